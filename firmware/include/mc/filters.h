@@ -1,0 +1,21 @@
+/* First-order low-pass and biquad (low-pass, band-pass, notch), discretised by Tustin with
+ * frequency pre-warping so the corner/centre frequency is exact. */
+#ifndef MC_FILTERS_H
+#define MC_FILTERS_H
+#include "mc/types.h"
+
+typedef struct { float a; float y; } mc_lpf1_t;
+void  mc_lpf1_init(mc_lpf1_t *s, float fc_hz, float ts, float y0);
+float mc_lpf1_step(mc_lpf1_t *s, float x);
+
+typedef struct {
+    float b0, b1, b2, a1, a2;   /* y = b0 x + b1 x1 + b2 x2 - a1 y1 - a2 y2 */
+    float x1, x2, y1, y2;
+} mc_biquad_t;
+void  mc_biquad_init_lowpass(mc_biquad_t *s, float fc_hz, float q, float ts);
+void  mc_biquad_init_bandpass(mc_biquad_t *s, float fc_hz, float q, float ts); /* unity gain at fc */
+void  mc_biquad_init_notch(mc_biquad_t *s, float fc_hz, float q, float ts);    /* zero gain at fc */
+void  mc_biquad_reset(mc_biquad_t *s, float x0);   /* state as if x0 had been applied forever */
+float mc_biquad_step(mc_biquad_t *s, float x);
+
+#endif

@@ -1,0 +1,27 @@
+/* Torque command -> current references: MTPA (analytic (2.24) or table), current circle (2.21),
+ * voltage ellipse (2.20) with field weakening (2.26) above base speed. */
+#ifndef MC_TORQUE_REF_H
+#define MC_TORQUE_REF_H
+#include "mc/types.h"
+#include "mc/mtpa.h"
+
+typedef struct {
+    int   pole_pairs;
+    mc_lin_params_t mach;       /* Ld, Lq, psi_pm used for MTPA and the voltage ellipse     */
+    float i_max;                /* current circle radius (peak) [A]                         */
+    float u_margin;             /* fraction of vdc/sqrt(3) the references may plan for (0..1) */
+    bool  use_table;            /* MTPA from `table` instead of (2.24)                      */
+    mc_mtpa_table_t table;
+} mc_tref_cfg_t;
+
+typedef struct {
+    mc_tref_cfg_t cfg;
+    bool fw_active;             /* field weakening moved id away from MTPA                  */
+    bool i_limited;             /* torque not reachable within i_max (or the voltage limit)  */
+} mc_tref_t;
+
+void    mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg);
+/* torque [N m], omega_e [rad/s electrical], vdc [V] -> current reference [A] */
+mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc);
+
+#endif

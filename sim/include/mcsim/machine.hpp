@@ -1,0 +1,61 @@
+// Machine (magnetic) models: current from flux linkage, i_dq = f(psi_dq), per machines.md.
+// Owner of implementations: sim/src/machine_*.cpp. Everything is in the rotor (d-q) frame,
+// peak-value space vectors, amplitude-invariant Clarke (2.4), SI units.
+#pragma once
+#include <Eigen/Dense>
+#include <memory>
+#include <string>
+
+namespace mcsim {
+
+using Vec2 = Eigen::Vector2d;
+using Mat2 = Eigen::Matrix2d;
+
+// Analytic energy-consistent saturation model (machines.md):
+//   i_d = G_d psi_d - i_f,  i_q = G_q psi_q
+//   G_d = a_d0 + a_dd |psi_d|^S + a_dq/(V+2) |psi_d|^U |psi_q|^(V+2)
+//   G_q = a_q0 + a_qq |psi_q|^T + a_dq/(U+2) |psi_d|^(U+2) |psi_q|^V
+struct SaturationParams {
+    double S = 2, T = 2, U = 1, V = 0;
+    double a_d0 = 0, a_dd = 0, a_q0 = 0, a_qq = 0, a_dq = 0, i_f = 0;
+};
+
+// One machine preset (presets/*.toml); read by the sim and the Python tools alike.
+struct MachineParams {
+    std::string name;
+    int pole_pairs = 1;
+    double rs = 0;            // [ohm]
+    double psi_pm = 0;        // [Wb]   small-signal, i = 0
+    double ld = 0, lq = 0;    // [H]    small-signal, i = 0
+    double inertia = 0;       // [kg m^2]
+    double friction = 0;      // [N m s]
+    double i_rated_peak = 0;  // [A]
+    double torque_rated = 0;  // [N m]
+    double vdc_nominal = 0;   // [V]
+    double f_sample = 0;      // [Hz] bench sampling = switching frequency
+    SaturationParams sat;
+};
+
+// Interface every magnetic model implements. current() and its Jacobian are what the plant
+// integrates with; flux() is the inverse (Newton), used for initial conditions and tables.
+class FluxModel {
+public:
+    virtual ~FluxModel() = default;
+    virtual Vec2 current(const Vec2& psi) const = 0;             // i_dq(psi_dq) [A]
+    virtual Mat2 di_dpsi(const Vec2& psi) const = 0;            // Jacobian [1/H]
+    virtual Vec2 flux(const Vec2& i) const;                      // psi_dq(i_dq) by Newton [Wb]
+    // Differential inductance matrix L = (di/dpsi)^-1 at current i [H].
+    Mat2 l_diff(const Vec2& i) const { return di_dpsi(flux(i)).inverse(); }
+    // Magnetic field energy stored, W(psi) = integral of i . dpsi from the no-current state
+    // psi0 = flux(0) (so W = 0 at i = 0) [J]; 1.5 factor for three phases is applied by callers.
+    virtual double energy(const Vec2& psi) const = 0;
+    virtual std::string kind() const = 0;                       // "linear" | "analytic" | "table"
+};
+
+std::unique_ptr<FluxModel> make_linear_model(double ld, double lq, double psi_pm);
+std::unique_ptr<FluxModel> make_analytic_model(const SaturationParams& p);
+
+// Loads presets/<name>.toml (or a path); throws std::runtime_error naming file, key, value.
+MachineParams load_machine_preset(const std::string& name_or_path);
+
+}  // namespace mcsim

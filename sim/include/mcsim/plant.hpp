@@ -1,0 +1,74 @@
+// The plant: flux-linkage state machine model + inverter + mechanics, advanced one PWM period
+// at a time. Implementation: sim/src/plant.cpp, inverter.cpp, mechanics.cpp.
+#pragma once
+#include <array>
+#include <functional>
+#include <memory>
+#include "mcsim/machine.hpp"
+
+namespace mcsim {
+
+// Inverter. Centre-aligned PWM over one period [t0, t0+Ts]: phase x's high side is on for
+// duty_x*Ts centred at t0 + Ts/2; ADC samples are taken at t0 (centre of the zero vector V000).
+struct InverterConfig {
+    enum class Mode { Averaged, Switching } mode = Mode::Switching;
+    double vdc = 300.0;          // [V]
+    double t_dead = 0.5e-6;      // [s] both switches off; phase voltage then set by current sign
+    double v_device = 0.0;       // [V] device on-state drop (diode/MOSFET), sign follows current
+    double i_zero_band = 0.05;   // [A] current below which a phase in dead time is taken as 0 A
+};
+
+struct MechanicsConfig {
+    enum class Mode { Inertia, Dyno } mode = Mode::Inertia;
+    double inertia = 0.013;      // [kg m^2]
+    double friction = 1.3e-3;    // [N m s]
+    bool locked = false;         // rotor held at theta_m0 (omega = 0) whatever the torque
+    std::function<double(double)> load_torque;   // T_load(t) [N m] (Inertia mode), may be empty
+    std::function<double(double)> dyno_speed;    // omega_m(t) [rad/s mech] (Dyno mode)
+};
+
+struct PlantConfig {
+    MachineParams machine;
+    InverterConfig inverter;
+    MechanicsConfig mech;
+    double theta_m0 = 0.0;       // initial mechanical angle [rad]
+    double omega_m0 = 0.0;       // initial mechanical speed [rad/s]
+    int substeps = 4;            // RK4 sub-steps per interval between switching instants
+};
+
+// Energy ledger since construction [J]; all three-phase (1.5 factor applied).
+struct EnergyLedger {
+    double electrical_in = 0;    // integral of 1.5 u_dq . i_dq dt (at the machine terminals)
+    double copper_loss = 0;      // integral of 1.5 Rs |i|^2 dt
+    double mech_out = 0;         // integral of T_e * omega_m dt
+    double magnetic = 0;         // 1.5 * (W(psi) - W(psi at construction)), kept current
+};
+
+class Plant {
+public:
+    Plant(const PlantConfig& cfg, std::unique_ptr<FluxModel> model);
+    // Advance one PWM period [t, t+Ts] with the given high-side duties (clamped to [0,1]);
+    // outputs_enabled = false: all six switches off (currents decay through the diodes).
+    void step_period(double Ts, const std::array<double, 3>& duty, bool outputs_enabled);
+
+    double time() const;
+    Vec2 psi_dq() const;
+    Vec2 i_dq() const;
+    std::array<double, 3> i_abc() const;        // instantaneous phase currents [A]
+    double theta_e() const;                      // electrical angle, wrapped to [-pi, pi)
+    double theta_m() const;                      // mechanical angle, unwrapped [rad]
+    double omega_m() const;                      // [rad/s]
+    double omega_e() const;
+    double torque() const;                       // electromagnetic torque T_e [N m]
+    Vec2 u_dq_avg_last() const;                  // average terminal voltage over last period
+    const EnergyLedger& energy() const;
+    const PlantConfig& config() const;
+    const FluxModel& model() const;
+    void set_vdc(double vdc);
+
+private:
+    struct Impl;
+    std::shared_ptr<Impl> impl_;
+};
+
+}  // namespace mcsim
