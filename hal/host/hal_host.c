@@ -1,1 +1,74 @@
-/* placeholder */
+/* Host HAL port: the peripheral "registers" are the structs in hal_host/host.h. */
+#include "hal_host/host.h"
+
+void hal_host_pwm_init(hal_pwm_t *pwm, float period_s, float dead_time_s)
+{
+    pwm->period_s = period_s;
+    pwm->dead_time_s = dead_time_s;
+    for (int k = 0; k < 3; ++k) {
+        pwm->shadow[k] = 0.5f;
+        pwm->active[k] = 0.5f;
+    }
+    pwm->enabled = false;
+    pwm->writes = 0u;
+}
+
+void hal_host_pwm_latch(hal_pwm_t *pwm)
+{
+    for (int k = 0; k < 3; ++k) {
+        pwm->active[k] = pwm->shadow[k];
+    }
+}
+
+static float clamp01(float x)
+{
+    return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
+}
+
+void hal_pwm_set_duties(hal_pwm_t *pwm, float da, float db, float dc)
+{
+    pwm->shadow[0] = clamp01(da);
+    pwm->shadow[1] = clamp01(db);
+    pwm->shadow[2] = clamp01(dc);
+    pwm->writes++;
+}
+
+void hal_pwm_enable(hal_pwm_t *pwm, bool on)
+{
+    pwm->enabled = on;
+}
+
+bool hal_pwm_enabled(const hal_pwm_t *pwm)
+{
+    return pwm->enabled;
+}
+
+float hal_pwm_period_s(const hal_pwm_t *pwm)
+{
+    return pwm->period_s;
+}
+
+float hal_pwm_dead_time_s(const hal_pwm_t *pwm)
+{
+    return pwm->dead_time_s;
+}
+
+void hal_adc_read(hal_adc_t *adc, hal_adc_sample_t *out)
+{
+    *out = adc->sample;
+}
+
+void hal_qep_read(hal_qep_t *qep, hal_qep_sample_t *out)
+{
+    *out = qep->sample;
+}
+
+uint32_t hal_qep_counts_per_rev(const hal_qep_t *qep)
+{
+    return qep->counts_per_rev;
+}
+
+uint32_t hal_time_us(const hal_time_t *t)
+{
+    return t->us;
+}

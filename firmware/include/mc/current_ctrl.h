@@ -1,5 +1,6 @@
 /* Current controller in a given (rotor or estimated) frame: PI per axis, decoupling
- * feed-forward (-w Lq iq, +w (Ld id + psi_pm)), anti-windup against the voltage limit. */
+ * feed-forward (-w Lq iq, +w (Ld id + psi_pm)) from the measured currents, anti-windup against
+ * the voltage limit. */
 #ifndef MC_CURRENT_CTRL_H
 #define MC_CURRENT_CTRL_H
 #include "mc/types.h"

@@ -21,7 +21,8 @@ typedef struct {
 } mc_tref_t;
 
 void    mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg);
-/* torque [N m], omega_e [rad/s electrical], vdc [V] -> current reference [A] */
+/* torque [N m], omega_e [rad/s electrical], vdc [V] -> current reference [A]. Bounded work (a few
+ * root searches of at most 32 steps each); continuous in omega_e and torque. */
 mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc);
 
 #endif

@@ -1,0 +1,306 @@
+/* The drive: ISR pipeline and background loop. The ISR reads top to bottom in mc_drive_isr(). */
+#include "mc/drive.h"
+#include <math.h>
+#include "mc/angle.h"
+#include "mc/sincos.h"
+#include "mc/transforms.h"
+
+void mc_drive_cfg_default(mc_drive_cfg_t *c)
+{
+    /* sun2016-ipm-5kw (thesis Table 4.1) on the 300 V / 10 kHz bench, 12-bit ADC over +-25 A. */
+    *c = (mc_drive_cfg_t){
+        .pole_pairs = 5, .rs = 0.400f, .ld = 10.5e-3f, .lq = 12.9e-3f, .psi_pm = 0.34305f,
+        .ts = 1.0e-4f,
+        .adc_amps_per_count = 50.0f / 4095.0f, .adc_offset_nominal = 2047.5f, .adc_offset_tol = 100.0f,
+        .adc_volts_per_count = 500.0f / 4095.0f, .offset_cal_samples = 256u,
+        .i_trip = 20.0f, .vdc_min = 150.0f, .vdc_max = 450.0f,
+        .angle_src = MC_ANGLE_SRC_ENCODER, .enc_counts_per_rev = 80000u, .enc_offset_rad = 0.0f,
+        .enc_pll_bw_hz = 150.0f, .enc_speed_fc_hz = 500.0f,
+        .cc_bw_hz = 500.0f, .cc_decouple = true,
+        .i_max = 13.29f, .i_headroom = 0.03f, .i_slew = 10000.0f, .u_margin = 0.92f, .mtpa_table = false,
+        .sc_kp = 1.0f, .sc_ki = 20.0f, .torque_max = 32.0f, .sc_decimation = 10,
+        .dtc_enable = true, .dtc_i_band = 0.3f, .dead_time = 0.5e-6f,
+    };
+}
+
+static bool cfg_valid(const mc_drive_cfg_t *c)
+{
+    return c->pole_pairs >= 1 && c->rs >= 0.0f && c->ld > 0.0f && c->lq > 0.0f && c->psi_pm >= 0.0f &&
+           c->ts >= 4.9e-5f && c->ts <= 5.1e-4f && c->adc_amps_per_count > 0.0f &&
+           c->adc_volts_per_count > 0.0f && c->offset_cal_samples > 0u && c->i_trip > 0.0f &&
+           c->vdc_max > c->vdc_min && c->angle_src < MC_ANGLE_SRC_COUNT && c->enc_counts_per_rev >= 4u &&
+           c->cc_bw_hz > 0.0f && c->i_max > 0.0f && c->i_max < c->i_trip && c->i_headroom >= 0.0f && c->i_headroom < 0.5f && c->i_slew > 0.0f && c->u_margin > 0.0f &&
+           c->u_margin <= 1.0f && c->sc_decimation >= 1 && c->torque_max > 0.0f && c->dead_time >= 0.0f;
+}
+
+static float i_ref_max(const mc_drive_cfg_t *c)
+{
+    return c->i_max * (1.0f - c->i_headroom);
+}
+
+static void init_blocks(mc_drive_t *d)
+{
+    const mc_drive_cfg_t *c = &d->cfg;
+    const mc_encoder_cfg_t ec = {.pole_pairs = c->pole_pairs, .counts_per_rev = c->enc_counts_per_rev,
+                                 .offset_rad = c->enc_offset_rad, .ts = c->ts,
+                                 .pll_bw_hz = c->enc_pll_bw_hz, .speed_fc_hz = c->enc_speed_fc_hz};
+    mc_encoder_init(&d->enc, &ec);
+
+    mc_cc_cfg_t cc;
+    mc_cc_cfg_from_bandwidth(&cc, c->cc_bw_hz, c->rs, c->ld, c->lq, c->psi_pm, c->ts);
+    cc.decouple = c->cc_decouple;
+    mc_cc_init(&d->cc, &cc);
+
+    const mc_sc_cfg_t sc = {.kp = c->sc_kp, .ki = c->sc_ki, .ts = c->ts * (float)c->sc_decimation,
+                            .torque_max = c->torque_max, .decimation = c->sc_decimation};
+    mc_sc_init(&d->sc, &sc);
+
+    mc_tref_cfg_t tc = {.pole_pairs = c->pole_pairs,
+                        .mach = {.ld = c->ld, .lq = c->lq, .psi_pm = c->psi_pm},
+                        .i_max = i_ref_max(c), .u_margin = c->u_margin, .use_table = c->mtpa_table};
+    mc_mtpa_table_fill_linear(&tc.table, &tc.mach, i_ref_max(c));
+    mc_tref_init(&d->tref, &tc);
+
+    const mc_dtc_cfg_t dc = {.t_dead = c->dead_time, .t_pwm = c->ts, .i_band = c->dtc_i_band,
+                             .enable = c->dtc_enable};
+    mc_dtc_init(&d->dtc, &dc);
+}
+
+bool mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, hal_adc_t *adc, hal_pwm_t *pwm, hal_qep_t *qep)
+{
+    *d = (mc_drive_t){0};
+    d->cfg = *cfg;
+    d->hal = (mc_drive_hal_t){.adc = adc, .pwm = pwm, .qep = qep};
+    hal_pwm_enable(pwm, false);
+    d->state = MC_STATE_IDLE;
+    for (int k = 0; k < 3; ++k) {
+        d->offset[k] = cfg->adc_offset_nominal;
+    }
+    if (!cfg_valid(cfg)) {
+        d->state = MC_STATE_FAULT;
+        d->faults = MC_FAULT_CONFIG;
+        return false;
+    }
+    init_blocks(d);
+    return true;
+}
+
+void mc_drive_command(mc_drive_t *d, const mc_drive_cmd_t *cmd)
+{
+    d->cmd_next = *cmd;
+    d->cmd_seq++;
+}
+
+const mc_drive_telem_t *mc_drive_telemetry(const mc_drive_t *d)
+{
+    return &d->tm;
+}
+
+/* Outputs off and duties at 50 % (zero voltage) so a later enable starts from rest. */
+static void outputs_off(mc_drive_t *d)
+{
+    hal_pwm_enable(d->hal.pwm, false);
+    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
+}
+
+static void trip(mc_drive_t *d, uint32_t reason)
+{
+    outputs_off(d);
+    d->faults |= reason;
+    d->state = MC_STATE_FAULT;
+}
+
+/* A new enable (rising edge) always starts clean: offsets re-measured, every block reset. */
+static void start_enable(mc_drive_t *d)
+{
+    d->faults = 0u;
+    d->cal_count = 0u;
+    d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
+    init_blocks(d);
+    d->i_ab_prev = (mc_ab_t){0.0f, 0.0f};
+    d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
+    d->u_hist[0] = d->u_hist[1] = (mc_ab_t){0.0f, 0.0f};
+    d->state = MC_STATE_OFFSET_CAL;
+}
+
+/* Commands change only here, at the start of a period, as one consistent copy. */
+static void take_command(mc_drive_t *d)
+{
+    if (d->cmd_seq == d->cmd_seen) {
+        return;
+    }
+    const bool was_enabled = d->cmd.enable;
+    d->cmd = d->cmd_next;
+    d->cmd_seen = d->cmd_seq;
+    if ((d->faults & MC_FAULT_CONFIG) != 0u) {
+        return;   /* a rejected configuration never runs */
+    }
+    if (d->cmd.enable && !was_enabled) {
+        start_enable(d);
+    } else if (!d->cmd.enable && was_enabled) {
+        outputs_off(d);
+        d->state = MC_STATE_IDLE;
+    }
+}
+
+/* Average the current channels with the outputs off; the offsets must be plausible. */
+static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
+{
+    for (int k = 0; k < 3; ++k) {
+        d->cal_sum[k] += (float)raw->i[k];
+    }
+    if (++d->cal_count < d->cfg.offset_cal_samples) {
+        return;
+    }
+    for (int k = 0; k < 3; ++k) {
+        const float off = d->cal_sum[k] / (float)d->cal_count;
+        if (fabsf(off - d->cfg.adc_offset_nominal) > d->cfg.adc_offset_tol) {
+            trip(d, MC_FAULT_OFFSET_CAL);
+            return;
+        }
+        d->offset[k] = off;
+    }
+    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
+    hal_pwm_enable(d->hal.pwm, true);
+    d->state = MC_STATE_RUN;
+}
+
+static void angle_source(mc_drive_t *d, const mc_angle_in_t *in, mc_angle_out_t *out)
+{
+    switch (d->cfg.angle_src) {
+    case MC_ANGLE_SRC_ENCODER:
+    default:
+        mc_encoder_step(&d->enc, in, out);
+        break;
+    }
+}
+
+/* The reference vector moves at most i_slew * ts per period: a step would make the current loop,
+ * with its 1.5-period delay, overshoot by ~20 % of the step and exceed the current limit. */
+static mc_dq_t slew(mc_drive_t *d, mc_dq_t target)
+{
+    const float dd = target.d - d->i_ref_prev.d;
+    const float dq = target.q - d->i_ref_prev.q;
+    const float step = d->cfg.i_slew * d->cfg.ts;
+    const float len = sqrtf(dd * dd + dq * dq);
+    if (len > step) {
+        target.d = d->i_ref_prev.d + dd * (step / len);
+        target.q = d->i_ref_prev.q + dq * (step / len);
+    }
+    d->i_ref_prev = target;
+    return target;
+}
+
+static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
+{
+    float torque = 0.0f;
+    switch (d->cmd.mode) {
+    case MC_MODE_CURRENT:
+        d->tm.torque_ref = 0.0f;
+        return slew(d, mc_limit_current_circle(d->cmd.i_ref, i_ref_max(&d->cfg)));
+    case MC_MODE_SPEED:
+        torque = mc_sc_step(&d->sc, d->cmd.speed_ref, omega / (float)d->cfg.pole_pairs);
+        break;
+    case MC_MODE_TORQUE:
+    default:
+        torque = d->cmd.torque_ref;
+        break;
+    }
+    d->tm.torque_ref = torque;
+    return slew(d, mc_tref_step(&d->tref, torque, omega, vdc));
+}
+
+void mc_drive_isr(mc_drive_t *d)
+{
+    const mc_drive_cfg_t *c = &d->cfg;
+    take_command(d);
+
+    /* 1. Samples of this period (ADC triggered at the PWM centre) and the encoder. */
+    hal_adc_sample_t raw;
+    hal_adc_read(d->hal.adc, &raw);
+    hal_qep_sample_t qep;
+    hal_qep_read(d->hal.qep, &qep);
+
+    /* 2. Scaling with the calibrated offsets. */
+    const float vdc = (float)raw.vdc * c->adc_volts_per_count;
+    const mc_abc_t i_abc = {((float)raw.i[0] - d->offset[0]) * c->adc_amps_per_count,
+                            ((float)raw.i[1] - d->offset[1]) * c->adc_amps_per_count,
+                            ((float)raw.i[2] - d->offset[2]) * c->adc_amps_per_count};
+    d->tm.period++;
+    d->tm.i_abc = i_abc;
+    d->tm.vdc = vdc;
+
+    /* 3. Sequencing and protection: only RUN goes past this block. */
+    if (d->state == MC_STATE_OFFSET_CAL) {
+        offset_cal(d, &raw);
+    }
+    if (d->state == MC_STATE_RUN) {
+        const float imax = fmaxf(fabsf(i_abc.a), fmaxf(fabsf(i_abc.b), fabsf(i_abc.c)));
+        if (imax > c->i_trip) {
+            trip(d, MC_FAULT_OVERCURRENT);
+        } else if (vdc > c->vdc_max) {
+            trip(d, MC_FAULT_OVERVOLTAGE);
+        } else if (vdc < c->vdc_min) {
+            trip(d, MC_FAULT_UNDERVOLTAGE);
+        }
+    }
+    d->tm.state = d->state;
+    d->tm.faults = d->faults;
+    if (d->state != MC_STATE_RUN) {
+        return;
+    }
+
+    /* 4. Clarke (2.4); the three channels are all measured. */
+    const mc_ab_t i_ab = mc_clarke(i_abc);
+
+    /* 5. Angle source: it gets i(k-1), i(k) and the voltage applied between them. */
+    const mc_angle_in_t ain = {.i_ab = i_ab, .i_ab_prev = d->i_ab_prev, .u_ab_applied = d->u_hist[1],
+                               .vdc = vdc, .qep_count = qep.count};
+    mc_angle_out_t ang;
+    angle_source(d, &ain, &ang);
+
+    /* 6. Park (2.5) into the controller's frame. */
+    const mc_dq_t i_dq = mc_park(i_ab, mc_sincos(ang.theta));
+
+    /* 7. References: current, torque (MTPA / field weakening) or speed. */
+    const mc_dq_t i_ref = references(d, ang.omega, vdc);
+
+    /* 8. Current control, limited to the inscribed circle of the voltage hexagon. */
+    const mc_dq_t u_dq = mc_cc_step(&d->cc, i_ref, i_dq, ang.omega, vdc * MC_1_SQRT3);
+
+    /* 9. Inverse Park at the middle of the period the voltage will act in, (k+1, k+2): the
+     *    one-period update delay plus the half period of the average. */
+    const mc_sincos_t sc_u = mc_sincos(mc_wrap_pi(ang.theta + 1.5f * ang.omega * c->ts));
+    const mc_ab_t u_ab = mc_park_inv(u_dq, sc_u);
+
+    /* 10. SVPWM (min-max injection), then dead-time compensation with the currents expected
+     *     in that period. */
+    mc_duty_t duty;
+    mc_svpwm(u_ab, vdc, &duty);
+    mc_dtc_apply(&d->dtc, &duty, mc_clarke_inv(mc_park_inv(i_dq, sc_u)));
+    hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
+
+    /* 11. Keep what the estimators need next period, and the telemetry. */
+    d->u_hist[1] = d->u_hist[0];
+    d->u_hist[0] = duty.u_real;
+    d->i_ab_prev = i_ab;
+    d->tm.theta = ang.theta;
+    d->tm.omega = ang.omega;
+    d->tm.i_dq = i_dq;
+    d->tm.i_ref = i_ref;
+    d->tm.u_dq = u_dq;
+    d->tm.u_ab = duty.u_real;
+    d->tm.duty[0] = duty.a;
+    d->tm.duty[1] = duty.b;
+    d->tm.duty[2] = duty.c;
+    d->tm.u_limited = d->cc.limited;
+    d->tm.fw_active = d->tref.fw_active;
+}
+
+void mc_drive_background(mc_drive_t *d)
+{
+    /* Slow work lives here, never in the ISR. For now: keep the telemetry's state in step when
+     * the ISR returned early (e.g. after a disable), so a reader never sees a stale state. */
+    d->tm.state = d->state;
+    d->tm.faults = d->faults;
+}

@@ -1,0 +1,34 @@
+#include "mc/encoder.h"
+#include "mc/angle.h"
+
+void mc_encoder_init(mc_encoder_t *s, const mc_encoder_cfg_t *cfg)
+{
+    s->cfg = *cfg;
+    /* (2.18); applied to (count * p mod cpr) so the electrical angle stays exact in float */
+    s->rad_per_count = MC_2PI / (float)cfg->counts_per_rev;
+    /* Critically damped second-order PLL: s^2 + kp s + ki with both poles at -w. */
+    const float w = MC_2PI * cfg->pll_bw_hz;
+    const mc_pll_cfg_t pc = {.kp = 2.0f * w, .ki = w * w, .ts = cfg->ts, .speed_fc_hz = cfg->speed_fc_hz};
+    mc_pll_init(&s->pll, &pc);
+    s->primed = false;
+}
+
+void mc_encoder_reset(mc_encoder_t *s)
+{
+    s->primed = false;
+}
+
+void mc_encoder_step(mc_encoder_t *s, const mc_angle_in_t *in, mc_angle_out_t *out)
+{
+    const uint64_t cpr = s->cfg.counts_per_rev;
+    const uint32_t elec = (uint32_t)(((uint64_t)in->qep_count * (uint64_t)s->cfg.pole_pairs) % cpr);
+    const float theta = mc_wrap_pi((float)elec * s->rad_per_count + s->cfg.offset_rad);
+    if (!s->primed) {
+        mc_pll_reset(&s->pll, theta, 0.0f);
+        s->primed = true;
+    }
+    mc_pll_step(&s->pll, theta, 0.0f);
+    /* The counter is exact to one count: use it for the angle, the PLL only for speed. */
+    out->theta = theta;
+    out->omega = s->pll.omega_filt;
+}

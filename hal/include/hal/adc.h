@@ -1,0 +1,18 @@
+/* ADC hardware interface: phase currents and DC-link voltage, sampled at the PWM centre
+ * (period boundary, centre of the zero vector) by the PWM trigger. Raw counts; scaling and
+ * offset calibration live in the firmware (mc drive), not in the port. */
+#ifndef HAL_ADC_H
+#define HAL_ADC_H
+#include <stdint.h>
+
+typedef struct hal_adc hal_adc_t;
+
+typedef struct {
+    uint16_t i[3];   /* phase a, b, c current channels [counts] */
+    uint16_t vdc;    /* DC-link voltage channel [counts]        */
+} hal_adc_sample_t;
+
+/* Latest conversion of the current PWM period. */
+void hal_adc_read(hal_adc_t *adc, hal_adc_sample_t *out);
+
+#endif

@@ -1,0 +1,123 @@
+#include "metrics.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace mcsim {
+
+std::string json_number(double v)
+{
+    if (!std::isfinite(v)) return "null";
+    std::ostringstream os;
+    os.precision(6);
+    os << v;
+    return os.str();
+}
+
+Metrics::Metrics(const Scenario& sc)
+    : start_(sc.f("metrics.start_s")),
+      settle_from_(sc.f("metrics.settle_from_s")),
+      band_(sc.f("metrics.settle_band")),
+      settle_signal_(sc.s("metrics.settle_signal")),
+      windows_(sc.windows()),
+      win_acc_(sc.windows().size())
+{
+}
+
+void Metrics::acc_add(Acc& a, const Sample& s) const
+{
+    a.n += 1;
+    a.i_peak = std::max(a.i_peak, s.i_peak);
+    a.speed_sum += s.speed_rpm;
+    if (!s.running) return;
+    a.run_n += 1;
+    a.err_sum += s.angle_err_deg;
+    a.err_absmax = std::max(a.err_absmax, std::fabs(s.angle_err_deg));
+    a.id_sum += s.id;
+    a.iq_sum += s.iq;
+    a.tq_sum += s.torque;
+    if (std::isfinite(s.speed_ref_rpm)) {
+        const double e = s.speed_rpm - s.speed_ref_rpm;
+        a.sp_n += 1;
+        a.sp_sq += e * e;
+        a.sp_max_abs = std::max(a.sp_max_abs, std::fabs(e));
+        a.ref_sum += s.speed_ref_rpm;
+    }
+}
+
+void Metrics::add(const Sample& s)
+{
+    last_t_ = s.t;
+    if (s.t >= start_) {
+        i_peak_ = std::max(i_peak_, s.i_peak);
+        if (s.running) angle_err_max_ = std::max(angle_err_max_, std::fabs(s.angle_err_deg));
+    }
+    for (size_t w = 0; w < windows_.size(); ++w) {
+        if (s.t >= windows_[w].from_s && s.t < windows_[w].to_s) {
+            acc_add(win_acc_[w], s);
+            acc_add(steady_, s);
+        }
+    }
+    if (s.t >= settle_from_) {
+        double e = NAN;
+        if (settle_signal_ == "speed") e = s.speed_rpm - s.speed_ref_rpm;
+        else if (settle_signal_ == "angle") e = s.angle_err_deg;
+        else if (settle_signal_ == "iq") e = s.iq - s.iq_ref;
+        any_settle_sample_ = true;
+        // a sample not running, or without a reference, counts as out of band
+        if (!s.running || !std::isfinite(e) || std::fabs(e) > band_) last_out_of_band_ = s.t;
+    }
+}
+
+std::string Metrics::json(const std::vector<std::string>& faults, const std::string& final_state,
+                          const std::vector<std::pair<std::string, std::string>>& extra) const
+{
+    auto mean = [](double sum, double n) { return n > 0 ? sum / n : NAN; };
+    auto pct = [](const Acc& a) {
+        const double ref = a.sp_n > 0 ? std::fabs(a.ref_sum / a.sp_n) : 0.0;
+        return ref > 1.0 ? 100.0 * a.sp_max_abs / ref : NAN;
+    };
+    double settling = NAN;
+    if (any_settle_sample_) {
+        if (last_out_of_band_ < 0) settling = 0.0;
+        else if (last_out_of_band_ < last_t_) settling = last_out_of_band_ - settle_from_;
+    }
+    std::ostringstream os;
+    os << "{\n";
+    os << "  \"angle_err_max_deg\": " << json_number(angle_err_max_) << ",\n";
+    os << "  \"angle_err_steady_mean_deg\": " << json_number(mean(steady_.err_sum, steady_.run_n)) << ",\n";
+    os << "  \"angle_err_steady_max_deg\": " << json_number(steady_.run_n > 0 ? steady_.err_absmax : NAN) << ",\n";
+    os << "  \"speed_err_steady_rms_rpm\": " << json_number(steady_.sp_n > 0 ? std::sqrt(steady_.sp_sq / steady_.sp_n) : NAN) << ",\n";
+    os << "  \"speed_err_steady_max_rpm\": " << json_number(steady_.sp_n > 0 ? steady_.sp_max_abs : NAN) << ",\n";
+    os << "  \"speed_err_steady_max_pct\": " << json_number(pct(steady_)) << ",\n";
+    os << "  \"settling_time_s\": " << json_number(settling) << ",\n";
+    os << "  \"current_peak_a\": " << json_number(i_peak_) << ",\n";
+    for (const auto& [k, v] : extra) os << "  \"" << k << "\": " << v << ",\n";
+    os << "  \"final_state\": \"" << final_state << "\",\n";
+    os << "  \"faults\": [";
+    for (size_t k = 0; k < faults.size(); ++k) os << (k ? ", " : "") << "\"" << faults[k] << "\"";
+    os << "],\n";
+    os << "  \"windows\": {";
+    for (size_t w = 0; w < windows_.size(); ++w) {
+        const Acc& a = win_acc_[w];
+        os << (w ? "," : "") << "\n    \"" << windows_[w].name << "\": {"
+           << "\"from_s\": " << json_number(windows_[w].from_s)
+           << ", \"to_s\": " << json_number(windows_[w].to_s)
+           << ", \"angle_err_mean_deg\": " << json_number(mean(a.err_sum, a.run_n))
+           << ", \"angle_err_max_deg\": " << json_number(a.run_n > 0 ? a.err_absmax : NAN)
+           << ", \"speed_err_rms_rpm\": " << json_number(a.sp_n > 0 ? std::sqrt(a.sp_sq / a.sp_n) : NAN)
+           << ", \"speed_err_max_rpm\": " << json_number(a.sp_n > 0 ? a.sp_max_abs : NAN)
+           << ", \"speed_err_max_pct\": " << json_number(pct(a))
+           << ", \"speed_mean_rpm\": " << json_number(mean(a.speed_sum, a.n))
+           << ", \"speed_ref_mean_rpm\": " << json_number(mean(a.ref_sum, a.sp_n))
+           << ", \"id_mean_a\": " << json_number(mean(a.id_sum, a.run_n))
+           << ", \"iq_mean_a\": " << json_number(mean(a.iq_sum, a.run_n))
+           << ", \"torque_mean_nm\": " << json_number(mean(a.tq_sum, a.run_n))
+           << ", \"current_peak_a\": " << json_number(a.i_peak)
+           << ", \"samples\": " << json_number(a.n) << "}";
+    }
+    os << (windows_.empty() ? "" : "\n  ") << "}\n}\n";
+    return os.str();
+}
+
+}  // namespace mcsim

@@ -1,0 +1,48 @@
+// Metrics accumulated every control period; written to metrics.json (keys: docs/simulator.md).
+#pragma once
+#include <string>
+#include <vector>
+#include "scenario.hpp"
+
+namespace mcsim {
+
+struct Sample {
+    double t;
+    bool running;           // drive in RUN
+    double angle_err_deg;   // wrapped (controller angle - true angle)
+    double speed_rpm, speed_ref_rpm;   // ref NaN when none
+    double id, iq, id_ref, iq_ref;
+    double torque;
+    double i_peak;          // max |i_abc| (true)
+};
+
+class Metrics {
+public:
+    explicit Metrics(const Scenario& sc);
+    void add(const Sample& s);
+    // faults: names of latched faults; extra: further "key": value pairs (already JSON).
+    std::string json(const std::vector<std::string>& faults, const std::string& final_state,
+                     const std::vector<std::pair<std::string, std::string>>& extra) const;
+
+private:
+    struct Acc {
+        double n = 0, err_sum = 0, err_absmax = 0;
+        double sp_n = 0, sp_sq = 0, sp_max_abs = 0, sp_sum = 0, ref_sum = 0;
+        double id_sum = 0, iq_sum = 0, tq_sum = 0, i_peak = 0, speed_sum = 0;
+        double run_n = 0;
+    };
+    void acc_add(Acc& a, const Sample& s) const;
+    double start_, settle_from_, band_;
+    std::string settle_signal_;
+    std::vector<Window> windows_;
+    std::vector<Acc> win_acc_;
+    Acc steady_;
+    double angle_err_max_ = 0, i_peak_ = 0;
+    double last_out_of_band_ = -1;     // time of last sample outside the band
+    bool any_settle_sample_ = false;
+    double last_t_ = 0;
+};
+
+std::string json_number(double v);
+
+}  // namespace mcsim

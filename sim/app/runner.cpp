@@ -1,0 +1,334 @@
+#include "runner.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+
+#include "metrics.hpp"
+#include "mcsim/fluxmap.hpp"
+#include "mcsim/plant.hpp"
+#include "mcsim/sensors.hpp"
+
+extern "C" {
+#include "hal_host/host.h"
+#include "mc/drive.h"
+}
+
+namespace mcsim {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRpm = 60.0 / (2.0 * kPi);  // rad/s -> rpm
+
+double wrap_pi(double x)
+{
+    x = std::fmod(x + kPi, 2.0 * kPi);
+    if (x < 0) x += 2.0 * kPi;
+    return x - kPi;
+}
+
+const char* state_name(mc_state_t s)
+{
+    switch (s) {
+    case MC_STATE_IDLE: return "IDLE";
+    case MC_STATE_OFFSET_CAL: return "OFFSET_CAL";
+    case MC_STATE_RUN: return "RUN";
+    case MC_STATE_FAULT: return "FAULT";
+    }
+    return "?";
+}
+
+std::vector<std::string> fault_names(uint32_t f)
+{
+    std::vector<std::string> out;
+    if (f & MC_FAULT_OVERCURRENT) out.push_back("overcurrent");
+    if (f & MC_FAULT_OVERVOLTAGE) out.push_back("overvoltage");
+    if (f & MC_FAULT_UNDERVOLTAGE) out.push_back("undervoltage");
+    if (f & MC_FAULT_OFFSET_CAL) out.push_back("offset_calibration");
+    if (f & MC_FAULT_CONFIG) out.push_back("config");
+    return out;
+}
+
+std::unique_ptr<FluxModel> make_plant_model(const Scenario& sc, const MachineParams& mp)
+{
+    const std::string& kind = sc.s("machine.model");
+    if (kind == "linear") return make_linear_model(mp.ld, mp.lq, mp.psi_pm);
+    auto analytic = make_analytic_model(mp.sat);
+    if (kind == "analytic") return analytic;
+    const int n = static_cast<int>(sc.i("machine.table_points"));
+    FluxMapGridSpec grid = default_flux_map_grid(std::max(mp.i_rated_peak, 1.0), n);
+    return make_table_model_from(*analytic, grid);
+}
+
+// Every derived default is resolved here, from the preset.
+struct Resolved {
+    MachineParams mp;
+    double vdc, ts, i_max, i_trip, vdc_min, vdc_max, inertia, friction, torque_max, kp, ki;
+};
+
+Resolved resolve(const Scenario& sc)
+{
+    Resolved r;
+    try {
+        r.mp = load_machine_preset(sc.s("machine.preset"));
+    } catch (const std::exception& e) {
+        throw ScenarioError(sc.origin() + ": key 'machine.preset' = \"" + sc.s("machine.preset") + "\": " + e.what());
+    }
+    auto opt = [&](const char* k, double def) { return sc.has(k) ? sc.f(k) : def; };
+    r.vdc = opt("inverter.vdc_v", r.mp.vdc_nominal);
+    r.ts = sc.f("control.ts_s");
+    r.i_max = opt("control.i_max_a", r.mp.i_rated_peak);
+    r.i_trip = opt("control.i_trip_a", 1.5 * r.mp.i_rated_peak);
+    r.vdc_min = opt("control.vdc_min_v", 0.5 * r.vdc);
+    r.vdc_max = opt("control.vdc_max_v", 1.5 * r.vdc);
+    r.inertia = opt("mechanics.inertia_kgm2", r.mp.inertia);
+    r.friction = opt("mechanics.friction_nms", r.mp.friction);
+    r.torque_max = opt("control.torque_max_nm", 1.2 * r.mp.torque_rated);
+    const double w = 2.0 * kPi * sc.f("control.speed_bw_hz");
+    r.kp = opt("control.speed_kp", r.inertia * w);
+    r.ki = opt("control.speed_ki", r.kp * w / 4.0);
+    if (r.i_trip <= r.i_max)
+        throw ScenarioError(sc.origin() + ": key 'control.i_trip_a' = " + json_number(r.i_trip) +
+                            ": must be above control.i_max_a (" + json_number(r.i_max) + ")");
+    if (r.vdc >= sc.f("sensors.vdc_full_scale_v"))
+        throw ScenarioError(sc.origin() + ": key 'sensors.vdc_full_scale_v' = " + json_number(sc.f("sensors.vdc_full_scale_v")) +
+                            ": must be above the DC-link voltage (" + json_number(r.vdc) + " V)");
+    if (r.vdc <= r.vdc_min || r.vdc >= r.vdc_max)
+        throw ScenarioError(sc.origin() + ": key 'inverter.vdc_v' = " + json_number(r.vdc) +
+                            ": outside the drive's trip window [control.vdc_min_v, control.vdc_max_v]");
+    return r;
+}
+
+class Progress {
+public:
+    explicit Progress(bool on, double total) : on_(on && isatty(STDERR_FILENO)), total_(total) {}
+    void update(double t, double wall)
+    {
+        if (!on_ || wall - last_ < 0.25) return;
+        last_ = wall;
+        std::fprintf(stderr, "\r  t = %7.3f / %.3f s  [%3.0f%%]  %6.0fx real time ", t, total_, 100.0 * t / total_,
+                     wall > 0 ? t / wall : 0.0);
+        std::fflush(stderr);
+    }
+    void done()
+    {
+        if (on_) std::fprintf(stderr, "\r%70s\r", "");
+    }
+
+private:
+    bool on_;
+    double total_, last_ = -1;
+};
+
+}  // namespace
+
+RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
+{
+    const Resolved r = resolve(sc);
+    const MachineParams& mp = r.mp;
+    const int p = mp.pole_pairs;
+
+    // ---- plant
+    PlantConfig pc;
+    pc.machine = mp;
+    pc.inverter.mode = sc.s("inverter.mode") == "averaged" ? InverterConfig::Mode::Averaged : InverterConfig::Mode::Switching;
+    pc.inverter.vdc = r.vdc;
+    pc.inverter.t_dead = sc.f("inverter.dead_time_s");
+    pc.inverter.v_device = sc.f("inverter.device_drop_v");
+    const std::string& mech = sc.s("mechanics.mode");
+    pc.mech.mode = mech == "dyno" ? MechanicsConfig::Mode::Dyno : MechanicsConfig::Mode::Inertia;
+    pc.mech.locked = mech == "locked";
+    pc.mech.inertia = r.inertia;
+    pc.mech.friction = r.friction;
+    const Profile load = sc.profile("mechanics.load_torque_nm");
+    const Profile dyno = sc.profile("mechanics.dyno_speed_rpm");
+    pc.mech.load_torque = [load](double t) { return load.at(t); };
+    pc.mech.dyno_speed = [dyno](double t) { return dyno.at(t) / kRpm; };
+    pc.theta_m0 = sc.f("mechanics.theta0_deg") * kPi / 180.0 / p;
+    pc.omega_m0 = mech == "dyno" ? dyno.at(0.0) / kRpm : (mech == "locked" ? 0.0 : sc.f("mechanics.speed0_rpm") / kRpm);
+    Plant plant(pc, make_plant_model(sc, mp));
+
+    // ---- sensors
+    AdcConfig ac;
+    ac.bits = static_cast<int>(sc.i("sensors.adc_bits"));
+    ac.i_full_scale = sc.f("sensors.i_full_scale_a");
+    ac.i_noise_rms = sc.f("sensors.i_noise_rms_a");
+    const auto ge = sc.f3("sensors.i_gain_err"), oe = sc.f3("sensors.i_offset_err_a");
+    for (int k = 0; k < 3; ++k) {
+        ac.gain_err[k] = ge[k];
+        ac.offset_err[k] = oe[k];
+    }
+    ac.vdc_full_scale = sc.f("sensors.vdc_full_scale_v");
+    ac.vdc_noise_rel = sc.f("sensors.vdc_noise_rel");
+    EncoderConfig ec;
+    ec.lines = static_cast<int>(sc.i("sensors.encoder_lines"));
+    ec.offset_rad = sc.f("sensors.encoder_offset_deg") * kPi / 180.0;
+    Sensors sensors(ac, ec, static_cast<uint64_t>(sc.i("scenario.seed")));
+
+    // ---- host HAL and firmware
+    hal_pwm_t pwm;
+    hal_host_pwm_init(&pwm, static_cast<float>(r.ts), static_cast<float>(pc.inverter.t_dead));
+    hal_adc_t adc{};
+    hal_qep_t qep{};
+    qep.counts_per_rev = 4u * static_cast<uint32_t>(ec.lines);
+
+    mc_drive_cfg_t dc;
+    mc_drive_cfg_default(&dc);
+    dc.pole_pairs = p;
+    dc.rs = static_cast<float>(mp.rs);
+    dc.ld = static_cast<float>(mp.ld);
+    dc.lq = static_cast<float>(mp.lq);
+    dc.psi_pm = static_cast<float>(mp.psi_pm);
+    dc.ts = static_cast<float>(r.ts);
+    dc.adc_amps_per_count = static_cast<float>(sensors.amps_per_count());
+    dc.adc_offset_nominal = static_cast<float>(sensors.offset_counts());
+    dc.adc_offset_tol = static_cast<float>(0.05 * (1 << ac.bits));
+    dc.adc_volts_per_count = static_cast<float>(sensors.volts_per_count());
+    dc.offset_cal_samples = static_cast<uint16_t>(sc.i("control.offset_cal_samples"));
+    dc.i_trip = static_cast<float>(r.i_trip);
+    dc.vdc_min = static_cast<float>(r.vdc_min);
+    dc.vdc_max = static_cast<float>(r.vdc_max);
+    dc.angle_src = MC_ANGLE_SRC_ENCODER;
+    dc.enc_counts_per_rev = qep.counts_per_rev;
+    dc.enc_offset_rad = static_cast<float>(p * ec.offset_rad);
+    dc.enc_pll_bw_hz = static_cast<float>(sc.f("control.encoder_pll_bw_hz"));
+    dc.cc_bw_hz = static_cast<float>(sc.f("control.current_bw_hz"));
+    dc.cc_decouple = sc.b("control.decouple");
+    dc.i_max = static_cast<float>(r.i_max);
+    dc.i_headroom = static_cast<float>(sc.f("control.i_headroom"));
+    dc.i_slew = static_cast<float>(sc.f("control.i_slew_a_per_s"));
+    dc.u_margin = static_cast<float>(sc.f("control.u_margin"));
+    dc.mtpa_table = sc.s("control.mtpa") == "table";
+    dc.sc_kp = static_cast<float>(r.kp);
+    dc.sc_ki = static_cast<float>(r.ki);
+    dc.torque_max = static_cast<float>(r.torque_max);
+    dc.sc_decimation = static_cast<int>(sc.i("control.speed_decimation"));
+    dc.dtc_enable = sc.b("control.deadtime_comp");
+    dc.dtc_i_band = static_cast<float>(sc.f("control.dtc_i_band_a"));
+    dc.dead_time = static_cast<float>(pc.inverter.t_dead);
+
+    auto drive = std::make_unique<mc_drive_t>();
+    if (!mc_drive_init(drive.get(), &dc, &adc, &pwm, &qep))
+        throw ScenarioError(sc.origin() + ": the firmware rejected the drive configuration (check control.* keys)");
+
+    const std::string& mode = sc.s("control.mode");
+    const mc_mode_t fw_mode = mode == "current" ? MC_MODE_CURRENT : (mode == "torque" ? MC_MODE_TORQUE : MC_MODE_SPEED);
+    const Profile speed_ref = sc.profile("control.speed_ref_rpm");
+    const Profile torque_ref = sc.profile("control.torque_ref_nm");
+    const Profile id_ref = sc.profile("control.id_ref_a");
+    const Profile iq_ref = sc.profile("control.iq_ref_a");
+    const double enable_at = sc.f("control.enable_at_s");
+
+    // ---- outputs
+    std::FILE* trace = nullptr;
+    const bool write = !opt.out_dir.empty();
+    if (write) {
+        std::filesystem::create_directories(opt.out_dir);
+        if (sc.b("output.trace")) {
+            const std::string tp = opt.out_dir + "/trace.csv";
+            trace = std::fopen(tp.c_str(), "w");
+            if (!trace) throw std::runtime_error("cannot write " + tp);
+            std::fputs("t_s,theta_deg,theta_hat_deg,angle_err_deg,speed_rpm,speed_hat_rpm,speed_ref_rpm,"
+                       "id_a,iq_a,id_ref_a,iq_ref_a,ud_v,uq_v,torque_nm,torque_ref_nm,load_nm,"
+                       "ia_a,ib_a,ic_a,vdc_v,state\n", trace);
+        }
+    }
+    const long decim = sc.i("output.decimation");
+
+    Metrics metrics(sc);
+    const double duration = sc.f("scenario.duration_s");
+    const long periods = static_cast<long>(std::llround(duration / r.ts));
+    Progress progress(opt.progress, duration);
+    const double deg = 180.0 / kPi;
+
+    double isr_ns = 0;
+    const auto wall0 = std::chrono::steady_clock::now();
+    for (long k = 0; k < periods; ++k) {
+        const double t = k * r.ts;
+        // Period boundary: the duties of the last ISR take effect; the ADC and QEP sample.
+        hal_host_pwm_latch(&pwm);
+        const AdcSample as = sensors.sample_adc(plant);
+        for (int j = 0; j < 3; ++j) adc.sample.i[j] = as.i[j];
+        adc.sample.vdc = as.vdc;
+        const QepSample qs = sensors.sample_qep(plant);
+        qep.sample.count = qs.count;
+        qep.sample.index_seen = qs.index_seen;
+        qep.sample.index_count = qs.index_count;
+
+        mc_drive_cmd_t cmd{};
+        cmd.enable = t >= enable_at;
+        cmd.mode = fw_mode;
+        cmd.speed_ref = static_cast<float>(speed_ref.at(t) / kRpm);
+        cmd.torque_ref = static_cast<float>(torque_ref.at(t));
+        cmd.i_ref = mc_dq_t{static_cast<float>(id_ref.at(t)), static_cast<float>(iq_ref.at(t))};
+        mc_drive_command(drive.get(), &cmd);
+
+        const auto i0 = std::chrono::steady_clock::now();
+        mc_drive_isr(drive.get());
+        isr_ns += std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - i0).count();
+        if (k % 10 == 0) mc_drive_background(drive.get());
+
+        // Record the state at the sample instant, before the plant moves on.
+        const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
+        const bool running = tm.state == MC_STATE_RUN;
+        const double theta = plant.theta_e();
+        const double err = running ? wrap_pi(tm.theta - theta) * deg : NAN;
+        const auto iabc = plant.i_abc();
+        const double ipk = std::max({std::fabs(iabc[0]), std::fabs(iabc[1]), std::fabs(iabc[2])});
+        const Vec2 idq = plant.i_dq();
+        double sref = NAN;
+        if (mech == "dyno") sref = dyno.at(t);
+        else if (fw_mode == MC_MODE_SPEED && mech != "locked") sref = speed_ref.at(t);
+        const double speed = plant.omega_m() * kRpm;
+        metrics.add(Sample{t, running, err, speed, sref, idq.x(), idq.y(), tm.i_ref.d, tm.i_ref.q, plant.torque(), ipk});
+
+        if (trace && k % decim == 0) {
+            std::fprintf(trace,
+                         "%.6f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.5f,%.5f,%.3f,%d\n",
+                         t, theta * deg, running ? tm.theta * deg : NAN, err, speed,
+                         running ? tm.omega / p * kRpm : NAN, sref, idq.x(), idq.y(), running ? tm.i_ref.d : NAN,
+                         running ? tm.i_ref.q : NAN, running ? tm.u_dq.d : NAN, running ? tm.u_dq.q : NAN,
+                         plant.torque(), running ? tm.torque_ref : NAN, mech == "inertia" ? load.at(t) : NAN, iabc[0],
+                         iabc[1], iabc[2], tm.vdc, static_cast<int>(tm.state));
+        }
+
+        // The inverter applies the latched duties over (t, t + Ts).
+        plant.step_period(r.ts, {pwm.active[0], pwm.active[1], pwm.active[2]}, pwm.enabled);
+
+        if ((k & 1023) == 0)
+            progress.update(t, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count());
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    progress.done();
+    if (trace) std::fclose(trace);
+
+    RunSummary out;
+    out.sim_time_s = periods * r.ts;
+    out.wall_time_s = wall;
+    out.realtime_factor = wall > 0 ? out.sim_time_s / wall : 0;
+    out.isr_ns_mean = periods > 0 ? isr_ns / periods : 0;
+    out.periods = periods;
+    const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
+    out.metrics_json = metrics.json(fault_names(tm.faults), state_name(tm.state),
+                                    {{"current_limit_a", json_number(r.i_max)},
+                                     {"current_trip_a", json_number(r.i_trip)},
+                                     {"speed_final_rpm", json_number(plant.omega_m() * kRpm)},
+                                     {"sim_time_s", json_number(out.sim_time_s)},
+                                     {"wall_time_s", json_number(wall)},
+                                     {"realtime_factor", json_number(out.realtime_factor)},
+                                     {"fault_count", std::to_string(fault_names(tm.faults).size())}});
+    if (write) {
+        std::ofstream m(opt.out_dir + "/metrics.json");
+        m << out.metrics_json;
+    }
+    return out;
+}
+
+}  // namespace mcsim

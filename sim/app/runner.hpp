@@ -1,0 +1,24 @@
+// Scenario runner: plant + sensors + host HAL + the firmware drive, one control period at a time,
+// exactly in the order the target runs: PWM latch at the period boundary, ADC/QEP sample, ISR,
+// plant integration over the period with the latched duties.
+#pragma once
+#include <string>
+#include "scenario.hpp"
+
+namespace mcsim {
+
+struct RunOptions {
+    std::string out_dir;      // trace.csv and metrics.json go here ("" = write nothing)
+    bool progress = false;    // progress line on stderr
+};
+
+struct RunSummary {
+    std::string metrics_json;
+    double sim_time_s = 0, wall_time_s = 0, realtime_factor = 0;
+    double isr_ns_mean = 0;   // wall time of mc_drive_isr per call (noisy; for bench)
+    long periods = 0;
+};
+
+RunSummary run_scenario(const Scenario& sc, const RunOptions& opt);
+
+}  // namespace mcsim

@@ -1,0 +1,466 @@
+#include "scenario.hpp"
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+namespace mcsim {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}
+
+// clang-format off
+const std::vector<KeySpec>& scenario_schema()
+{
+    static const std::vector<KeySpec> k = {
+    {"scenario.name", KeyType::String, "\"\"", nullptr, 0, 0, "", "", "Short name, used in plot titles."},
+    {"scenario.description", KeyType::String, "\"\"", nullptr, 0, 0, "", "", "What the scenario reproduces."},
+    {"scenario.duration_s", KeyType::Float, "1.0", nullptr, 1e-3, 600, "s", "", "Simulated time."},
+    {"scenario.seed", KeyType::Int, "1", nullptr, 0, 2147483647, "", "", "Seed of the sensor noise."},
+    {"scenario.profile", KeyType::Enum, "\"realistic\"", nullptr, 0, 0, "", "realistic|ideal",
+     "Realism profile: sets the defaults of the inverter and sensor keys (see the table's ideal column)."},
+
+    {"machine.preset", KeyType::String, "\"sun2016-ipm-5kw\"", nullptr, 0, 0, "", "", "Preset name (presets/NAME.toml) or path."},
+    {"machine.model", KeyType::Enum, "\"analytic\"", nullptr, 0, 0, "", "analytic|linear|table",
+     "Plant magnetics: analytic saturation model, constant Ld/Lq/psi_pm, or the analytic model tabulated, inverted (Fig. 4.3) and interpolated."},
+    {"machine.table_points", KeyType::Int, "41", nullptr, 5, 401, "", "", "Grid points per axis of the table model."},
+
+    {"inverter.mode", KeyType::Enum, "\"switching\"", "\"averaged\"", 0, 0, "", "switching|averaged", "Switching instants with dead time, or period averages."},
+    {"inverter.vdc_v", KeyType::Float, "", nullptr, 1, 2000, "V", "", "DC-link voltage (default: the preset's nominal)."},
+    {"inverter.dead_time_s", KeyType::Float, "0.5e-6", "0.0", 0, 10e-6, "s", "", "Dead time per commutation."},
+    {"inverter.device_drop_v", KeyType::Float, "0.0", nullptr, 0, 10, "V", "", "Device on-state drop."},
+
+    {"sensors.adc_bits", KeyType::Int, "12", "16", 8, 16, "bit", "", "Current/voltage ADC resolution."},
+    {"sensors.i_full_scale_a", KeyType::Float, "25.0", nullptr, 0.1, 5000, "A", "", "Current ADC span is -fs..+fs."},
+    {"sensors.i_noise_rms_a", KeyType::Float, "0.02", "0.0", 0, 10, "A", "", "White noise on each current sample."},
+    {"sensors.i_gain_err", KeyType::Float3, "[0.0, 0.0, 0.0]", nullptr, -0.5, 0.5, "1", "", "Relative gain error per phase."},
+    {"sensors.i_offset_err_a", KeyType::Float3, "[0.0, 0.0, 0.0]", nullptr, -10, 10, "A", "", "Offset error per phase (removed by the firmware's calibration)."},
+    {"sensors.vdc_full_scale_v", KeyType::Float, "500.0", nullptr, 1, 5000, "V", "", "Vdc ADC span 0..fs."},
+    {"sensors.vdc_noise_rel", KeyType::Float, "0.005", "0.0", 0, 0.2, "1", "", "Vdc noise, rms relative to the value."},
+    {"sensors.encoder_lines", KeyType::Int, "20000", nullptr, 1, 1000000, "lines/rev", "", "Quadrature encoder lines (4 counts each); 20000 = the thesis' 80000 counts."},
+    {"sensors.encoder_offset_deg", KeyType::Float, "0.0", nullptr, -360, 360, "deg (mech)", "", "Mechanical angle where the counter reads 0 and the index sits."},
+
+    {"mechanics.mode", KeyType::Enum, "\"inertia\"", nullptr, 0, 0, "", "inertia|dyno|locked",
+     "inertia: J dw/dt = Te - B w - T_load; dyno: speed held to mechanics.dyno_speed_rpm; locked: rotor held."},
+    {"mechanics.inertia_kgm2", KeyType::Float, "", nullptr, 1e-6, 1e3, "kg m^2", "", "Inertia (default: preset)."},
+    {"mechanics.friction_nms", KeyType::Float, "", nullptr, 0, 1e2, "N m s", "", "Viscous friction (default: preset)."},
+    {"mechanics.theta0_deg", KeyType::Float, "0.0", nullptr, -360, 360, "deg (elec)", "", "Initial electrical rotor angle."},
+    {"mechanics.speed0_rpm", KeyType::Float, "0.0", nullptr, -30000, 30000, "rpm", "", "Initial speed."},
+    {"mechanics.load_torque_nm", KeyType::Profile, "0.0", nullptr, -1e4, 1e4, "N m", "", "Load torque opposing positive speed (inertia mode)."},
+    {"mechanics.dyno_speed_rpm", KeyType::Profile, "0.0", nullptr, -30000, 30000, "rpm", "", "Dyno speed profile (dyno mode)."},
+
+    {"control.ts_s", KeyType::Float, "1e-4", nullptr, 5e-5, 5e-4, "s", "", "Control = PWM period (2 kHz to 20 kHz)."},
+    {"control.mode", KeyType::Enum, "\"speed\"", nullptr, 0, 0, "", "speed|torque|current", "What the references command."},
+    {"control.angle_source", KeyType::Enum, "\"encoder\"", nullptr, 0, 0, "", "encoder", "Angle used by the controller."},
+    {"control.enable_at_s", KeyType::Float, "0.0", nullptr, 0, 600, "s", "", "Enable command time (offset calibration follows)."},
+    {"control.offset_cal_samples", KeyType::Int, "256", nullptr, 1, 65535, "periods", "", "Periods averaged for the current offsets."},
+    {"control.i_max_a", KeyType::Float, "", nullptr, 0.01, 5000, "A", "", "Phase current limit, peak; references stay within i_max (1 - i_headroom) (default: preset rated peak)."},
+    {"control.i_headroom", KeyType::Float, "0.03", nullptr, 0, 0.49, "1", "", "Share of control.i_max_a the references leave free for regulation error, noise and ripple."},
+    {"control.i_slew_a_per_s", KeyType::Float, "10000.0", nullptr, 1, 1e8, "A/s", "", "Rate limit of the current reference vector (no overshoot past i_max on steps)."},
+    {"control.i_trip_a", KeyType::Float, "", nullptr, 0.01, 5000, "A", "", "Over-current trip, peak (default: 1.5 x rated peak)."},
+    {"control.vdc_min_v", KeyType::Float, "", nullptr, 0, 5000, "V", "", "Under-voltage trip (default: 0.5 x Vdc)."},
+    {"control.vdc_max_v", KeyType::Float, "", nullptr, 0, 5000, "V", "", "Over-voltage trip (default: 1.5 x Vdc)."},
+    {"control.current_bw_hz", KeyType::Float, "500.0", nullptr, 10, 5000, "Hz", "", "Current-loop bandwidth."},
+    {"control.decouple", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Decoupling feed-forward in the current loop."},
+    {"control.speed_bw_hz", KeyType::Float, "10.0", nullptr, 0.1, 200, "Hz", "", "Speed-loop bandwidth (sets kp = J w, ki = kp w / 4 unless given)."},
+    {"control.speed_kp", KeyType::Float, "", nullptr, 0, 1e4, "N m s/rad", "", "Speed PI proportional gain (mechanical rad/s)."},
+    {"control.speed_ki", KeyType::Float, "", nullptr, 0, 1e6, "N m/rad", "", "Speed PI integral gain."},
+    {"control.speed_decimation", KeyType::Int, "10", nullptr, 1, 100, "periods", "", "Speed loop runs every N periods."},
+    {"control.torque_max_nm", KeyType::Float, "", nullptr, 0.01, 1e5, "N m", "", "Speed-loop torque limit (default: 1.2 x rated torque)."},
+    {"control.u_margin", KeyType::Float, "0.92", nullptr, 0.1, 1.0, "1", "", "Share of Vdc/sqrt(3) the references plan for (field weakening)."},
+    {"control.mtpa", KeyType::Enum, "\"analytic\"", nullptr, 0, 0, "", "analytic|table", "MTPA law (2.24) or its table."},
+    {"control.deadtime_comp", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Dead-time compensation in the modulator."},
+    {"control.dtc_i_band_a", KeyType::Float, "0.3", nullptr, 0.001, 100, "A", "", "Linear zone of the compensation's current sign."},
+    {"control.encoder_pll_bw_hz", KeyType::Float, "150.0", nullptr, 1, 2000, "Hz", "", "Encoder speed PLL bandwidth."},
+    {"control.speed_ref_rpm", KeyType::Profile, "0.0", nullptr, -30000, 30000, "rpm", "", "Speed reference (speed mode)."},
+    {"control.torque_ref_nm", KeyType::Profile, "0.0", nullptr, -1e5, 1e5, "N m", "", "Torque reference (torque mode)."},
+    {"control.id_ref_a", KeyType::Profile, "0.0", nullptr, -5000, 5000, "A", "", "d current reference (current mode)."},
+    {"control.iq_ref_a", KeyType::Profile, "0.0", nullptr, -5000, 5000, "A", "", "q current reference (current mode)."},
+
+    {"output.decimation", KeyType::Int, "10", nullptr, 1, 1000000, "periods", "", "Write one trace row every N periods."},
+    {"output.trace", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Write trace.csv."},
+
+    {"metrics.start_s", KeyType::Float, "0.0", nullptr, 0, 600, "s", "", "angle_err_max_deg and current figures from here on."},
+    {"metrics.settle_from_s", KeyType::Float, "0.0", nullptr, 0, 600, "s", "", "settling_time_s is measured from here."},
+    {"metrics.settle_signal", KeyType::Enum, "\"speed\"", nullptr, 0, 0, "", "speed|angle|iq", "Error settling_time_s looks at: speed - ref [rpm], angle error [deg], iq - iq_ref [A]."},
+    {"metrics.settle_band", KeyType::Float, "6.0", nullptr, 0, 1e5, "rpm|deg|A", "", "Error band for settling_time_s."},
+    {"metrics.window", KeyType::String, "", nullptr, 0, 0, "", "",
+     "Array of tables [[metrics.window]] with name (string), from_s, to_s: the steady windows."},
+    };
+    return k;
+}
+// clang-format on
+
+double Profile::at(double t) const
+{
+    if (pts.empty()) return 0.0;
+    if (t <= pts.front().first) return pts.front().second;
+    if (t >= pts.back().first) return pts.back().second;
+    for (size_t k = 1; k < pts.size(); ++k) {
+        if (t < pts[k].first) {
+            const auto& a = pts[k - 1];
+            const auto& b = pts[k];
+            if (b.first <= a.first) return b.second;  // a step: two points at the same time
+            return a.second + (b.second - a.second) * (t - a.first) / (b.first - a.first);
+        }
+    }
+    return pts.back().second;
+}
+
+namespace {
+
+const KeySpec* find_spec(const std::string& key)
+{
+    for (const auto& s : scenario_schema())
+        if (key == s.key) return &s;
+    return nullptr;
+}
+
+std::string node_text(const toml::node& n)
+{
+    std::ostringstream os;
+    if (auto s = n.as_string()) {
+        os << '"' << s->get() << '"';
+    } else if (n.is_table()) {
+        os << "(table)";
+    } else {
+        os << toml::json_formatter{n};  // compact, one line for scalars and arrays
+    }
+    std::string r = os.str();
+    for (auto& c : r)
+        if (c == '\n') c = ' ';
+    return r;
+}
+
+const char* type_name(KeyType t)
+{
+    switch (t) {
+    case KeyType::Float: return "a number";
+    case KeyType::Int: return "an integer";
+    case KeyType::Bool: return "true or false";
+    case KeyType::String: return "a string";
+    case KeyType::Enum: return "one of the strings";
+    case KeyType::Float3: return "an array of 3 numbers";
+    case KeyType::Profile: return "a number or an array of [t_s, value] pairs with non-decreasing t";
+    }
+    return "?";
+}
+
+std::string range_text(const KeySpec& s)
+{
+    std::ostringstream os;
+    if (s.type == KeyType::Enum) {
+        os << "allowed: " << s.choices;
+    } else if (s.type == KeyType::Bool || s.type == KeyType::String) {
+        os << "expected " << type_name(s.type);
+    } else {
+        os << "allowed range [" << s.min << ", " << s.max << "]" << (s.unit[0] ? " " : "") << s.unit;
+    }
+    return os.str();
+}
+
+[[noreturn]] void fail(const std::string& origin, const std::string& key, const std::string& value,
+                       const std::string& what)
+{
+    throw ScenarioError(origin + ": key '" + key + "' = " + value + ": " + what);
+}
+
+std::optional<double> as_number(const toml::node& n)
+{
+    if (auto v = n.as_floating_point()) return v->get();
+    if (auto v = n.as_integer()) return static_cast<double>(v->get());
+    return std::nullopt;
+}
+
+}  // namespace
+
+// Convert one validated node into the typed stores.
+static void store(const std::string& origin, const KeySpec& s, const toml::node& n,
+                  std::map<std::string, double>& num, std::map<std::string, std::string>& str,
+                  std::map<std::string, Profile>& prof, std::map<std::string, std::vector<double>>& f3)
+{
+    const std::string key = s.key;
+    const std::string shown = node_text(n);
+    auto check_range = [&](double v) {
+        if (!std::isfinite(v) || v < s.min || v > s.max) fail(origin, key, shown, "out of range; " + range_text(s));
+    };
+    switch (s.type) {
+    case KeyType::Float: {
+        auto v = as_number(n);
+        if (!v) fail(origin, key, shown, std::string("wrong type: expected ") + type_name(s.type) + "; " + range_text(s));
+        check_range(*v);
+        num[key] = *v;
+        break;
+    }
+    case KeyType::Int: {
+        auto v = n.as_integer();
+        if (!v) fail(origin, key, shown, std::string("wrong type: expected ") + type_name(s.type) + "; " + range_text(s));
+        check_range(static_cast<double>(v->get()));
+        num[key] = static_cast<double>(v->get());
+        break;
+    }
+    case KeyType::Bool: {
+        auto v = n.as_boolean();
+        if (!v) fail(origin, key, shown, "wrong type: expected true or false");
+        num[key] = v->get() ? 1.0 : 0.0;
+        break;
+    }
+    case KeyType::String: {
+        auto v = n.as_string();
+        if (!v) fail(origin, key, shown, "wrong type: expected a string");
+        str[key] = v->get();
+        break;
+    }
+    case KeyType::Enum: {
+        auto v = n.as_string();
+        if (!v) fail(origin, key, shown, std::string("wrong type: expected a string; ") + range_text(s));
+        const std::string val = v->get();
+        const std::string choices = std::string("|") + s.choices + "|";
+        if (val.empty() || choices.find("|" + val + "|") == std::string::npos)
+            fail(origin, key, shown, "not a valid choice; " + range_text(s));
+        str[key] = val;
+        break;
+    }
+    case KeyType::Float3: {
+        auto a = n.as_array();
+        if (!a || a->size() != 3) fail(origin, key, shown, "wrong type: expected an array of 3 numbers; " + range_text(s));
+        std::vector<double> out;
+        for (auto& e : *a) {
+            auto v = as_number(e);
+            if (!v) fail(origin, key, shown, "wrong type: expected an array of 3 numbers");
+            check_range(*v);
+            out.push_back(*v);
+        }
+        f3[key] = out;
+        break;
+    }
+    case KeyType::Profile: {
+        Profile p;
+        if (auto v = as_number(n)) {
+            check_range(*v);
+            p.pts.push_back({0.0, *v});
+        } else if (auto a = n.as_array()) {
+            if (a->empty()) fail(origin, key, shown, std::string("wrong type: expected ") + type_name(s.type));
+            for (auto& e : *a) {
+                auto pair = e.as_array();
+                std::optional<double> t, v;
+                if (pair && pair->size() == 2) {
+                    t = as_number(*pair->get(0));
+                    v = as_number(*pair->get(1));
+                }
+                if (!t || !v) fail(origin, key, shown, std::string("wrong type: expected ") + type_name(s.type));
+                if (*t < 0 || !std::isfinite(*t)) fail(origin, key, shown, "profile time must be >= 0 s");
+                if (!p.pts.empty() && *t < p.pts.back().first)
+                    fail(origin, key, shown, "profile times must be non-decreasing");
+                check_range(*v);
+                p.pts.push_back({*t, *v});
+            }
+        } else {
+            fail(origin, key, shown, std::string("wrong type: expected ") + type_name(s.type) + "; " + range_text(s));
+        }
+        prof[key] = p;
+        break;
+    }
+    }
+}
+
+static void parse_windows(const std::string& origin, const toml::node& n, std::vector<Window>& out)
+{
+    const std::string key = "metrics.window";
+    auto arr = n.as_array();
+    if (!arr) fail(origin, key, node_text(n), "wrong type: expected an array of tables [[metrics.window]]");
+    out.clear();
+    for (auto& e : *arr) {
+        auto t = e.as_table();
+        if (!t) fail(origin, key, node_text(e), "wrong type: expected a table with name, from_s, to_s");
+        Window w;
+        bool has_from = false, has_to = false;
+        for (auto&& [k, v] : *t) {
+            const std::string kk = std::string(k.str());
+            const std::string full = key + "." + kk;
+            if (kk == "name") {
+                auto s = v.as_string();
+                if (!s) fail(origin, full, node_text(v), "wrong type: expected a string");
+                w.name = s->get();
+            } else if (kk == "from_s" || kk == "to_s") {
+                auto x = as_number(v);
+                if (!x || *x < 0 || *x > 600) fail(origin, full, node_text(v), "expected a number; allowed range [0, 600] s");
+                (kk == "from_s" ? w.from_s : w.to_s) = *x;
+                (kk == "from_s" ? has_from : has_to) = true;
+            } else {
+                fail(origin, full, node_text(v), "unknown key; a window has name, from_s, to_s");
+            }
+        }
+        if (w.name.empty()) fail(origin, key + ".name", "(missing)", "every window needs a name");
+        if (!has_from || !has_to) fail(origin, key + "." + w.name, "(missing)", "every window needs from_s and to_s");
+        if (w.to_s <= w.from_s) fail(origin, key + "." + w.name, std::to_string(w.to_s), "to_s must be after from_s");
+        out.push_back(w);
+    }
+}
+
+// Flatten the two-level document; reject unknown sections/keys before anything is used.
+static void walk(const std::string& origin, const toml::table& root, std::map<std::string, const toml::node*>& leaves)
+{
+    for (auto&& [sec, node] : root) {
+        const std::string sname = std::string(sec.str());
+        auto t = node.as_table();
+        if (!t) fail(origin, sname, node_text(node), "unknown top-level key; keys live in sections [scenario], [machine], [inverter], [sensors], [mechanics], [control], [output], [metrics]");
+        for (auto&& [k, v] : *t) {
+            const std::string full = sname + "." + std::string(k.str());
+            if (!find_spec(full)) fail(origin, full, node_text(v), "unknown key (see `mcsim keys` for the list)");
+            leaves[full] = &v;
+        }
+    }
+}
+
+// Insert "a.b = value" into a table; the value is parsed as TOML, or taken as a bare string.
+static void apply_set(toml::table& root, const std::string& set)
+{
+    const auto eq = set.find('=');
+    if (eq == std::string::npos || eq == 0) throw ScenarioError("--set '" + set + "': expected key=value");
+    const std::string key = set.substr(0, eq);
+    const std::string val = set.substr(eq + 1);
+    const auto dot = key.find('.');
+    if (dot == std::string::npos) throw ScenarioError("--set: key '" + key + "': expected section.key");
+    if (!find_spec(key)) throw ScenarioError("--set: key '" + key + "' = " + val + ": unknown key (see `mcsim keys` for the list)");
+    const std::string sec = key.substr(0, dot), name = key.substr(dot + 1);
+    toml::table parsed;
+    try {
+        parsed = toml::parse("v = " + val);
+    } catch (const toml::parse_error&) {
+        parsed = toml::table{};
+        parsed.insert("v", val);
+    }
+    if (!root.contains(sec)) root.insert(sec, toml::table{});
+    auto* t = root[sec].as_table();
+    if (!t) throw ScenarioError("--set: section '" + sec + "' is not a table");
+    t->insert_or_assign(name, *parsed.get("v"));
+}
+
+Scenario Scenario::from_string(const std::string& text, const std::string& origin, const std::vector<std::string>& sets)
+{
+    toml::table root;
+    try {
+        root = toml::parse(text, origin);
+    } catch (const toml::parse_error& e) {
+        std::ostringstream os;
+        os << origin << ":" << e.source().begin.line << ":" << e.source().begin.column << ": TOML syntax error: " << e.description();
+        throw ScenarioError(os.str());
+    }
+    for (const auto& s : sets) apply_set(root, s);
+
+    Scenario sc;
+    sc.origin_ = origin;
+    std::map<std::string, const toml::node*> leaves;
+    walk(origin, root, leaves);
+
+    // profile first: it selects the defaults of the other keys
+    bool ideal = false;
+    if (auto it = leaves.find("scenario.profile"); it != leaves.end()) {
+        store(origin, *find_spec("scenario.profile"), *it->second, sc.num_, sc.str_, sc.prof_, sc.f3_);
+        ideal = sc.str_["scenario.profile"] == "ideal";
+    }
+    for (const auto& spec : scenario_schema()) {
+        const std::string key = spec.key;
+        if (key == "metrics.window") {
+            if (auto it = leaves.find(key); it != leaves.end()) parse_windows(origin, *it->second, sc.windows_);
+            continue;
+        }
+        if (auto it = leaves.find(key); it != leaves.end()) {
+            store(origin, spec, *it->second, sc.num_, sc.str_, sc.prof_, sc.f3_);
+            continue;
+        }
+        const char* def = (ideal && spec.def_ideal) ? spec.def_ideal : spec.def;
+        if (!def || !def[0]) continue;  // derived from the preset by the runner
+        toml::table d = toml::parse(std::string("v = ") + def);
+        store("(default)", spec, *d.get("v"), sc.num_, sc.str_, sc.prof_, sc.f3_);
+    }
+    // cross-key checks
+    for (const auto& w : sc.windows_)
+        if (w.to_s > sc.f("scenario.duration_s") + 1e-12)
+            fail(origin, "metrics.window." + w.name + ".to_s", std::to_string(w.to_s), "window ends after scenario.duration_s");
+    return sc;
+}
+
+Scenario Scenario::load(const std::string& path, const std::vector<std::string>& sets)
+{
+    std::ifstream in(path);
+    if (!in) throw ScenarioError(path + ": cannot open scenario file");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return from_string(ss.str(), path, sets);
+}
+
+double Scenario::f(const std::string& key) const
+{
+    auto it = num_.find(key);
+    if (it == num_.end()) throw ScenarioError("internal: key '" + key + "' has no value");
+    return it->second;
+}
+long Scenario::i(const std::string& key) const { return static_cast<long>(std::llround(f(key))); }
+bool Scenario::b(const std::string& key) const { return f(key) != 0.0; }
+const std::string& Scenario::s(const std::string& key) const
+{
+    auto it = str_.find(key);
+    if (it == str_.end()) throw ScenarioError("internal: key '" + key + "' has no value");
+    return it->second;
+}
+bool Scenario::has(const std::string& key) const
+{
+    return num_.count(key) || str_.count(key) || prof_.count(key) || f3_.count(key);
+}
+const Profile& Scenario::profile(const std::string& key) const
+{
+    auto it = prof_.find(key);
+    if (it == prof_.end()) throw ScenarioError("internal: key '" + key + "' has no value");
+    return it->second;
+}
+std::vector<double> Scenario::f3(const std::string& key) const
+{
+    auto it = f3_.find(key);
+    if (it == f3_.end()) throw ScenarioError("internal: key '" + key + "' has no value");
+    return it->second;
+}
+
+std::string schema_markdown()
+{
+    std::ostringstream os;
+    os << "| key | type | default | ideal profile | range / choices | unit | meaning |\n";
+    os << "|---|---|---|---|---|---|---|\n";
+    for (const auto& s : scenario_schema()) {
+        std::string range;
+        if (s.type == KeyType::Enum) {
+            range = s.choices;
+        } else if (s.type == KeyType::Float || s.type == KeyType::Int || s.type == KeyType::Float3 || s.type == KeyType::Profile) {
+            std::ostringstream r;
+            r << s.min << " .. " << s.max;
+            range = r.str();
+        }
+        const char* tn = "";
+        switch (s.type) {
+        case KeyType::Float: tn = "float"; break;
+        case KeyType::Int: tn = "int"; break;
+        case KeyType::Bool: tn = "bool"; break;
+        case KeyType::String: tn = std::string(s.key) == "metrics.window" ? "array of tables" : "string"; break;
+        case KeyType::Enum: tn = "string"; break;
+        case KeyType::Float3: tn = "float[3]"; break;
+        case KeyType::Profile: tn = "profile"; break;
+        }
+        std::string def = s.def && s.def[0] ? s.def : "(preset)";
+        if (std::string(s.key) == "metrics.window") def = "none";
+        std::string range_esc = range;
+        for (size_t p = 0; (p = range_esc.find('|', p)) != std::string::npos; p += 2) range_esc.replace(p, 1, "\\|");
+        std::string unit = s.unit;
+        for (size_t p = 0; (p = unit.find('|', p)) != std::string::npos; p += 2) unit.replace(p, 1, "\\|");
+        os << "| `" << s.key << "` | " << tn << " | `" << def << "` | " << (s.def_ideal ? std::string("`") + s.def_ideal + "`" : "") << " | "
+           << range_esc << " | " << unit << " | " << s.doc << " |\n";
+    }
+    return os.str();
+}
+
+}  // namespace mcsim

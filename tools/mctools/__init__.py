@@ -1,0 +1,3 @@
+"""PC-side tools for the IPMSM sensorless motor drive."""
+
+__version__ = "0.1.0"

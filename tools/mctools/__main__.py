@@ -1,0 +1,5 @@
+import sys
+
+from mctools.cli import main
+
+sys.exit(main())

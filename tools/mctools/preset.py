@@ -1,0 +1,134 @@
+"""Locating and reading machine preset files (TOML), and the `preset` report."""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from pathlib import Path
+
+from mctools.machine import Machine, machine_from_dict
+
+
+class PresetError(Exception):
+    """Preset not found or malformed; the CLI turns it into exit status 2."""
+
+
+def search_dirs(preset_dir=None) -> list[Path]:
+    """Where a preset name is looked up, in order."""
+    dirs = []
+    if preset_dir:
+        dirs.append(Path(preset_dir))
+    env = os.environ.get("MC_PRESET_DIR")
+    if env:
+        dirs.append(Path(env))
+    # Editable install / source checkout: tools/mctools/preset.py -> <repo>/presets
+    dirs.append(Path(__file__).resolve().parents[2] / "presets")
+    dirs.append(Path.cwd() / "presets")
+    seen, out = set(), []
+    for d in dirs:
+        key = d.resolve() if d.exists() else d
+        if key not in seen:
+            seen.add(key)
+            out.append(d)
+    return out
+
+
+def find_preset(name_or_path: str, preset_dir=None) -> Path:
+    p = Path(name_or_path)
+    looks_like_path = p.suffix == ".toml" or os.sep in name_or_path or "/" in name_or_path
+    if p.is_file():
+        return p
+    if looks_like_path:
+        raise PresetError(f"{name_or_path}: no such preset file")
+    dirs = search_dirs(preset_dir)
+    for d in dirs:
+        cand = d / f"{name_or_path}.toml"
+        if cand.is_file():
+            return cand
+    raise PresetError(f"preset '{name_or_path}' not found; looked in: "
+                      + ", ".join(str(d) for d in dirs))
+
+
+def load_preset(name_or_path: str, preset_dir=None) -> Machine:
+    path = find_preset(name_or_path, preset_dir)
+    try:
+        with path.open("rb") as f:
+            data = tomllib.load(f)
+    except tomllib.TOMLDecodeError as exc:
+        raise PresetError(f"{path}: invalid TOML: {exc}") from None
+    try:
+        return machine_from_dict(data)
+    except (ValueError, TypeError) as exc:
+        raise PresetError(f"{path}: {exc}") from None
+
+
+def derived_figures(m: Machine) -> dict:
+    """Figures derived from the model, for the `preset` report and for tests."""
+    psi_pm, ld, lq = m.small_signal()
+    out = {
+        "name": m.name,
+        "pole_pairs": m.pole_pairs,
+        "psi_pm_model_wb": psi_pm,
+        "psi_pm_preset_wb": m.psi_pm_wb,
+        "ld_model_h": ld,
+        "ld_preset_h": m.ld_h,
+        "lq_model_h": lq,
+        "lq_preset_h": m.lq_h,
+    }
+    if math.isfinite(m.vdc_nominal_v):
+        out["vdc_nominal_v"] = m.vdc_nominal_v
+        out["u_max_v"] = m.u_max()
+        out["base_speed_noload_rpm"] = m.base_speed_rpm()
+    if math.isfinite(m.i_rated_peak_a):
+        p = m.mtpa(m.i_rated_peak_a)
+        out.update({
+            "i_rated_peak_a": m.i_rated_peak_a,
+            "mtpa_id_a": p.i_d,
+            "mtpa_iq_a": p.i_q,
+            "mtpa_angle_deg": p.angle_deg,
+            "mtpa_torque_nm": p.torque_nm,
+            "mtpa_psi_d_wb": p.psi_d,
+            "mtpa_psi_q_wb": p.psi_q,
+        })
+        if math.isfinite(m.torque_rated_nm):
+            out["torque_rated_nm"] = m.torque_rated_nm
+        if math.isfinite(m.vdc_nominal_v):
+            out["base_speed_mtpa_rated_rpm"] = m.base_speed_rpm(p.i_d, p.i_q)
+        (ldd_lo, ldd_hi), (lqq_lo, lqq_hi) = m.inductance_ranges(m.i_rated_peak_a)
+        out.update({"l_dd_min_h": ldd_lo, "l_dd_max_h": ldd_hi,
+                    "l_qq_min_h": lqq_lo, "l_qq_max_h": lqq_hi})
+    return out
+
+
+def format_report(f: dict, source: Path | None = None) -> str:
+    def mh(x):
+        return f"{x * 1e3:.4g} mH"
+
+    def dev(model, preset):
+        return f"({100.0 * (model / preset - 1.0):+.2f} % vs preset)" if preset else ""
+
+    lines = [f"preset {f['name']}" + (f"  [{source}]" if source else ""),
+             f"  pole pairs                 {f['pole_pairs']}",
+             "  small-signal at i = 0 (saturation model):",
+             f"    psi_pm                   {f['psi_pm_model_wb']:.5f} Wb "
+             f"{dev(f['psi_pm_model_wb'], f['psi_pm_preset_wb'])}",
+             f"    Ld                       {mh(f['ld_model_h'])} {dev(f['ld_model_h'], f['ld_preset_h'])}",
+             f"    Lq                       {mh(f['lq_model_h'])} {dev(f['lq_model_h'], f['lq_preset_h'])}"]
+    if "u_max_v" in f:
+        lines += [f"  at Vdc = {f['vdc_nominal_v']:g} V (u_max = Vdc/sqrt(3) = {f['u_max_v']:.1f} V):",
+                  f"    no-load base speed       {f['base_speed_noload_rpm']:.0f} rpm"]
+        if "base_speed_mtpa_rated_rpm" in f:
+            lines.append(f"    base speed, MTPA rated   {f['base_speed_mtpa_rated_rpm']:.0f} rpm"
+                         "  (incl. Rs drop)")
+    if "mtpa_torque_nm" in f:
+        rated = (f"  (preset rated {f['torque_rated_nm']:g} N m)" if "torque_rated_nm" in f else "")
+        lines += [f"  MTPA at rated {f['i_rated_peak_a']:g} A peak:",
+                  f"    torque                   {f['mtpa_torque_nm']:.2f} N m{rated}",
+                  f"    i_d, i_q                 {f['mtpa_id_a']:.2f} A, {f['mtpa_iq_a']:.2f} A "
+                  f"(angle {f['mtpa_angle_deg']:.1f} deg from d)",
+                  f"    psi_d, psi_q             {f['mtpa_psi_d_wb']:.4f} Wb, {f['mtpa_psi_q_wb']:.4f} Wb",
+                  f"  differential inductances, i_d <= 0, i_q >= 0, |i| <= {f['i_rated_peak_a']:g} A:",
+                  f"    l_dd                     {mh(f['l_dd_min_h'])} .. {mh(f['l_dd_max_h'])}",
+                  f"    l_qq                     {mh(f['l_qq_min_h'])} .. {mh(f['l_qq_max_h'])}"]
+    return "\n".join(lines)
