@@ -17,7 +17,7 @@ void mc_drive_cfg_default(mc_drive_cfg_t *c)
         .angle_src = MC_ANGLE_SRC_ENCODER, .enc_counts_per_rev = 80000u, .enc_offset_rad = 0.0f,
         .enc_pll_bw_hz = 150.0f, .enc_speed_fc_hz = 500.0f,
         .cc_bw_hz = 500.0f, .cc_decouple = true,
-        .i_max = 13.29f, .i_headroom = 0.03f, .i_slew = 10000.0f, .u_margin = 0.92f, .mtpa_table = false,
+        .i_max = 13.29f, .i_headroom = 0.03f, .i_slew = 10000.0f, .u_margin = 0.95f, .mtpa_table = false,
         .sc_kp = 1.0f, .sc_ki = 20.0f, .torque_max = 32.0f, .sc_decimation = 10,
         .dtc_enable = true, .dtc_i_band = 0.3f, .dead_time = 0.5e-6f,
     };

@@ -72,7 +72,7 @@ const std::vector<KeySpec>& scenario_schema()
     {"control.speed_ki", KeyType::Float, "", nullptr, 0, 1e6, "N m/rad", "", "Speed PI integral gain."},
     {"control.speed_decimation", KeyType::Int, "10", nullptr, 1, 100, "periods", "", "Speed loop runs every N periods."},
     {"control.torque_max_nm", KeyType::Float, "", nullptr, 0.01, 1e5, "N m", "", "Speed-loop torque limit (default: 1.2 x rated torque)."},
-    {"control.u_margin", KeyType::Float, "0.92", nullptr, 0.1, 1.0, "1", "", "Share of Vdc/sqrt(3) the references plan for (field weakening)."},
+    {"control.u_margin", KeyType::Float, "0.95", nullptr, 0.1, 1.0, "1", "", "Share of Vdc/sqrt(3) the references plan for (field weakening)."},
     {"control.mtpa", KeyType::Enum, "\"analytic\"", nullptr, 0, 0, "", "analytic|table", "MTPA law (2.24) or its table."},
     {"control.deadtime_comp", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Dead-time compensation in the modulator."},
     {"control.dtc_i_band_a", KeyType::Float, "0.3", nullptr, 0.001, 100, "A", "", "Linear zone of the compensation's current sign."},
@@ -121,20 +121,28 @@ const KeySpec* find_spec(const std::string& key)
     return nullptr;
 }
 
+// One-line rendering of a value for error messages.
 std::string node_text(const toml::node& n)
 {
     std::ostringstream os;
     if (auto s = n.as_string()) {
         os << '"' << s->get() << '"';
+    } else if (auto f = n.as_floating_point()) {
+        os << f->get();
+    } else if (auto i = n.as_integer()) {
+        os << i->get();
+    } else if (auto b = n.as_boolean()) {
+        os << (b->get() ? "true" : "false");
+    } else if (auto a = n.as_array()) {
+        os << '[';
+        for (size_t k = 0; k < a->size(); ++k) os << (k ? ", " : "") << node_text(*a->get(k));
+        os << ']';
     } else if (n.is_table()) {
         os << "(table)";
     } else {
-        os << toml::json_formatter{n};  // compact, one line for scalars and arrays
+        os << "(value)";
     }
-    std::string r = os.str();
-    for (auto& c : r)
-        if (c == '\n') c = ' ';
-    return r;
+    return os.str();
 }
 
 const char* type_name(KeyType t)

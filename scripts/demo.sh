@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# The demo: build, run the default scenario in the simulator, render the plots.
+# Usage: scripts/demo.sh [SCENARIO.toml] (default: scenarios/speed_step_inertia.toml)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scenario="${1:-scenarios/speed_step_inertia.toml}"
+name="$(basename "$scenario" .toml)"
+out="out/$name"
+
+scripts/setup.sh
+scripts/build.sh
+build/host/sim/app/mcsim run "$scenario" --out "$out"
+.venv/bin/mctools plot "$out/trace.csv" --out "$out/plots" --metrics "$out/metrics.json"
+echo
+echo "demo: metrics in $out/metrics.json, trace in $out/trace.csv, plots in $out/plots/"
