@@ -4,8 +4,11 @@
 #define MC_FILTERS_H
 #include "mc/types.h"
 
-typedef struct { float a; float y; } mc_lpf1_t;
+/* y(k) = b (x(k) + x(k-1)) + a y(k-1); y is the output, x1 the previous input. */
+typedef struct { float a; float b; float x1; float y; } mc_lpf1_t;
+/* fc is limited to 0.45/ts; y0 is taken as the steady state (input and output). */
 void  mc_lpf1_init(mc_lpf1_t *s, float fc_hz, float ts, float y0);
+void  mc_lpf1_reset(mc_lpf1_t *s, float y0);
 float mc_lpf1_step(mc_lpf1_t *s, float x);
 
 typedef struct {

@@ -45,7 +45,7 @@ typedef struct { mc_pi_q15_cfg_t cfg; int32_t integ; } mc_pi_q15_t;   /* integ i
 void     mc_pi_q15_init(mc_pi_q15_t *s, const mc_pi_q15_cfg_t *cfg);
 mc_q15_t mc_pi_q15_step(mc_pi_q15_t *s, mc_q15_t err);
 typedef struct { mc_q31_t kp, ki_ts; int16_t shift; mc_q31_t out_min, out_max; } mc_pi_q31_cfg_t;
-typedef struct { mc_pi_q31_cfg_t cfg; int64_t integ; } mc_pi_q31_t;
+typedef struct { mc_pi_q31_cfg_t cfg; int64_t integ; } mc_pi_q31_t;   /* integ in Q47 of output */
 void     mc_pi_q31_init(mc_pi_q31_t *s, const mc_pi_q31_cfg_t *cfg);
 mc_q31_t mc_pi_q31_step(mc_pi_q31_t *s, mc_q31_t err);
 

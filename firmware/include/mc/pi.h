@@ -1,4 +1,7 @@
-/* PI controller with output limits and anti-windup (conditional integration + clamp). */
+/* PI controller with output limits and anti-windup (conditional integration + clamp).
+ * Discrete form: integ(k) = integ(k-1) + ki ts err(k); out = clamp(ff + kp err + integ).
+ * While the output is at a limit and err pushes outward, the integrator charges only up to the
+ * value that puts the output exactly on the limit; it is also clamped to [lo, hi]. */
 #ifndef MC_PI_H
 #define MC_PI_H
 #include "mc/types.h"
@@ -14,7 +17,7 @@ typedef struct {
 typedef struct {
     mc_pi_cfg_t cfg;
     float integ;     /* integrator state, in output units      */
-    bool  saturated; /* last output was clamped                */
+    bool  saturated; /* last output was at (or clamped to) a limit */
 } mc_pi_t;
 
 void  mc_pi_init(mc_pi_t *s, const mc_pi_cfg_t *cfg);

@@ -22,6 +22,8 @@ typedef struct {
 } mc_pll_t;
 
 void mc_pll_init(mc_pll_t *s, const mc_pll_cfg_t *cfg);
+/* omega goes into both the speed and the integrator: right when no feed-forward is used; with
+ * feed-forward, set s->integ = omega - omega_ff after the reset. */
 void mc_pll_reset(mc_pll_t *s, float theta, float omega);
 /* theta_in: raw angle measurement; omega_ff: speed feed-forward (0 if none). */
 void mc_pll_step(mc_pll_t *s, float theta_in, float omega_ff);

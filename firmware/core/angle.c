@@ -1,0 +1,49 @@
+/* Angle wrapping: the one helper every angle difference goes through (architecture.md). */
+#include "mc/angle.h"
+
+#include <math.h>
+#include <stdint.h>
+
+/* 2*pi split Cody-Waite style: the high part has only 8 significant bits, so k * hi is exact
+ * for |k| < 2^16 and x - k*hi is exact too; the low part carries the rest of 2*pi. This keeps
+ * the reduction error at the 1e-9 level for |x| up to ~4e5 rad instead of k * 1.7e-7. */
+#define TWO_PI_HI  6.28125f
+#define TWO_PI_LO  1.9353071795864769e-3f
+#define INV_TWO_PI 0.15915494309189535f
+/* Beyond this the float grid of x is coarser than the reduction error anyway; fmodf keeps the
+ * multiple k small enough for the exact split above. */
+#define BIG_ANGLE  100000.0f
+
+float mc_wrap_pi(float x)
+{
+    if (!(fabsf(x) <= BIG_ANGLE)) {
+        if (x != x) {
+            return x;   /* NaN: nothing sensible to wrap, and it must not reach the int cast */
+        }
+        x = fmodf(x, MC_2PI);
+    }
+    /* nearest turn count by a truncating conversion (floorf is a library call on the M4) */
+    float y = x * INV_TWO_PI;
+    float k = (float)(int32_t)(y + ((y >= 0.0f) ? 0.5f : -0.5f));
+    float r = (x - k * TWO_PI_HI) - k * TWO_PI_LO;
+    /* rounding at the seams may leave r one ulp outside; a single correction suffices */
+    if (r >= MC_PI) {
+        r -= MC_2PI;
+    } else if (r < -MC_PI) {
+        r += MC_2PI;
+    }
+    return r;
+}
+
+float mc_wrap_2pi(float x)
+{
+    float r = mc_wrap_pi(x);
+    if (r < 0.0f) {
+        r += MC_2PI;
+        /* -tiny + 2pi rounds to 2pi, which is outside [0, 2pi) */
+        if (r >= MC_2PI) {
+            r = 0.0f;
+        }
+    }
+    return r;
+}

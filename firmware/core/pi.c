@@ -1,0 +1,63 @@
+/* PI controller with output limits and anti-windup by conditional integration + clamp. */
+#include "mc/pi.h"
+
+void mc_pi_init(mc_pi_t *s, const mc_pi_cfg_t *cfg)
+{
+    s->cfg = *cfg;
+    mc_pi_reset(s, 0.0f);
+}
+
+void mc_pi_reset(mc_pi_t *s, float integ)
+{
+    s->integ = integ;
+    s->saturated = false;
+}
+
+float mc_pi_step_lim(mc_pi_t *s, float err, float ff, float lo, float hi)
+{
+    if (lo > hi) {
+        /* inconsistent limits (e.g. a voltage budget that went negative): collapse, don't flip */
+        float m = 0.5f * (lo + hi);
+        lo = m;
+        hi = m;
+    }
+    float p = s->cfg.kp * err;
+    float integ = s->integ + s->cfg.ki * s->cfg.ts * err;   /* backward Euler: uses e(k) */
+    float u = ff + p + integ;
+
+    /* Conditional integration: while the output is at a limit and the error pushes further out,
+     * the integrator only charges up to the point where the output just reaches the limit (never
+     * beyond, never backwards). It then holds no excess when the error reverses, so recovery
+     * starts on the next sample, and the output still settles exactly on the limit. */
+    if (u > hi && err > 0.0f) {
+        float room = hi - ff - p;
+        integ = (integ < room) ? integ : room;
+        integ = (integ > s->integ) ? integ : s->integ;
+    } else if (u < lo && err < 0.0f) {
+        float room = lo - ff - p;
+        integ = (integ > room) ? integ : room;
+        integ = (integ < s->integ) ? integ : s->integ;
+    }
+    /* Clamp: the integrator alone never exceeds what the output may reach (covers a limit
+     * that shrinks while the integrator is charged). */
+    if (integ > hi) {
+        integ = hi;
+    } else if (integ < lo) {
+        integ = lo;
+    }
+    s->integ = integ;
+    u = ff + p + integ;
+
+    s->saturated = (u >= hi) || (u <= lo);   /* at a limit: the caller's decoupling may care */
+    if (u > hi) {
+        u = hi;
+    } else if (u < lo) {
+        u = lo;
+    }
+    return u;
+}
+
+float mc_pi_step(mc_pi_t *s, float err, float ff)
+{
+    return mc_pi_step_lim(s, err, ff, s->cfg.out_min, s->cfg.out_max);
+}

@@ -1,0 +1,123 @@
+/* SVPWM by min-max zero-sequence injection, and the sector method (2.10)-(2.13) it reproduces. */
+#include "mc/svpwm.h"
+
+#include <math.h>
+
+#include "mc/transforms.h"
+
+/* Requests this close to the hexagon (relative) count as inside: a vector exactly on the
+ * inscribed circle must not be flagged as saturated because of float rounding. */
+#define SAT_TOL 1.0e-6f
+
+/* plain compares: fmaxf/fminf are library calls on the Cortex-M4 */
+static float maxf(float a, float b)
+{
+    return (a > b) ? a : b;
+}
+
+static float minf(float a, float b)
+{
+    return (a < b) ? a : b;
+}
+
+static float clamp01(float x)
+{
+    return (x < 0.0f) ? 0.0f : ((x > 1.0f) ? 1.0f : x);
+}
+
+/* Duties -> realised vector: phase voltage vs DC midpoint is (d - 0.5) vdc, then (2.4); the
+ * common mode of the three legs drops out of Clarke. */
+static void finish(mc_duty_t *out, float vdc)
+{
+    mc_abc_t v;
+    out->a = clamp01(out->a);
+    out->b = clamp01(out->b);
+    out->c = clamp01(out->c);
+    v.a = (out->a - 0.5f) * vdc;
+    v.b = (out->b - 0.5f) * vdc;
+    v.c = (out->c - 0.5f) * vdc;
+    out->u_real = mc_clarke(v);
+}
+
+static bool bad_vdc(float vdc, mc_duty_t *out)
+{
+    if (vdc > 0.0f) {
+        return false;
+    }
+    out->a = out->b = out->c = 0.5f;
+    out->u_real.alpha = 0.0f;
+    out->u_real.beta = 0.0f;
+    out->saturated = true;
+    return true;
+}
+
+void mc_svpwm(mc_ab_t u, float vdc, mc_duty_t *out)
+{
+    if (bad_vdc(vdc, out)) {
+        return;
+    }
+    mc_abc_t v = mc_clarke_inv(u);
+    float vmax = maxf(v.a, maxf(v.b, v.c));
+    float vmin = minf(v.a, minf(v.b, v.c));
+    float span = vmax - vmin;   /* largest line-to-line voltage; the hexagon is span <= vdc */
+    float scale = 1.0f;
+    out->saturated = false;
+    if (span > vdc * (1.0f + SAT_TOL)) {
+        /* scaling all phases by one factor keeps the direction: no phase error */
+        scale = vdc / span;
+        out->saturated = true;
+    }
+    /* zero sequence centring max and min in the DC link: same as equal U0/U7 times (2.11) */
+    float v0 = -0.5f * (vmax + vmin);
+    float k = scale / vdc;
+    out->a = 0.5f + (v.a + v0) * k;
+    out->b = 0.5f + (v.b + v0) * k;
+    out->c = 0.5f + (v.c + v0) * k;
+    finish(out, vdc);
+}
+
+void mc_svpwm_sector(mc_ab_t u, float vdc, mc_duty_t *out)
+{
+    /* Which legs are high in each active vector U1..U6 (Table 2.1 / Figure 2.6). */
+    static const float sw[6][3] = {
+        {1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f},
+        {0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 1.0f},
+    };
+    if (bad_vdc(vdc, out)) {
+        return;
+    }
+    float mag = sqrtf(u.alpha * u.alpha + u.beta * u.beta);
+    float gamma = atan2f(u.beta, u.alpha);              /* (2.13) */
+    if (gamma < 0.0f) {
+        gamma += MC_2PI;
+    }
+    int n = (int)(gamma / (MC_PI / 3.0f));
+    if (n > 5) {
+        n = 5;
+    } else if (n < 0) {
+        n = 0;
+    }
+    float g = gamma - (float)n * (MC_PI / 3.0f);
+    /* (2.13) boundary vectors, (2.10) with |U1| = 2 vdc / 3; times relative to Tc/2 */
+    float tr = (2.0f / MC_SQRT3) * mag * sinf(MC_PI / 3.0f - g) / (2.0f * vdc / 3.0f);
+    float tl = (2.0f / MC_SQRT3) * mag * sinf(g) / (2.0f * vdc / 3.0f);
+    out->saturated = false;
+    if (tr + tl > 1.0f + SAT_TOL) {
+        /* no time left for zero vectors: shorten both, keeping their ratio (the angle) */
+        float s = 1.0f / (tr + tl);
+        tr *= s;
+        tl *= s;
+        out->saturated = true;
+    }
+    float t0 = 1.0f - tr - tl;                           /* (2.11) */
+    if (t0 < 0.0f) {
+        t0 = 0.0f;
+    }
+    const float *r = sw[n];
+    const float *l = sw[(n + 1) % 6];
+    /* (2.12) with T0 split equally between U0 and U7 */
+    out->a = 0.5f * t0 + tr * r[0] + tl * l[0];
+    out->b = 0.5f * t0 + tr * r[1] + tl * l[1];
+    out->c = 0.5f * t0 + tr * r[2] + tl * l[2];
+    finish(out, vdc);
+}
