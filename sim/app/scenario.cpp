@@ -446,6 +446,7 @@ std::string schema_markdown()
             range = s.choices;
         } else if (s.type == KeyType::Float || s.type == KeyType::Int || s.type == KeyType::Float3 || s.type == KeyType::Profile) {
             std::ostringstream r;
+            r.precision(10);
             r << s.min << " .. " << s.max;
             range = r.str();
         }
