@@ -16,6 +16,7 @@ struct RunSummary {
     std::string metrics_json;
     double sim_time_s = 0, wall_time_s = 0, realtime_factor = 0;
     double isr_ns_mean = 0;   // wall time of mc_drive_isr per call (noisy; for bench)
+    double plant_ns_mean = 0; // wall time of Plant::step_period per call
     long periods = 0;
 };
 

@@ -50,10 +50,39 @@ public:
     // psi0 = flux(0) (so W = 0 at i = 0) [J]; 1.5 factor for three phases is applied by callers.
     virtual double energy(const Vec2& psi) const = 0;
     virtual std::string kind() const = 0;                       // "linear" | "analytic" | "table"
+
+protected:
+    // Starting point of the Newton iteration in flux(); models override it with something close
+    // to the answer (the iteration itself is damped, so a poor guess costs iterations, not safety).
+    virtual Vec2 flux_initial_guess(const Vec2& i) const;
 };
+
+// Options/diagnostics of the damped Newton solve behind FluxModel::flux().
+struct FluxSolveStats {
+    int iterations = 0;
+    double residual = 0;  // |current(psi) - i| at exit [A]
+    bool converged = false;
+};
+// Damped Newton on r(psi) = current(psi) - i from psi_start; stops when the step is below
+// rel_tol * |psi| (or the residual is at round-off). Exposed for tests and table inversion.
+Vec2 solve_flux(const FluxModel& m, const Vec2& i, const Vec2& psi_start, FluxSolveStats* stats = nullptr,
+                double rel_tol = 1e-12, int max_iter = 100);
 
 std::unique_ptr<FluxModel> make_linear_model(double ld, double lq, double psi_pm);
 std::unique_ptr<FluxModel> make_analytic_model(const SaturationParams& p);
+// The linear model written in the analytic parametrisation: a_d0 = 1/ld, a_q0 = 1/lq,
+// i_f = psi_pm/ld, all saturation coefficients zero.
+SaturationParams linear_saturation_params(double ld, double lq, double psi_pm);
+// Magnetic co-ordinates of the model at i = 0: psi0 = flux(0) (psi0_d is the PM flux psi_pm)
+// and L0 = l_diff(0) (small-signal Ld, Lq on the diagonal).
+struct SmallSignal {
+    double psi_pm = 0, ld = 0, lq = 0, ldq = 0;
+};
+SmallSignal small_signal(const FluxModel& m);
+// Electromagnetic torque T = 1.5 p (psi_d i_q - psi_q i_d) at current i [N m].
+double torque(const FluxModel& m, int pole_pairs, const Vec2& i);
+// The model a preset describes: the analytic model of its [saturation] table.
+std::unique_ptr<FluxModel> make_preset_model(const MachineParams& mp);
 
 // Loads presets/<name>.toml (or a path); throws std::runtime_error naming file, key, value.
 MachineParams load_machine_preset(const std::string& name_or_path);

@@ -1,0 +1,40 @@
+// Shaft mechanics for the plant: inertia with friction and load, dyno speed hold, locked rotor.
+// The user profiles (std::function) are sampled once per PWM period (start and end) and
+// interpolated linearly inside it, so the RK4 stages of the plant call no std::function.
+#pragma once
+#include "mcsim/plant.hpp"
+
+namespace mcsim {
+
+class Mechanics {
+public:
+    explicit Mechanics(const MechanicsConfig& cfg) : cfg_(cfg) {}
+    // Samples the profiles for [t0, t0+Ts]. In Dyno mode returns the speed the shaft must have
+    // at t0 (the dyno is stiff: the speed is imposed, not integrated); otherwise omega_now.
+    double begin_period(double t0, double Ts, double omega_now);
+    // d omega_m/dt at tau in [0, Ts] from the period start, given T_e and omega_m.
+    // Inertia: J domega/dt = T_e - B omega - T_load(t); Dyno: slope of the profile; Locked: 0.
+    double accel(double tau, double te, double omega) const {
+        if (mode_ == Held) return 0.0;
+        if (mode_ == Dyno) return slope_;
+        return (te - cfg_.friction * omega - (load0_ + slope_ * tau)) * inv_j_;
+    }
+    // Speed at the end of the period when imposed (Dyno), to remove the round-off of the ramp.
+    bool speed_imposed() const { return mode_ != Inertia; }
+    double omega_end() const { return omega_end_; }
+    const MechanicsConfig& config() const { return cfg_; }
+
+private:
+    enum Mode { Inertia, Dyno, Held };
+    double sample_load(double t);
+    double sample_dyno(double t);
+
+    MechanicsConfig cfg_;
+    Mode mode_ = Inertia;
+    double slope_ = 0, load0_ = 0, inv_j_ = 0, omega_end_ = 0;
+    // The end sample of one period is the start sample of the next: one call per period.
+    double cache_t_ = -1e300, cache_v_ = 0;
+    bool cache_dyno_ = false;
+};
+
+}  // namespace mcsim

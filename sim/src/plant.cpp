@@ -1,0 +1,424 @@
+// The plant: flux-linkage state model (4.1)/(4.5) integrated with RK4 between switching
+// instants, inverter, mechanics and the energy ledger. Equations and measured errors:
+// docs/plant.md.
+#include "mcsim/plant.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "mcsim/inverter.hpp"
+#include "mcsim/mechanics.hpp"
+
+namespace mcsim {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// cos/sin of (theta0 + d) from cos/sin of theta0. The stage angles of one period stay within a
+// few 0.1 rad of the period's base angle, where a Taylor series to d^14 is exact in double
+// (next term < 1e-19 at |d| = 0.3); that replaces a libm sincos per RK4 stage.
+inline void rotate_angle(double c0, double s0, double d, double* c, double* s) {
+    double cd, sd;
+    if (std::fabs(d) < 0.3) {
+        // Horner with reciprocal constants: a division per term would cost more than libm.
+        const double d2 = d * d;
+        sd = d * (1.0 + d2 * (-1.0 / 6 + d2 * (1.0 / 120 + d2 * (-1.0 / 5040 + d2 * (1.0 / 362880 +
+                 d2 * (-1.0 / 39916800 + d2 * (1.0 / 6227020800.0)))))));
+        cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24 + d2 * (-1.0 / 720 + d2 * (1.0 / 40320 + d2 * (-1.0 / 3628800 +
+                 d2 * (1.0 / 479001600.0 + d2 * (-1.0 / 87178291200.0)))))));
+    } else {
+        cd = std::cos(d);
+        sd = std::sin(d);
+    }
+    *c = c0 * cd - s0 * sd;
+    *s = s0 * cd + c0 * sd;
+}
+
+// Same within one RK4 step, where |d| <= w_e h stays below ~0.05: to d^5 / d^6 the relative error
+// is < 2e-13 at |d| = 0.05, far below the RK4 truncation.
+inline void rotate_small(double c0, double s0, double d, double* c, double* s) {
+    if (std::fabs(d) >= 0.05) {
+        rotate_angle(c0, s0, d, c, s);
+        return;
+    }
+    const double d2 = d * d;
+    const double sd = d * (1.0 + d2 * (-1.0 / 6 + d2 * (1.0 / 120)));
+    const double cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24 + d2 * (-1.0 / 720)));
+    *c = c0 * cd - s0 * sd;
+    *s = s0 * cd + c0 * sd;
+}
+
+// RK4 state: the machine state plus the integrands of the energy ledger and of the period-average
+// terminal voltage, so that they are integrated with the same order as the state they belong to
+// (the ledger then balances to the integration error, not to a quadrature error on top of it).
+struct St {
+    double pd, pq, th, w;    // psi_dq [Wb], theta_m [rad], omega_m [rad/s]
+    double ein, cu, mech;    // [J] (already x1.5 where it applies)
+    double ud, uq;           // integral of u_dq [V s]
+};
+
+inline void axpy(St& y, const St& x, double a, const St& k) {
+    y.pd = x.pd + a * k.pd;
+    y.pq = x.pq + a * k.pq;
+    y.th = x.th + a * k.th;
+    y.w = x.w + a * k.w;
+    y.ein = x.ein + a * k.ein;
+    y.cu = x.cu + a * k.cu;
+    y.mech = x.mech + a * k.mech;
+    y.ud = x.ud + a * k.ud;
+    y.uq = x.uq + a * k.uq;
+}
+
+}  // namespace
+
+struct Plant::Impl {
+    PlantConfig cfg;
+    std::unique_ptr<FluxModel> model;
+    Mechanics mech;
+    PwmSequencer seq;
+
+    // state
+    double t = 0;
+    Vec2 psi = Vec2::Zero();
+    Vec2 i = Vec2::Zero();  // always model->current(psi) (0 when floating)
+    double th = 0, w = 0;
+    bool floating = false;
+    bool latched[3] = {false, false, false};
+
+    Vec2 psi0 = Vec2::Zero();
+    double w_init = 0;  // W(psi) at the last reset
+    EnergyLedger ledger;
+    Vec2 u_dq_avg = Vec2::Zero(), u_ab_avg = Vec2::Zero();
+    std::array<double, 3> v_avg{{0, 0, 0}};
+
+    // per-period constants used by the stages
+    double p = 1, rs = 0, th_base = 0, c0 = 1, s0 = 0;
+    double th_step = 0, c_step = 1, s_step = 0;  // angle at the start of the current RK4 step
+    Vec2 u_ab = Vec2::Zero();
+
+    Impl(const PlantConfig& c, std::unique_ptr<FluxModel> m) : cfg(c), model(std::move(m)), mech(c.mech) {}
+
+    void sincos_at(double theta_m, double* c, double* s) const {
+        rotate_angle(c0, s0, p * (theta_m - th_base), c, s);
+    }
+
+    std::array<double, 3> phase_currents() const {
+        double c, s;
+        rotate_small(c_step, s_step, p * (th - th_step), &c, &s);  // th is near the last step start
+        return inverse_clarke(Vec2(c * i.x() - s * i.y(), s * i.x() + c * i.y()));
+    }
+
+    // (4.1) in the rotor frame with the stationary-frame voltage u_ab rotated by the stage angle.
+    void deriv(const St& x, const Vec2& ii, double tau, St& dx) const {
+        double c, s;
+        rotate_small(c_step, s_step, p * (x.th - th_step), &c, &s);
+        const double we = p * x.w;
+        double ud, uq;
+        if (floating) {
+            // Open terminals with zero current: the terminal voltage is the speed voltage of the
+            // held flux, d psi/dt = 0.
+            ud = -we * x.pq;
+            uq = we * x.pd;
+            dx.pd = dx.pq = 0.0;
+        } else {
+            ud = c * u_ab.x() + s * u_ab.y();
+            uq = -s * u_ab.x() + c * u_ab.y();
+            dx.pd = ud - rs * ii.x() + we * x.pq;
+            dx.pq = uq - rs * ii.y() - we * x.pd;
+        }
+        const double te = 1.5 * p * (x.pd * ii.y() - x.pq * ii.x());
+        dx.th = x.w;
+        dx.w = mech.accel(tau, te, x.w);
+        dx.ein = 1.5 * (ud * ii.x() + uq * ii.y());
+        dx.cu = 1.5 * rs * ii.squaredNorm();
+        dx.mech = te * x.w;
+        dx.ud = ud;
+        dx.uq = uq;
+    }
+
+    Vec2 current_of(double pd, double pq) const {
+        return floating ? Vec2::Zero() : model->current(Vec2(pd, pq));
+    }
+
+    // Classical RK4 from tau to tau+h with the voltage u_ab held (stationary frame).
+    void rk4(St& x, double tau, double h) {
+        St k1, k2, k3, k4, y;
+        th_step = x.th;
+        sincos_at(th_step, &c_step, &s_step);
+        deriv(x, i, tau, k1);
+        axpy(y, x, 0.5 * h, k1);
+        deriv(y, current_of(y.pd, y.pq), tau + 0.5 * h, k2);
+        axpy(y, x, 0.5 * h, k2);
+        deriv(y, current_of(y.pd, y.pq), tau + 0.5 * h, k3);
+        axpy(y, x, h, k3);
+        deriv(y, current_of(y.pd, y.pq), tau + h, k4);
+        const double a = h / 6.0;
+        x.pd += a * (k1.pd + 2 * k2.pd + 2 * k3.pd + k4.pd);
+        x.pq += a * (k1.pq + 2 * k2.pq + 2 * k3.pq + k4.pq);
+        x.th += a * (k1.th + 2 * k2.th + 2 * k3.th + k4.th);
+        x.w += a * (k1.w + 2 * k2.w + 2 * k3.w + k4.w);
+        x.ein += a * (k1.ein + 2 * k2.ein + 2 * k3.ein + k4.ein);
+        x.cu += a * (k1.cu + 2 * k2.cu + 2 * k3.cu + k4.cu);
+        x.mech += a * (k1.mech + 2 * k2.mech + 2 * k3.mech + k4.mech);
+        x.ud += a * (k1.ud + 2 * k2.ud + 2 * k3.ud + k4.ud);
+        x.uq += a * (k1.uq + 2 * k2.uq + 2 * k3.uq + k4.uq);
+        psi = Vec2(x.pd, x.pq);
+        th = x.th;
+        w = x.w;
+        i = current_of(x.pd, x.pq);
+    }
+
+    // One interval with constant phase voltages v (to the DC midpoint), n RK4 steps.
+    void interval(St& x, double tau0, double tau1, const std::array<double, 3>& v, int n) {
+        const double len = tau1 - tau0;
+        if (!(len > 0.0)) return;
+        u_ab = clarke_phase_voltages(v);
+        for (int k = 0; k < 3; ++k) v_avg[k] += v[k] * len;
+        u_ab_avg += u_ab * len;
+        const double h = len / n;
+        for (int k = 0; k < n; ++k) rk4(x, tau0 + k * h, h);
+    }
+
+    int steps_for(double len, double h_max) const {
+        const int n = static_cast<int>(std::ceil(len / h_max - 1e-9));
+        return n < 1 ? 1 : n;
+    }
+
+    std::array<double, 3> switched_voltages(const std::array<int, 3>& lv) const {
+        const double half = 0.5 * cfg.inverter.vdc;
+        std::array<double, 3> v{{lv[0] * half, lv[1] * half, lv[2] * half}};
+        if (cfg.inverter.v_device != 0.0) {
+            const auto ia = phase_currents();
+            for (int k = 0; k < 3; ++k) v[k] -= device_drop(ia[k], cfg.inverter);
+        }
+        return v;
+    }
+
+    // Bound on |di_x/dt| over this period, for PwmSequencer::predecide. From (4.1) in the
+    // stationary frame: di_ab/dt = R(theta) (G (u - Rs i - w_e J psi) + w_e J i), G = di/dpsi,
+    // |u| <= 2/3 vdc; x2 margin for the change of G (saturation) and of the state in the period.
+    double current_rate_bound() const {
+        const Mat2 g = model->di_dpsi(psi);
+        const double gn = std::max(std::fabs(g(0, 0)) + std::fabs(g(0, 1)), std::fabs(g(1, 0)) + std::fabs(g(1, 1)));
+        const double we = std::fabs(p * w);
+        const double in = i.norm();
+        return 2.0 * (gn * (cfg.inverter.vdc + rs * in + we * psi.norm()) + we * in);
+    }
+
+    void go_floating(St& x) {
+        // Snap the residual current (below the zero band) to exactly 0: the energy it held goes
+        // back to the DC link through the diodes, booked as (negative) electrical input.
+        const double dw = 1.5 * (model->energy(psi0) - model->energy(psi));
+        x.ein += dw;
+        psi = psi0;
+        x.pd = psi0.x();
+        x.pq = psi0.y();
+        floating = true;
+        i = Vec2::Zero();
+    }
+
+    void disabled_period(St& x, double Ts) {
+        // All switches off. Conducting phases are clamped by their diodes; a phase whose current
+        // reaches 0 is latched open. Simplification (docs/plant.md): an open phase is given the
+        // voltage that cancels its speed voltage, 1.5 e_x + (sum of the others)/2, which keeps its
+        // current near 0 for a non-salient machine; once two phases are open the third carries
+        // no current either and the terminals float (psi = flux(0), i = 0). Valid while the
+        // back-EMF line-to-line peak stays below Vdc (otherwise the diodes would conduct again).
+        const int n = cfg.substeps * 8 > 32 ? cfg.substeps * 8 : 32;
+        const double h = Ts / n;
+        double tau = 0.0;
+        auto count_latched = [&] { return int(latched[0]) + int(latched[1]) + int(latched[2]); };
+        while (tau < Ts * (1 - 1e-12)) {
+            if (!floating) {
+                const auto ia = phase_currents();
+                for (int k = 0; k < 3; ++k)
+                    if (std::fabs(ia[k]) <= cfg.inverter.i_zero_band) latched[k] = true;
+                if (count_latched() >= 2) go_floating(x);
+            }
+            const double step = std::min(h, Ts - tau);
+            if (floating) {
+                // Mechanics only; the voltage average is the speed voltage (see deriv).
+                const St x0 = x;
+                rk4(x, tau, step);
+                double c, s;
+                sincos_at(th - 0.5 * step * w, &c, &s);
+                const double ud = (x.ud - x0.ud) / step, uq = (x.uq - x0.uq) / step;
+                const Vec2 uab(c * ud - s * uq, s * ud + c * uq);
+                u_ab_avg += uab * step;
+                const auto vabc = inverse_clarke(uab);
+                for (int k = 0; k < 3; ++k) v_avg[k] += vabc[k] * step;
+                tau += step;
+                continue;
+            }
+            const auto ia = phase_currents();
+            std::array<double, 3> v{};
+            double sum_conducting = 0.0;
+            for (int k = 0; k < 3; ++k)
+                if (!latched[k]) sum_conducting += (v[k] = diode_phase_voltage(ia[k], cfg.inverter));
+            if (count_latched() == 1) {
+                double c, s;
+                sincos_at(th, &c, &s);
+                const double we = p * w;
+                const Vec2 e_dq(-we * psi.y(), we * psi.x());
+                const auto e = inverse_clarke(Vec2(c * e_dq.x() - s * e_dq.y(), s * e_dq.x() + c * e_dq.y()));
+                for (int k = 0; k < 3; ++k)
+                    if (latched[k]) {
+                        // An open terminal cannot leave the rails without its diode conducting.
+                        const double half = 0.5 * cfg.inverter.vdc;
+                        v[k] = std::max(-half, std::min(half, 1.5 * e[k] + 0.5 * sum_conducting));
+                    }
+            }
+            // Trial step; if a conducting phase current changes sign, redo up to the secant
+            // estimate of its zero crossing and latch it there.
+            const St xs = x;
+            const Vec2 psis = psi, is = i;
+            const double ths = th, ws = w;
+            const auto vs_avg = v_avg;
+            const Vec2 uab_s = u_ab_avg;
+            interval(x, tau, tau + step, v, 1);
+            const auto ib = phase_currents();
+            double frac = 1.0;
+            int who = -1;
+            for (int k = 0; k < 3; ++k) {
+                if (latched[k] || ia[k] * ib[k] > 0.0) continue;
+                const double f = ia[k] / (ia[k] - ib[k]);
+                if (f < frac) {
+                    frac = f;
+                    who = k;
+                }
+            }
+            if (who >= 0 && frac < 1.0) {
+                x = xs;
+                psi = psis;
+                i = is;
+                th = ths;
+                w = ws;
+                v_avg = vs_avg;
+                u_ab_avg = uab_s;
+                const double part = std::max(frac, 1e-6) * step;
+                interval(x, tau, tau + part, v, 1);
+                tau += part;
+            } else {
+                tau += step;
+            }
+            if (who >= 0) latched[who] = true;
+        }
+    }
+};
+
+Plant::Plant(const PlantConfig& cfg, std::unique_ptr<FluxModel> model) {
+    if (!model) throw std::invalid_argument("Plant: null FluxModel");
+    if (cfg.substeps < 1) throw std::invalid_argument("Plant: substeps must be >= 1");
+    if (cfg.machine.pole_pairs < 1) throw std::invalid_argument("Plant: pole_pairs must be >= 1");
+    impl_ = std::make_shared<Impl>(cfg, std::move(model));
+    Impl& m = *impl_;
+    m.p = cfg.machine.pole_pairs;
+    m.rs = cfg.machine.rs;
+    m.psi0 = m.model->flux(Vec2::Zero());
+    reset_state(m.psi0, cfg.theta_m0, cfg.omega_m0);
+}
+
+void Plant::reset_state(const Vec2& psi_dq, double theta_m, double omega_m) {
+    Impl& m = *impl_;
+    m.psi = psi_dq;
+    m.th = theta_m;
+    m.w = m.cfg.mech.locked ? 0.0 : omega_m;
+    m.floating = false;
+    m.latched[0] = m.latched[1] = m.latched[2] = false;
+    m.i = m.model->current(psi_dq);
+    m.w_init = m.model->energy(psi_dq);
+    m.ledger = EnergyLedger{};
+}
+
+void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outputs_enabled) {
+    if (!(Ts > 0.0)) throw std::invalid_argument("Plant::step_period: Ts must be > 0");
+    Impl& m = *impl_;
+    const double t0 = m.t;
+    const double w_start = m.mech.begin_period(t0, Ts, m.w);
+    if (m.mech.speed_imposed()) m.w = w_start;
+    m.th_base = m.th_step = m.th;
+    m.c0 = m.c_step = std::cos(m.p * m.th);
+    m.s0 = m.s_step = std::sin(m.p * m.th);
+    m.v_avg = {0.0, 0.0, 0.0};
+    m.u_ab_avg = Vec2::Zero();
+    St x{m.psi.x(), m.psi.y(), m.th, m.w, 0, 0, 0, 0, 0};
+
+    if (outputs_enabled && m.floating) {
+        m.floating = false;
+        m.i = m.model->current(m.psi);
+    }
+    if (outputs_enabled) m.latched[0] = m.latched[1] = m.latched[2] = false;
+
+    const InverterConfig& inv = m.cfg.inverter;
+    if (!outputs_enabled) {
+        m.disabled_period(x, Ts);
+    } else if (inv.mode == InverterConfig::Mode::Averaged) {
+        const auto v = averaged_phase_voltages(duty, m.phase_currents(), inv, Ts);
+        m.interval(x, 0.0, Ts, v, m.cfg.substeps);
+    } else {
+        const double h_max = Ts / m.cfg.substeps;
+        m.seq.begin(t0, Ts, duty, inv);
+        const double di_max = inv.t_dead > 0.0 ? m.current_rate_bound() : 0.0;
+        m.seq.predecide(t0, m.phase_currents(), di_max);
+        double tau = 0.0, te;
+        while (m.seq.next_time(&te)) {
+            const double tau_e = te - t0;
+            if (tau_e > tau) {
+                m.interval(x, tau, tau_e, m.switched_voltages(m.seq.levels()), m.steps_for(tau_e - tau, h_max));
+                tau = tau_e;
+            }
+            const auto ia = m.phase_currents();
+            m.seq.apply(te, ia);
+            m.seq.predecide(te, ia, di_max);
+        }
+        m.interval(x, tau, Ts, m.switched_voltages(m.seq.levels()), m.steps_for(Ts - tau, h_max));
+    }
+
+    m.t = t0 + Ts;
+    if (m.mech.speed_imposed()) m.w = m.mech.omega_end();
+    const double inv_ts = 1.0 / Ts;
+    m.u_dq_avg = Vec2(x.ud, x.uq) * inv_ts;
+    m.u_ab_avg *= inv_ts;
+    for (double& v : m.v_avg) v *= inv_ts;
+    m.ledger.electrical_in += x.ein;
+    m.ledger.copper_loss += x.cu;
+    m.ledger.mech_out += x.mech;
+    m.ledger.magnetic = 1.5 * (m.model->energy(m.psi) - m.w_init);
+}
+
+double Plant::time() const { return impl_->t; }
+Vec2 Plant::psi_dq() const { return impl_->psi; }
+Vec2 Plant::i_dq() const { return impl_->i; }
+std::array<double, 3> Plant::i_abc() const {
+    const Impl& m = *impl_;
+    const double th = m.p * m.th;
+    const double c = std::cos(th), s = std::sin(th);
+    return inverse_clarke(Vec2(c * m.i.x() - s * m.i.y(), s * m.i.x() + c * m.i.y()));
+}
+double Plant::theta_e() const {
+    double a = std::fmod(impl_->p * impl_->th + kPi, 2.0 * kPi);
+    if (a < 0) a += 2.0 * kPi;
+    a -= kPi;
+    return a >= kPi ? -kPi : a;
+}
+double Plant::theta_m() const { return impl_->th; }
+double Plant::omega_m() const { return impl_->w; }
+double Plant::omega_e() const { return impl_->p * impl_->w; }
+double Plant::torque() const {
+    const Impl& m = *impl_;
+    return 1.5 * m.p * (m.psi.x() * m.i.y() - m.psi.y() * m.i.x());
+}
+Vec2 Plant::u_dq_avg_last() const { return impl_->u_dq_avg; }
+Vec2 Plant::u_ab_avg_last() const { return impl_->u_ab_avg; }
+std::array<double, 3> Plant::v_phase_avg_last() const { return impl_->v_avg; }
+Vec2 Plant::psi_no_current() const { return impl_->psi0; }
+bool Plant::floating() const { return impl_->floating; }
+const EnergyLedger& Plant::energy() const { return impl_->ledger; }
+const PlantConfig& Plant::config() const { return impl_->cfg; }
+const FluxModel& Plant::model() const { return *impl_->model; }
+void Plant::set_vdc(double vdc) { impl_->cfg.inverter.vdc = vdc; }
+
+}  // namespace mcsim

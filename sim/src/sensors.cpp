@@ -1,0 +1,71 @@
+// ADC and quadrature-encoder models, see sim/include/mcsim/sensors.hpp.
+#include "mcsim/sensors.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace mcsim {
+
+namespace {
+constexpr double kTwoPi = 6.28318530717958647692;
+
+uint16_t to_counts(double x, double max_count) {
+    const double c = std::round(x);
+    if (!(c > 0.0)) return 0;  // also maps NaN to 0
+    return static_cast<uint16_t>(c > max_count ? max_count : c);
+}
+}  // namespace
+
+Sensors::Sensors(const AdcConfig& adc, const EncoderConfig& enc, uint64_t seed)
+    : adc_(adc), enc_(enc), rng_(seed) {
+    if (adc.bits < 2 || adc.bits > 16) throw std::invalid_argument("AdcConfig.bits must be 2..16");
+    if (!(adc.i_full_scale > 0.0) || !(adc.vdc_full_scale > 0.0))
+        throw std::invalid_argument("AdcConfig full scales must be > 0");
+    if (enc.lines < 1) throw std::invalid_argument("EncoderConfig.lines must be >= 1");
+}
+
+double Sensors::amps_per_count() const {
+    return 2.0 * adc_.i_full_scale / (std::ldexp(1.0, adc_.bits) - 1.0);
+}
+double Sensors::offset_counts() const { return std::ldexp(1.0, adc_.bits - 1); }
+double Sensors::volts_per_count() const {
+    return adc_.vdc_full_scale / (std::ldexp(1.0, adc_.bits) - 1.0);
+}
+
+AdcSample Sensors::sample_adc(const Plant& p) {
+    AdcSample s{};
+    const double max_count = std::ldexp(1.0, adc_.bits) - 1.0;
+    const auto i = p.i_abc();
+    const double apc = amps_per_count(), mid = offset_counts();
+    // Draw order is fixed (a, b, c, vdc) so a seed reproduces a run exactly.
+    for (int k = 0; k < 3; ++k) {
+        const double meas = i[k] * (1.0 + adc_.gain_err[k]) + adc_.offset_err[k] + adc_.i_noise_rms * n01_(rng_);
+        s.i[k] = to_counts(meas / apc + mid, max_count);
+    }
+    const double vdc = p.config().inverter.vdc;
+    s.vdc = to_counts(vdc * (1.0 + adc_.vdc_noise_rel * n01_(rng_)) / volts_per_count(), max_count);
+    return s;
+}
+
+QepSample Sensors::sample_qep(const Plant& p) {
+    const double n = 4.0 * enc_.lines;
+    const double rev = (p.theta_m() - enc_.offset_rad) / kTwoPi;
+    double c = std::fmod(std::floor(rev * n), n);
+    if (c < 0) c += n;
+    // The index mark sits at rev = integer: it was passed if an integer lies in (prev, rev]
+    // (forwards) or in (rev, prev] (backwards). Sampling is assumed faster than half a turn.
+    if (have_prev_ && !index_seen_) {
+        if (std::floor(rev) > std::floor(prev_rev_)) {
+            index_seen_ = true;
+            index_count_ = 0;
+        } else if (std::floor(rev) < std::floor(prev_rev_)) {
+            index_seen_ = true;
+            index_count_ = static_cast<uint32_t>(n - 1);
+        }
+    }
+    have_prev_ = true;
+    prev_rev_ = rev;
+    return QepSample{static_cast<uint32_t>(c), index_seen_, index_count_};
+}
+
+}  // namespace mcsim
