@@ -320,7 +320,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     out.periods = periods;
     const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
     out.metrics_json = metrics.json(fault_names(tm.faults), state_name(tm.state),
-                                    {{"current_limit_a", json_number(r.i_max)},
+                                    {{"scenario", "\"" + sc.s("scenario.name") + "\""},
+                                     {"current_limit_a", json_number(r.i_max)},
                                      {"current_trip_a", json_number(r.i_trip)},
                                      {"speed_final_rpm", json_number(plant.omega_m() * kRpm)},
                                      {"sim_time_s", json_number(out.sim_time_s)},

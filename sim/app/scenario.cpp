@@ -67,7 +67,7 @@ const std::vector<KeySpec>& scenario_schema()
     {"control.vdc_max_v", KeyType::Float, "", nullptr, 0, 5000, "V", "", "Over-voltage trip (default: 1.5 x Vdc)."},
     {"control.current_bw_hz", KeyType::Float, "500.0", nullptr, 10, 5000, "Hz", "", "Current-loop bandwidth."},
     {"control.decouple", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Decoupling feed-forward in the current loop."},
-    {"control.speed_bw_hz", KeyType::Float, "10.0", nullptr, 0.1, 200, "Hz", "", "Speed-loop bandwidth (sets kp = J w, ki = kp w / 4 unless given)."},
+    {"control.speed_bw_hz", KeyType::Float, "25.0", nullptr, 0.1, 200, "Hz", "", "Speed-loop bandwidth (sets kp = J w, ki = kp w / 4 unless given)."},
     {"control.speed_kp", KeyType::Float, "", nullptr, 0, 1e4, "N m s/rad", "", "Speed PI proportional gain (mechanical rad/s)."},
     {"control.speed_ki", KeyType::Float, "", nullptr, 0, 1e6, "N m/rad", "", "Speed PI integral gain."},
     {"control.speed_decimation", KeyType::Int, "10", nullptr, 1, 100, "periods", "", "Speed loop runs every N periods."},

@@ -20,7 +20,11 @@ def _cmd_plot(args) -> int:
     trace = load_trace(args.trace)
     metrics = load_metrics(args.metrics) if args.metrics else None
     out_dir = Path(args.out) if args.out else trace.path.parent
-    for p in plot_trace(trace, out_dir, title=args.title, metrics=metrics, dpi=args.dpi):
+    headline = [k.strip() for k in args.headline.split(",") if k.strip()] if args.headline else None
+    if headline and metrics is None:
+        from mctools.trace import TraceError
+        raise TraceError("--headline needs --metrics")
+    for p in plot_trace(trace, out_dir, title=args.title, metrics=metrics, dpi=args.dpi, headline=headline):
         print(p)
     return 0
 
@@ -48,6 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--title", help="figure title (default: the trace file name)")
     p.add_argument("--metrics", metavar="JSON", help="metrics.json to annotate headline figures")
     p.add_argument("--dpi", type=int, default=120, help="resolution (default 120)")
+    p.add_argument("--headline", metavar="KEYS",
+                   help="comma-separated metric names (dotted for windows) for the title")
     p.set_defaults(func=_cmd_plot)
 
     p = sub.add_parser("preset", help="print figures derived from a machine preset")

@@ -110,8 +110,19 @@ def _flatten(d: dict, prefix: str = "") -> list[tuple[str, object]]:
 _PRIORITY = ("pass", "angle_err", "err", "rms", "max", "overshoot", "settl", "ripple")
 
 
-def headline_metrics(metrics: dict, limit: int = 6) -> list[str]:
-    items = _flatten(metrics)
+def headline_metrics(metrics: dict, limit: int = 6, keys: list[str] | None = None) -> list[str]:
+    """The figures for the title: `keys` (dotted paths) if given, else the top-level scalars
+    ranked by _PRIORITY (per-window figures only when asked for by name)."""
+    flat = _flatten(metrics)
+    if keys:
+        known = dict(flat)
+        missing = [k for k in keys if k not in known]
+        if missing:
+            raise TraceError(f"metrics: no such figure(s): {', '.join(missing)}")
+        items = [(k, known[k]) for k in keys]
+        limit = len(items)
+    else:
+        items = [(k, v) for k, v in flat if "." not in k]
 
     def rank(item):
         name = item[0].lower()
@@ -120,7 +131,8 @@ def headline_metrics(metrics: dict, limit: int = 6) -> list[str]:
                 return k
         return len(_PRIORITY)
 
-    items = sorted(items, key=rank)[:limit]  # sorted() is stable: file order within a rank
+    if not keys:
+        items = sorted(items, key=rank)[:limit]  # sorted() is stable: file order within a rank
     out = []
     for name, v in items:
         if isinstance(v, bool):
@@ -159,7 +171,7 @@ def _draw_panel(ax, panel: Panel, trace: Trace, label: str, *, xlabel: bool) -> 
 
 
 def plot_trace(trace: Trace, out_dir, *, title: str | None = None, metrics: dict | None = None,
-               dpi: int = 120) -> list[Path]:
+               dpi: int = 120, headline: list[str] | None = None) -> list[Path]:
     """Write <stem>_overview.png and one <stem>_<panel>.png per panel; return the paths."""
     derive_columns(trace)
     panels = available_panels(trace)
@@ -169,8 +181,10 @@ def plot_trace(trace: Trace, out_dir, *, title: str | None = None, metrics: dict
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     stem = trace.path.stem
+    if not title and metrics and isinstance(metrics.get("scenario"), str) and metrics["scenario"]:
+        title = metrics["scenario"]
     title = title or trace.path.name
-    head = headline_metrics(metrics) if metrics else []
+    head = headline_metrics(metrics, keys=headline) if metrics else []
     letters = [f"({chr(ord('a') + k)}) {p.title}" for k, p in enumerate(panels)]
     written = []
 

@@ -75,7 +75,10 @@ def test_metrics_annotation(full_trace, tmp_path, capsys):
     head = headline_metrics(json.loads(metrics.read_text()))
     assert head[0] == "passed: yes"
     assert "angle_err_rms_deg = 1.234" in head
-    assert "nested.speed_err_max_rpm = 7" in head
+    # nested (per-window) figures only when named
+    assert not any(h.startswith("nested.") for h in head)
+    assert headline_metrics(json.loads(metrics.read_text()), keys=["nested.speed_err_max_rpm"]) == \
+        ["nested.speed_err_max_rpm = 7"]
 
 
 @pytest.mark.parametrize("content, needle", [
@@ -168,3 +171,17 @@ def test_break_wraps_on_rotating_angle():
 def test_wrap_deg_range():
     x = wrap_deg(np.array([-540.0, -180.0, 180.0, 359.0, 0.0]))
     np.testing.assert_allclose(x, [-180.0, -180.0, -180.0, -1.0, 0.0])
+
+
+def test_headline_picks_named_and_top_level_figures():
+    from mctools.plot import headline_metrics
+    from mctools.trace import TraceError
+
+    m = {"scenario": "x", "speed_err_steady_max_pct": 0.02, "current_peak_a": 13.2,
+         "windows": {"steady": {"speed_err_max_pct": 0.5}}}
+    auto = headline_metrics(m)
+    assert all("windows" not in h for h in auto)
+    named = headline_metrics(m, keys=["windows.steady.speed_err_max_pct", "current_peak_a"])
+    assert named == ["windows.steady.speed_err_max_pct = 0.5", "current_peak_a = 13.2"]
+    with pytest.raises(TraceError, match="no_such"):
+        headline_metrics(m, keys=["no_such"])
