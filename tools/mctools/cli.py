@@ -41,6 +41,12 @@ def _cmd_preset(args) -> int:
     return 0
 
 
+def _cmd_report(args) -> int:
+    from mctools.report import report
+
+    return report(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="mctools", description=__doc__)
     ap.add_argument("--version", action="version", version=f"mctools {__version__}")
@@ -62,17 +68,35 @@ def build_parser() -> argparse.ArgumentParser:
                    help="directory to look up preset names in (also: env MC_PRESET_DIR)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.set_defaults(func=_cmd_preset)
+
+    p = sub.add_parser("report", help="run the thesis scenarios with mcsim and write the "
+                                      "comparison table (docs/results.md)")
+    p.add_argument("--mcsim", metavar="PATH",
+                   help="simulator binary (default: build/host/sim/app/mcsim, else mcsim on PATH)")
+    p.add_argument("--scenarios", metavar="DIR", default="scenarios/thesis",
+                   help="folder with expected.toml and the scenarios (default scenarios/thesis)")
+    p.add_argument("--out", metavar="DIR", default="out/thesis",
+                   help="run folders and plots (default out/thesis)")
+    p.add_argument("--doc", metavar="PATH", default="docs/results.md",
+                   help="markdown file to write (default docs/results.md)")
+    p.add_argument("--only", metavar="NAME[,NAME]",
+                   help="only the checks of these scenarios")
+    p.add_argument("--jobs", type=int, default=2, metavar="N",
+                   help="simulations in parallel (default 2)")
+    p.add_argument("--dpi", type=int, default=100, help="plot resolution (default 100)")
+    p.set_defaults(func=_cmd_report)
     return ap
 
 
 def main(argv=None) -> int:
     from mctools.preset import PresetError
+    from mctools.report import ReportInputError
     from mctools.trace import TraceError
 
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (TraceError, PresetError) as exc:
+    except (TraceError, PresetError, ReportInputError) as exc:
         print(f"mctools {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except RuntimeError as exc:  # e.g. flux inversion outside the model's valid range

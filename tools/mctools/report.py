@@ -1,0 +1,525 @@
+"""`mctools report`: run the thesis scenarios with mcsim and write the comparison table.
+
+expected.toml (format documented at its top) lists one [[check]] per figure of merit. Every
+distinct (scenario, set, model) is simulated once; the table in the doc is built only from the
+metrics.json files those runs write, so the numbers in the doc can always be regenerated.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+import tomllib
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+
+MODELS = ("const", "fluxmap")
+MODEL_TITLES = {"const": "ours, constant parameters", "fluxmap": "ours, flux map"}
+CHECK_KEYS = {"scenario", "set", "models", "metric", "what", "thesis", "bound"}
+REQUIRED_KEYS = ("scenario", "models", "metric", "what")
+HEADLINE = ("angle_err_steady_max_deg", "angle_err_max_deg", "settling_time_s", "newton_iter_mean")
+UNITS = (("_deg", "°"), ("_rpm", " rpm"), ("_pct", " %"), ("_nm", " N m"), ("_s", " s"),
+         ("_a", " A"), ("_v", " V"))
+DEFAULT_MCSIM = "build/host/sim/app/mcsim"
+REGEN_SCRIPT = "bash scripts/report.sh"
+DASH = "—"
+PASS_MARK = "✓"
+FAIL_MARK = "✗ **FAIL**"
+
+
+class ReportInputError(Exception):
+    """Bad expected.toml, scenario folder or arguments; the CLI turns it into exit status 2."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Bounds
+
+_BOUND_RE = re.compile(r"^\s*(abs\s+)?(<=|>=|==|<|>)\s*(\S+)\s*$")
+_OPS = {
+    "<=": lambda a, b: a <= b,
+    ">=": lambda a, b: a >= b,
+    "<": lambda a, b: a < b,
+    ">": lambda a, b: a > b,
+    # Exact equality is what "== 0" on counters means; the tolerance only absorbs the decimal
+    # round trip of a float through JSON text.
+    "==": lambda a, b: math.isclose(a, b, rel_tol=1e-12, abs_tol=0.0),
+}
+
+
+@dataclass(frozen=True)
+class Bound:
+    text: str
+    use_abs: bool
+    op: str
+    limit: float
+
+    def holds(self, value) -> bool:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return False  # null or non-numeric never satisfies an acceptance bound
+        v = abs(value) if self.use_abs else float(value)
+        if math.isnan(v):
+            return False
+        return _OPS[self.op](v, self.limit)
+
+    def __str__(self) -> str:
+        return self.text.strip()
+
+
+def parse_bound(text: str) -> Bound:
+    """'abs <= X' | '<= X' | '>= X' | '== X' | '< X' | '> X' (abs works with every operator)."""
+    if not isinstance(text, str):
+        raise ValueError(f"bound must be a string like \"<= 2\", got {text!r}")
+    m = _BOUND_RE.match(text)
+    if not m:
+        raise ValueError(f"bad bound {text!r} (expected 'abs <= X', '<= X', '>= X', '== X', "
+                         f"'< X' or '> X')")
+    try:
+        limit = float(m.group(3))
+    except ValueError:
+        raise ValueError(f"bad bound {text!r}: {m.group(3)!r} is not a number") from None
+    if not math.isfinite(limit):
+        raise ValueError(f"bad bound {text!r}: limit must be finite")
+    return Bound(text, bool(m.group(1)), m.group(2), limit)
+
+
+# ---------------------------------------------------------------------------------------------
+# expected.toml
+
+@dataclass(frozen=True)
+class Check:
+    index: int  # 1-based position among the [[check]] tables, as people count them
+    scenario: str
+    sets: tuple[str, ...]
+    models: tuple[str, ...]
+    metric: str
+    what: str
+    thesis: str
+    bounds: dict  # model -> Bound
+
+    def run_keys(self):
+        return [(self.scenario, self.sets, m) for m in self.models]
+
+
+def _is_str_list(v) -> bool:
+    return isinstance(v, list) and all(isinstance(x, str) for x in v)
+
+
+def load_expected(scen_dir: Path) -> list[Check]:
+    path = scen_dir / "expected.toml"
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ReportInputError(f"{path}: no such file") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ReportInputError(f"{path}: not valid TOML: {exc}") from None
+    extra = sorted(set(data) - {"check"})
+    if extra:
+        raise ReportInputError(f"{path}: unknown top-level key(s) {', '.join(extra)} "
+                               f"(only [[check]] tables)")
+    raw = data.get("check")
+    if not isinstance(raw, list) or not raw:
+        raise ReportInputError(f"{path}: no [[check]] tables")
+    checks = []
+    for i, c in enumerate(raw, start=1):
+        def bad(key, msg):
+            return ReportInputError(f"{path}: check {i}, key '{key}': {msg}")
+
+        unknown = sorted(set(c) - CHECK_KEYS)
+        if unknown:
+            raise bad(unknown[0], f"unknown key (allowed: {', '.join(sorted(CHECK_KEYS))})")
+        for key in REQUIRED_KEYS:
+            if key not in c:
+                raise bad(key, "missing")
+        for key in ("scenario", "metric", "what", "thesis"):
+            if key in c and not isinstance(c[key], str):
+                raise bad(key, f"must be a string, got {c[key]!r}")
+        scenario = c["scenario"]
+        if not re.fullmatch(r"[A-Za-z0-9._-]+", scenario) or scenario.startswith("."):
+            raise bad("scenario", f"{scenario!r} is not a plain file name (without .toml)")
+        if not (scen_dir / f"{scenario}.toml").is_file():
+            raise bad("scenario", f"no scenario file {scen_dir / (scenario + '.toml')}")
+        if not c["metric"].strip():
+            raise bad("metric", "empty")
+        sets = c.get("set", [])
+        if not _is_str_list(sets):
+            raise bad("set", f"must be a list of \"key=value\" strings, got {sets!r}")
+        for s in sets:
+            k = s.split("=", 1)[0].strip()
+            if "=" not in s or not k:
+                raise bad("set", f"{s!r} is not key=value")
+            if k == "estimator.model":
+                raise bad("set", "estimator.model is chosen by 'models', not by 'set'")
+        models = c["models"]
+        if not _is_str_list(models) or not models:
+            raise bad("models", f"must be a non-empty list of {' / '.join(MODELS)}, got {models!r}")
+        for m in models:
+            if m not in MODELS:
+                raise bad("models", f"unknown model {m!r} (known: {', '.join(MODELS)})")
+        if len(set(models)) != len(models):
+            raise bad("models", f"duplicate model in {models!r}")
+        bound_raw = c.get("bound", {})
+        if not isinstance(bound_raw, dict):
+            raise bad("bound", f"must be a table model = \"<= X\", got {bound_raw!r}")
+        bounds = {}
+        for m, text in bound_raw.items():
+            if m not in MODELS:
+                raise bad("bound", f"unknown model {m!r} (known: {', '.join(MODELS)})")
+            if m not in models:
+                raise bad("bound", f"bound for model {m!r}, which the check does not run")
+            try:
+                bounds[m] = parse_bound(text)
+            except ValueError as exc:
+                raise bad("bound", f"{m}: {exc}") from None
+        checks.append(Check(i, scenario, tuple(sets), tuple(models), c["metric"].strip(),
+                            c["what"], c.get("thesis", ""), bounds))
+    return checks
+
+
+# ---------------------------------------------------------------------------------------------
+# Runs
+
+@dataclass
+class Run:
+    scenario: str
+    sets: tuple[str, ...]
+    model: str
+    dir: Path
+    exit_code: int | None = None
+    seconds: float = 0.0
+    metrics: dict | None = None
+    error: str | None = None  # why there are no metrics, in the words of the table
+    plots: list[Path] = field(default_factory=list)
+
+    @property
+    def label(self) -> str:
+        return " ".join([self.scenario, *self.sets, self.model])
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def model_set(model: str) -> str:
+    # mcsim reads --set values as TOML, so the string needs its quotes inside the argument.
+    return f'estimator.model="{model}"'
+
+
+def _sanitise(s: str) -> str:
+    s = s.replace('"', "").replace("'", "")
+    return re.sub(r"[^A-Za-z0-9._=+-]+", "_", s).strip("_")
+
+
+def run_dir_names(keys) -> dict:
+    """<scenario>[__<sanitised set>]__<model>, unique: a name two different runs would share
+    (or one too long for a file system) gets a short hash of the set list."""
+    names = {}
+    for key in keys:
+        scenario, sets, model = key
+        names[key] = "__".join([scenario, *(_sanitise(s) for s in sets), model])
+    counts = {}
+    for n in names.values():
+        counts[n] = counts.get(n, 0) + 1
+    for key, n in names.items():
+        if counts[n] > 1 or len(n) > 150:
+            model = key[2]
+            digest = hashlib.sha1("\0".join(key[1]).encode()).hexdigest()[:8]
+            names[key] = f"{n[: -len(model) - 2][:120]}_{digest}__{model}"
+    return names
+
+
+def _clear_outputs(d: Path) -> None:
+    # A failed run must not be reported with the numbers of an earlier, successful one.
+    for name in ("metrics.json", "trace.csv", "mcsim.log"):
+        (d / name).unlink(missing_ok=True)
+    shutil.rmtree(d / "plots", ignore_errors=True)
+
+
+def execute(run: Run, mcsim: str, scen_dir: Path) -> Run:
+    try:
+        run.dir.mkdir(parents=True, exist_ok=True)
+        _clear_outputs(run.dir)
+    except OSError as exc:
+        run.error = f"run failed ({exc.strerror or exc})"
+        return run
+    cmd = [mcsim, "run", str(scen_dir / f"{run.scenario}.toml")]
+    for s in (*run.sets, model_set(run.model)):
+        cmd += ["--set", s]
+    cmd += ["--out", str(run.dir), "--quiet"]
+    t0 = time.monotonic()
+    try:
+        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              stdin=subprocess.DEVNULL)
+        run.exit_code = proc.returncode
+        log = proc.stdout.decode("utf-8", errors="replace")
+    except OSError as exc:
+        run.exit_code = 127
+        log = f"cannot start {mcsim}: {exc}\n"
+    run.seconds = time.monotonic() - t0
+    (run.dir / "mcsim.log").write_text(" ".join(cmd) + "\n" + log, encoding="utf-8")
+    if run.exit_code != 0:
+        run.error = f"run failed (exit {run.exit_code})"
+        return run
+    try:
+        data = json.loads((run.dir / "metrics.json").read_text(encoding="utf-8"))
+        if not isinstance(data, dict):
+            raise ValueError("not a JSON object")
+        run.metrics = data
+    except FileNotFoundError:
+        run.error = "run failed (no metrics.json)"
+    except (ValueError, UnicodeDecodeError):
+        run.error = "run failed (bad metrics.json)"
+    return run
+
+
+def render_plots(run: Run, scen_title: str, dpi: int) -> None:
+    from mctools.plot import plot_trace
+    from mctools.trace import TraceError, load_trace
+
+    trace_path = run.dir / "trace.csv"
+    if not trace_path.is_file():
+        return
+    keys = [k for k in HEADLINE if isinstance(run.metrics.get(k), (int, float))]
+    title = f"{scen_title} — {', '.join(run.sets) + ', ' if run.sets else ''}{run.model}"
+    try:
+        run.plots = plot_trace(load_trace(trace_path), run.dir / "plots", title=title,
+                               metrics=run.metrics if keys else None, dpi=dpi,
+                               headline=keys or None)
+    except (TraceError, ValueError, OSError) as exc:
+        # The plots are an aid; the table does not depend on them.
+        print(f"report: warning: {run.label}: no plots: {exc}", file=sys.stderr)
+
+
+# ---------------------------------------------------------------------------------------------
+# Formatting
+
+def fmt_number(v: float) -> str:
+    """Three significant digits, written out in full (1520, 12.3, 1.50, 0.0280)."""
+    if v == 0 or not math.isfinite(v):
+        return "0" if v == 0 else str(v)
+    r = float(f"{v:.3g}")
+    exp = math.floor(math.log10(abs(r)))
+    if exp < -3 or exp >= 6:
+        return f"{r:.2e}"
+    return f"{r:.{max(0, 2 - exp)}f}"
+
+
+def unit_of(metric: str) -> str:
+    name = metric.rsplit(".", 1)[-1]
+    for suffix, unit in UNITS:
+        if name.endswith(suffix):
+            return unit
+    return ""
+
+
+def fmt_value(v, metric: str) -> str:
+    if v is None:
+        return DASH
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return f"{v}{unit_of(metric)}"
+    if isinstance(v, float):
+        return f"{fmt_number(v)}{unit_of(metric)}"
+    return str(v)
+
+
+_MISSING = object()
+
+
+def lookup(metrics: dict, dotted: str):
+    """metrics.json value at a dotted path; _MISSING when a key on the way does not exist."""
+    if dotted in metrics:
+        return metrics[dotted]
+    node = metrics
+    for part in dotted.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return _MISSING
+        node = node[part]
+    return node
+
+
+def _md(s: str) -> str:
+    return s.replace("|", "\\|").replace("\n", " ")
+
+
+@dataclass
+class Cell:
+    text: str
+    failed: bool = False  # the bound for this model does not hold
+    value: str = ""  # the text without the pass/fail mark, for messages
+
+
+def evaluate(check: Check, model: str, run: Run | None) -> Cell:
+    if model not in check.models or run is None:
+        return Cell(DASH)
+    bound = check.bounds.get(model)
+    if not run.ok:
+        return Cell(run.error, failed=bound is not None, value=run.error)
+    v = lookup(run.metrics, check.metric)
+    text = "— (absent)" if v is _MISSING else fmt_value(v, check.metric)
+    if v is _MISSING:
+        v = None
+    if bound is None:
+        return Cell(text, value=text)
+    if bound.holds(v):
+        return Cell(f"{text} {PASS_MARK}", value=text)
+    return Cell(f"{text} {FAIL_MARK}", failed=True, value=text)
+
+
+def _link(path: Path, doc_dir: Path) -> str:
+    return Path(os.path.relpath(path, doc_dir)).as_posix()
+
+
+def scenario_title(scen_dir: Path, scenario: str) -> str:
+    try:
+        data = tomllib.loads((scen_dir / f"{scenario}.toml").read_text(encoding="utf-8"))
+        name = data.get("scenario", {}).get("name")
+        if isinstance(name, str) and name.strip():
+            return name.strip()
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError, AttributeError):
+        pass  # mcsim reports a broken scenario file; the title is cosmetic
+    return scenario
+
+
+def regen_command(args) -> str:
+    cmd = ["mctools", "report", "--scenarios", args.scenarios, "--out", args.out,
+           "--doc", args.doc]
+    if args.only:
+        cmd += ["--only", args.only]
+    return " ".join(cmd)
+
+
+def build_doc(checks, runs: dict, args, scen_dir: Path, doc_path: Path) -> str:
+    doc_dir = doc_path.parent.resolve()
+    lines = ["# Thesis comparison: results", ""]
+    lines.append(f"Generated by `{regen_command(args)}` from `{_link(scen_dir / 'expected.toml', doc_dir)}`; "
+                 f"regenerate all of it with `{REGEN_SCRIPT}`. Do not edit by hand: every number "
+                 f"below comes from a simulator run of that command.")
+    if args.only:
+        lines += ["", f"**Partial report**: only the scenario(s) {args.only}."]
+    lines += [
+        "",
+        "Legend: *thesis* is the thesis' value as it states it (experiment unless it says sim). "
+        "*ours* are `mcsim` runs of the same scenario with the sensorless estimator using the "
+        "thesis' constant parameters (`estimator.model = \"const\"`) or the flux map "
+        "(`\"fluxmap\"`). "
+        f"{PASS_MARK} the value is within the check's bound for that model, {FAIL_MARK} it is not "
+        f"(a null value never is); {DASH} the model is not run for this check, or the metric is "
+        "null (e.g. the error never settled). Numbers have 3 significant digits; units follow "
+        "the metric name.",
+        "",
+        "| figure | quantity | thesis | " + " | ".join(MODEL_TITLES[m] for m in MODELS) + " | bound |",
+        "|---|---|---|" + "---|" * len(MODELS) + "---|",
+    ]
+    for c in checks:
+        fig = c.scenario + (" (" + ", ".join(f"`{_md(s)}`" for s in c.sets) + ")" if c.sets else "")
+        quantity = f"{_md(c.what)} (`{_md(c.metric)}`)"
+        cells = [evaluate(c, m, runs.get((c.scenario, c.sets, m))).text for m in MODELS]
+        bound = "; ".join(f"{m} `{b}`" for m, b in c.bounds.items()) or DASH
+        lines.append(f"| {fig} | {quantity} | {_md(c.thesis) or DASH} | "
+                     + " | ".join(_md(x) for x in cells) + f" | {bound} |")
+    lines += ["", "## Plots", "",
+              f"Overview plots of every run. They are written to `{args.out}`, which is not "
+              f"committed: the links work after running the command locally.", ""]
+    scenarios = list(dict.fromkeys(c.scenario for c in checks))
+    for s in scenarios:
+        entries = []
+        for key, run in runs.items():
+            if key[0] != s:
+                continue
+            label = ", ".join([*run.sets, run.model])
+            overview = run.dir / "plots" / "trace_overview.png"
+            if not run.ok:
+                entries.append(f"{label}: {run.error}")
+            elif overview not in run.plots:
+                entries.append(f"{label}: no trace plotted")
+            else:
+                entries.append(f"[{_md(label)}]({_link(overview, doc_dir)})")
+        lines.append(f"- {s} ({_md(scenario_title(scen_dir, s))}): " + " · ".join(entries))
+    lines.append("")
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+
+def find_mcsim(given: str | None) -> str:
+    if given:
+        if not (Path(given).is_file() and os.access(given, os.X_OK)):
+            raise ReportInputError(f"--mcsim {given}: not an executable file")
+        return given
+    if Path(DEFAULT_MCSIM).is_file():
+        return DEFAULT_MCSIM
+    found = shutil.which("mcsim")
+    if not found:
+        raise ReportInputError(f"no mcsim at {DEFAULT_MCSIM} nor on PATH; build it with "
+                               f"scripts/build.sh or pass --mcsim PATH")
+    return found
+
+
+def report(args) -> int:
+    scen_dir = Path(args.scenarios)
+    out_dir = Path(args.out)
+    doc_path = Path(args.doc)
+    if args.jobs < 1:
+        raise ReportInputError("--jobs must be at least 1")
+    checks = load_expected(scen_dir)
+    if args.only:
+        wanted = [s.strip() for s in args.only.split(",") if s.strip()]
+        known = {c.scenario for c in checks}
+        unknown = [s for s in wanted if s not in known]
+        if unknown or not wanted:
+            raise ReportInputError(f"--only: no check uses scenario(s) {', '.join(unknown) or '(none)'}"
+                                   f" (known: {', '.join(sorted(known))})")
+        checks = [c for c in checks if c.scenario in wanted]
+    mcsim = find_mcsim(args.mcsim)
+
+    keys = list(dict.fromkeys(k for c in checks for k in c.run_keys()))
+    names = run_dir_names(keys)
+    runs = {k: Run(k[0], k[1], k[2], out_dir / names[k]) for k in keys}
+    titles = {s: scenario_title(scen_dir, s) for s in dict.fromkeys(k[0] for k in keys)}
+
+    # Simulations run in worker threads (each just waits on its mcsim process); the plots are
+    # drawn here in the main thread, one at a time, because matplotlib is not thread-safe.
+    done = 0
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        futures = [pool.submit(execute, runs[k], mcsim, scen_dir) for k in keys]
+        for fut in as_completed(futures):
+            run = fut.result()
+            done += 1
+            status = "" if run.ok else f"{run.error} "
+            print(f"[{done}/{len(keys)}] {run.label} ... {status}{run.seconds:.1f} s", flush=True)
+            if run.ok:
+                render_plots(run, titles[run.scenario], args.dpi)
+            elif run.exit_code not in (0, None):
+                log = run.dir / "mcsim.log"
+                for ln in log.read_text(encoding="utf-8", errors="replace").splitlines()[-5:]:
+                    print(f"    {ln}", file=sys.stderr)
+
+    doc_path.parent.mkdir(parents=True, exist_ok=True)
+    doc_path.write_text(build_doc(checks, runs, args, scen_dir, doc_path), encoding="utf-8")
+
+    n_bounds = sum(1 for c in checks if c.bounds)
+    failed = []
+    for c in checks:
+        if any(evaluate(c, m, runs[(c.scenario, c.sets, m)]).failed for m in c.bounds):
+            failed.append(c)
+    for c in failed:
+        print(f"report: FAIL check {c.index} ({c.scenario}, {c.metric}): "
+              + "; ".join(f"{m} {evaluate(c, m, runs[(c.scenario, c.sets, m)]).value} "
+                          f"(bound {b})" for m, b in c.bounds.items()),
+              file=sys.stderr)
+    run_failures = [r for r in runs.values() if not r.ok]
+    print(f"wrote {doc_path}")
+    print(f"report: {len(checks)} checks, {n_bounds} with bounds, {len(failed)} failed")
+    if run_failures:
+        print(f"report: {len(run_failures)} of {len(runs)} runs failed: "
+              + ", ".join(r.label for r in run_failures))
+    return 1 if failed or run_failures else 0
