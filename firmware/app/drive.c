@@ -20,17 +20,36 @@ void mc_drive_cfg_default(mc_drive_cfg_t *c)
         .i_max = 13.29f, .i_headroom = 0.03f, .i_slew = 10000.0f, .u_margin = 0.95f, .mtpa_table = false,
         .sc_kp = 1.0f, .sc_ki = 20.0f, .torque_max = 32.0f, .sc_decimation = 10,
         .dtc_enable = true, .dtc_i_band = 0.3f, .dead_time = 0.5e-6f,
+        .pll_bw_hz = 100.0f, .pll_speed_fc_hz = 200.0f,
+        .inj = {.kind = MC_INJ_SINE, .v1 = 70.0f, .f_hz = 500.0f, .omega_n1 = 209.44f, .ts = 1.0e-4f},
+        .notch_q = 1.0f,
     };
+    mc_unop_cfg_default(&c->unop);
+    c->unop.ts = c->ts;
+    c->unop.rs = c->rs;
+    c->unop.model = (mc_flux_model_t){.kind = MC_FLUX_CONST, .ld = c->ld, .lq = c->lq, .psi_pm = c->psi_pm, .map = 0};
+    c->unop.omega_n1 = c->inj.omega_n1;   /* N1 = 400 rpm: 209 rad/s electrical */
 }
 
 static bool cfg_valid(const mc_drive_cfg_t *c)
 {
-    return c->pole_pairs >= 1 && c->rs >= 0.0f && c->ld > 0.0f && c->lq > 0.0f && c->psi_pm >= 0.0f &&
-           c->ts >= 4.9e-5f && c->ts <= 5.1e-4f && c->adc_amps_per_count > 0.0f &&
-           c->adc_volts_per_count > 0.0f && c->offset_cal_samples > 0u && c->i_trip > 0.0f &&
-           c->vdc_max > c->vdc_min && c->angle_src < MC_ANGLE_SRC_COUNT && c->enc_counts_per_rev >= 4u &&
-           c->cc_bw_hz > 0.0f && c->i_max > 0.0f && c->i_max < c->i_trip && c->i_headroom >= 0.0f && c->i_headroom < 0.5f && c->i_slew > 0.0f && c->u_margin > 0.0f &&
-           c->u_margin <= 1.0f && c->sc_decimation >= 1 && c->torque_max > 0.0f && c->dead_time >= 0.0f;
+    const bool motor = c->pole_pairs >= 1 && c->rs >= 0.0f && c->ld > 0.0f && c->lq > 0.0f && c->psi_pm >= 0.0f;
+    const bool sensing = c->ts >= 4.9e-5f && c->ts <= 5.1e-4f && c->adc_amps_per_count > 0.0f &&
+                         c->adc_volts_per_count > 0.0f && c->offset_cal_samples > 0u && c->i_trip > 0.0f &&
+                         c->vdc_max > c->vdc_min && c->angle_src < MC_ANGLE_SRC_COUNT && c->enc_counts_per_rev >= 4u;
+    const bool loops = c->cc_bw_hz > 0.0f && c->i_max > 0.0f && c->i_max < c->i_trip && c->i_headroom >= 0.0f &&
+                       c->i_headroom < 0.5f && c->i_slew > 0.0f && c->u_margin > 0.0f && c->u_margin <= 1.0f &&
+                       c->sc_decimation >= 1 && c->torque_max > 0.0f && c->dead_time >= 0.0f;
+    bool sensorless = true;
+    if (c->angle_src == MC_ANGLE_SRC_UNOP) {
+        const mc_unop_cfg_t *u = &c->unop;
+        sensorless = u->iter_max >= 1 && u->iter_max <= 18 && u->ts == c->ts && u->omega_base > 0.0f &&
+                     u->k1 >= 0.0f && u->k2 >= 0.0f && (u->model.kind != MC_FLUX_MAP || u->model.map != 0) &&
+                     c->pll_bw_hz > 0.0f && c->pll_speed_fc_hz > 0.0f && c->inj.v1 >= 0.0f &&
+                     c->inj.ts == c->ts && (c->inj.kind == MC_INJ_OFF || (c->inj.f_hz > 0.0f && c->inj.f_hz * c->ts <= 0.5f)) &&
+                     c->notch_q > 0.0f;
+    }
+    return motor && sensing && loops && sensorless;
 }
 
 static float i_ref_max(const mc_drive_cfg_t *c)
@@ -60,6 +79,16 @@ static void init_blocks(mc_drive_t *d)
                         .i_max = i_ref_max(c), .u_margin = c->u_margin, .use_table = c->mtpa_table};
     mc_mtpa_table_fill_linear(&tc.table, &tc.mach, i_ref_max(c));
     mc_tref_init(&d->tref, &tc);
+
+    mc_unop_init(&d->unop, &c->unop);
+    /* PLL after the estimator: critically damped, the estimator's speed as feed-forward. */
+    const float w = MC_2PI * c->pll_bw_hz;
+    const mc_pll_cfg_t pc = {.kp = 2.0f * w, .ki = w * w, .ts = c->ts, .speed_fc_hz = c->pll_speed_fc_hz};
+    mc_pll_init(&d->pll, &pc);
+    mc_inj_init(&d->inj, &c->inj);
+    const float f_notch = c->inj.f_hz < 0.45f / c->ts ? c->inj.f_hz : 0.45f / c->ts;
+    mc_biquad_init_notch(&d->notch_d, f_notch, c->notch_q, c->ts);
+    mc_biquad_init_notch(&d->notch_q, f_notch, c->notch_q, c->ts);
 
     const mc_dtc_cfg_t dc = {.t_dead = c->dead_time, .t_pwm = c->ts, .i_band = c->dtc_i_band,
                              .enable = c->dtc_enable};
@@ -111,12 +140,20 @@ static void trip(mc_drive_t *d, uint32_t reason)
 }
 
 /* A new enable (rising edge) always starts clean: offsets re-measured, every block reset. */
+static bool injecting(const mc_drive_t *d)
+{
+    return d->cfg.angle_src == MC_ANGLE_SRC_UNOP && d->cfg.inj.kind != MC_INJ_OFF;
+}
+
 static void start_enable(mc_drive_t *d)
 {
     d->faults = 0u;
     d->cal_count = 0u;
     d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
     init_blocks(d);
+    /* The sensorless estimate starts from the angle given with the enable command. */
+    mc_unop_reset(&d->unop, d->cmd.theta_init, 0.0f);
+    mc_pll_reset(&d->pll, d->cmd.theta_init, 0.0f);
     d->i_ab_prev = (mc_ab_t){0.0f, 0.0f};
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
     d->u_hist[0] = d->u_hist[1] = (mc_ab_t){0.0f, 0.0f};
@@ -168,9 +205,26 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 static void angle_source(mc_drive_t *d, const mc_angle_in_t *in, mc_angle_out_t *out)
 {
     switch (d->cfg.angle_src) {
+    case MC_ANGLE_SRC_UNOP: {
+        /* Fig. 6.9: Newton estimator, then the PLL as a filter with the estimated speed as
+         * feed-forward; the controller uses the PLL's angle and filtered speed. */
+        mc_angle_out_t raw;
+        mc_unop_step(&d->unop, in, &raw);
+        mc_pll_step(&d->pll, raw.theta, raw.omega);
+        out->theta = d->pll.theta;
+        out->omega = d->pll.omega_filt;
+        d->tm.theta_raw = raw.theta;
+        d->tm.omega_raw = raw.omega;
+        d->tm.est_iters = d->unop.iters;
+        d->tm.est_cost = d->unop.cost;
+        d->tm.est_cond = d->unop.cond;
+        break;
+    }
     case MC_ANGLE_SRC_ENCODER:
     default:
         mc_encoder_step(&d->enc, in, out);
+        d->tm.theta_raw = out->theta;
+        d->tm.omega_raw = out->omega;
         break;
     }
 }
@@ -259,14 +313,23 @@ void mc_drive_isr(mc_drive_t *d)
     mc_angle_out_t ang;
     angle_source(d, &ain, &ang);
 
-    /* 6. Park (2.5) into the controller's frame. */
+    /* 6. Park (2.5) into the controller's frame. While injecting, the current loop sees the
+     *    currents with the injection frequency notched out, so it does not cancel it. */
     const mc_dq_t i_dq = mc_park(i_ab, mc_sincos(ang.theta));
+    mc_dq_t i_fb = i_dq;
+    if (injecting(d)) {
+        i_fb.d = mc_biquad_step(&d->notch_d, i_dq.d);
+        i_fb.q = mc_biquad_step(&d->notch_q, i_dq.q);
+    }
 
     /* 7. References: current, torque (MTPA / field weakening) or speed. */
     const mc_dq_t i_ref = references(d, ang.omega, vdc);
 
-    /* 8. Current control, limited to the inscribed circle of the voltage hexagon. */
-    const mc_dq_t u_dq = mc_cc_step(&d->cc, i_ref, i_dq, ang.omega, vdc * MC_1_SQRT3);
+    /* 8. Current control, limited to the inscribed circle of the voltage hexagon; the HF
+     *    injection (6.6) rides on the estimated d axis. */
+    mc_dq_t u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, vdc * MC_1_SQRT3);
+    d->tm.u_inj = injecting(d) ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
+    u_dq.d += d->tm.u_inj;
 
     /* 9. Inverse Park at the middle of the period the voltage will act in, (k+1, k+2): the
      *    one-period update delay plus the half period of the average. */
@@ -277,7 +340,11 @@ void mc_drive_isr(mc_drive_t *d)
      *     in that period. */
     mc_duty_t duty;
     mc_svpwm(u_ab, vdc, &duty);
-    mc_dtc_apply(&d->dtc, &duty, mc_clarke_inv(mc_park_inv(i_dq, sc_u)));
+    /* The current of that period, extrapolated from the last two samples (it carries the
+     * injection ripple, which decides the sign near zero crossings). */
+    const mc_ab_t i_next = {i_ab.alpha + 1.5f * (i_ab.alpha - d->i_ab_prev.alpha),
+                            i_ab.beta + 1.5f * (i_ab.beta - d->i_ab_prev.beta)};
+    mc_dtc_apply(&d->dtc, &duty, mc_clarke_inv(i_next));
     hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
 
     /* 11. Keep what the estimators need next period, and the telemetry. */

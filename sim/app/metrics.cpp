@@ -1,5 +1,6 @@
 #include "metrics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -48,6 +49,11 @@ void Metrics::acc_add(Acc& a, const Sample& s) const
 void Metrics::add(const Sample& s)
 {
     last_t_ = s.t;
+    if (s.iters >= 0) {
+        iter_sum_ += s.iters;
+        iter_n_ += 1;
+        iter_max_ = std::max(iter_max_, s.iters);
+    }
     if (s.t >= start_) {
         i_peak_ = std::max(i_peak_, s.i_peak);
         if (s.running) angle_err_max_ = std::max(angle_err_max_, std::fabs(s.angle_err_deg));
@@ -64,6 +70,12 @@ void Metrics::add(const Sample& s)
         else if (settle_signal_ == "angle") e = s.angle_err_deg;
         else if (settle_signal_ == "iq") e = s.iq - s.iq_ref;
         any_settle_sample_ = true;
+        if (s.running && std::isfinite(e)) {
+            const double ae = std::fabs(e);
+            if (!std::isfinite(e0_)) e0_ = ae;
+            if (!std::isfinite(t90_) && ae <= 0.9 * e0_) t90_ = s.t;
+            if (!std::isfinite(t10_) && ae <= 0.1 * e0_) t10_ = s.t;
+        }
         // a sample not running, or without a reference, counts as out of band
         if (!s.running || !std::isfinite(e) || std::fabs(e) > band_) last_out_of_band_ = s.t;
     }
@@ -97,7 +109,10 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
     }
     os << "  \"speed_err_steady_max_pct\": " << json_number(pct_max) << ",\n";
     os << "  \"settling_time_s\": " << json_number(settling) << ",\n";
+    os << "  \"rise_time_s\": " << json_number(std::isfinite(t90_) && std::isfinite(t10_) ? t10_ - t90_ : NAN) << ",\n";
     os << "  \"current_peak_a\": " << json_number(i_peak_) << ",\n";
+    os << "  \"newton_iter_mean\": " << json_number(iter_n_ > 0 ? iter_sum_ / iter_n_ : NAN) << ",\n";
+    os << "  \"newton_iter_max\": " << json_number(iter_max_ >= 0 ? iter_max_ : NAN) << ",\n";
     for (const auto& [k, v] : extra) os << "  \"" << k << "\": " << v << ",\n";
     os << "  \"final_state\": \"" << final_state << "\",\n";
     os << "  \"faults\": [";

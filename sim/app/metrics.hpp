@@ -1,5 +1,6 @@
 // Metrics accumulated every control period; written to metrics.json (keys: docs/simulator.md).
 #pragma once
+#include <cmath>
 #include <string>
 #include <vector>
 #include "scenario.hpp"
@@ -14,6 +15,7 @@ struct Sample {
     double id, iq, id_ref, iq_ref;
     double torque;
     double i_peak;          // max |i_abc| (true)
+    int iters;              // estimator Newton iterations this period (-1: no estimator)
 };
 
 class Metrics {
@@ -38,6 +40,9 @@ private:
     std::vector<Acc> win_acc_;
     Acc steady_;
     double angle_err_max_ = 0, i_peak_ = 0;
+    double iter_sum_ = 0, iter_n_ = 0;
+    double e0_ = NAN, t90_ = NAN, t10_ = NAN;   // rise time of the settle signal's error
+    int iter_max_ = -1;
     double last_out_of_band_ = -1;     // time of last sample outside the band
     bool any_settle_sample_ = false;
     double last_t_ = 0;

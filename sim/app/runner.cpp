@@ -100,10 +100,41 @@ Resolved resolve(const Scenario& sc)
     if (r.vdc >= sc.f("sensors.vdc_full_scale_v"))
         throw ScenarioError(sc.origin() + ": key 'sensors.vdc_full_scale_v' = " + json_number(sc.f("sensors.vdc_full_scale_v")) +
                             ": must be above the DC-link voltage (" + json_number(r.vdc) + " V)");
+    if (sc.s("control.angle_source") == "unop" && sc.s("injection.kind") != "off" &&
+        sc.f("injection.f_hz") * r.ts > 0.5 + 1e-12)
+        throw ScenarioError(sc.origin() + ": key 'injection.f_hz' = " + json_number(sc.f("injection.f_hz")) +
+                            ": above half the sampling frequency (" + json_number(0.5 / r.ts) + " Hz at control.ts_s)");
     if (r.vdc <= r.vdc_min || r.vdc >= r.vdc_max)
         throw ScenarioError(sc.origin() + ": key 'inverter.vdc_v' = " + json_number(r.vdc) +
                             ": outside the drive's trip window [control.vdc_min_v, control.vdc_max_v]");
     return r;
+}
+
+// The estimator's flux map: the plant's magnetics tabulated on a regular grid, as an offline
+// identification would deliver it (the KIT identifier will replace this later).
+std::unique_ptr<mc_flux_map_t> make_estimator_map(const FluxModel& m, int n, double span, double l_scale,
+                                                  double psi_scale)
+{
+    auto map = std::make_unique<mc_flux_map_t>();
+    map->n_d = n;
+    map->n_q = n;
+    map->id0 = static_cast<float>(-span);
+    map->iq0 = static_cast<float>(-span);
+    map->did = static_cast<float>(2.0 * span / (n - 1));
+    map->diq = static_cast<float>(2.0 * span / (n - 1));
+    const Vec2 psi0 = m.flux(Vec2::Zero());
+    for (int a = 0; a < n; ++a) {
+        for (int b = 0; b < n; ++b) {
+            const Vec2 i(-span + a * 2.0 * span / (n - 1), -span + b * 2.0 * span / (n - 1));
+            const Vec2 psi = m.flux(i);
+            // mismatch: the magnet part scales with psi_scale, the current-dependent part with l_scale
+            const double pd = psi_scale * psi0.x() + l_scale * (psi.x() - psi0.x());
+            const double pq = l_scale * (psi.y() - psi0.y());
+            map->psi_d[a * n + b] = static_cast<float>(pd);
+            map->psi_q[a * n + b] = static_cast<float>(pq);
+        }
+    }
+    return map;
 }
 
 class Progress {
@@ -195,7 +226,6 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     dc.i_trip = static_cast<float>(r.i_trip);
     dc.vdc_min = static_cast<float>(r.vdc_min);
     dc.vdc_max = static_cast<float>(r.vdc_max);
-    dc.angle_src = MC_ANGLE_SRC_ENCODER;
     dc.enc_counts_per_rev = qep.counts_per_rev;
     dc.enc_offset_rad = static_cast<float>(p * ec.offset_rad);
     dc.enc_pll_bw_hz = static_cast<float>(sc.f("control.encoder_pll_bw_hz"));
@@ -213,6 +243,48 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     dc.dtc_enable = sc.b("control.deadtime_comp");
     dc.dtc_i_band = static_cast<float>(sc.f("control.dtc_i_band_a"));
     dc.dead_time = static_cast<float>(pc.inverter.t_dead);
+
+    // sensorless estimator, PLL and injection
+    const bool unop = sc.s("control.angle_source") == "unop";
+    std::unique_ptr<mc_flux_map_t> est_map;
+    dc.angle_src = unop ? MC_ANGLE_SRC_UNOP : MC_ANGLE_SRC_ENCODER;
+    {
+        const double n1 = sc.f("injection.n1_rpm") / kRpm * p;
+        mc_unop_cfg_t& u = dc.unop;
+        mc_unop_cfg_default(&u);
+        u.ts = dc.ts;
+        u.rs = static_cast<float>(mp.rs * sc.f("estimator.rs_scale"));
+        u.model.kind = MC_FLUX_CONST;
+        u.model.ld = static_cast<float>(mp.ld * sc.f("estimator.l_scale"));
+        u.model.lq = static_cast<float>(mp.lq * sc.f("estimator.l_scale"));
+        u.model.psi_pm = static_cast<float>(mp.psi_pm * sc.f("estimator.psi_scale"));
+        u.model.map = nullptr;
+        if (unop && sc.s("estimator.model") == "fluxmap") {
+            const double span = sc.has("estimator.map_span_a") ? sc.f("estimator.map_span_a") : 1.5 * mp.i_rated_peak;
+            est_map = make_estimator_map(plant.model(), static_cast<int>(sc.i("estimator.map_points")), span,
+                                         sc.f("estimator.l_scale"), sc.f("estimator.psi_scale"));
+            u.model.kind = MC_FLUX_MAP;
+            u.model.map = est_map.get();
+        }
+        u.iter_max = static_cast<int>(sc.i("estimator.iter_max"));
+        u.step_tol = static_cast<float>(sc.f("estimator.step_tol"));
+        u.k1 = static_cast<float>(sc.f("estimator.k1"));
+        u.k2 = static_cast<float>(sc.f("estimator.k2"));
+        u.omega_n1 = static_cast<float>(n1);
+        u.omega_base = static_cast<float>(sc.f("estimator.speed_scale_rpm") / kRpm * p);
+        u.mid_sample = sc.b("estimator.mid_sample");
+        u.reg_predicted = sc.b("estimator.reg_predicted");
+        dc.pll_bw_hz = static_cast<float>(sc.f("estimator.pll_bw_hz"));
+        dc.pll_speed_fc_hz = static_cast<float>(sc.f("estimator.pll_speed_fc_hz"));
+        const std::string& ik = sc.s("injection.kind");
+        dc.inj.kind = ik == "sine" ? MC_INJ_SINE : (ik == "rect" ? MC_INJ_RECT : MC_INJ_OFF);
+        dc.inj.v1 = static_cast<float>(sc.f("injection.v1_v"));
+        dc.inj.f_hz = static_cast<float>(sc.f("injection.f_hz"));
+        dc.inj.omega_n1 = static_cast<float>(n1);
+        dc.inj.ts = dc.ts;
+        dc.notch_q = static_cast<float>(sc.f("injection.notch_q"));
+    }
+    const double theta_init_err = sc.f("estimator.theta0_err_deg") * kPi / 180.0;
 
     auto drive = std::make_unique<mc_drive_t>();
     if (!mc_drive_init(drive.get(), &dc, &adc, &pwm, &qep))
@@ -237,7 +309,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
             if (!trace) throw std::runtime_error("cannot write " + tp);
             std::fputs("t_s,theta_deg,theta_hat_deg,angle_err_deg,speed_rpm,speed_hat_rpm,speed_ref_rpm,"
                        "id_a,iq_a,id_ref_a,iq_ref_a,ud_v,uq_v,torque_nm,torque_ref_nm,load_nm,"
-                       "ia_a,ib_a,ic_a,vdc_v,state\n", trace);
+                       "ia_a,ib_a,ic_a,vdc_v,state,theta_raw_deg,speed_raw_rpm,newton_iter,cost,u_inj_v\n", trace);
         }
     }
     const long decim = sc.i("output.decimation");
@@ -268,6 +340,9 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         cmd.speed_ref = static_cast<float>(speed_ref.at(t) / kRpm);
         cmd.torque_ref = static_cast<float>(torque_ref.at(t));
         cmd.i_ref = mc_dq_t{static_cast<float>(id_ref.at(t)), static_cast<float>(iq_ref.at(t))};
+        // The initial position is taken as known (plus the scenario's error) until the
+        // three-step routine exists; the drive only reads it at the enable edge.
+        cmd.theta_init = static_cast<float>(wrap_pi(plant.theta_e() + theta_init_err));
         mc_drive_command(drive.get(), &cmd);
 
         const auto i0 = std::chrono::steady_clock::now();
@@ -287,16 +362,21 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         if (mech == "dyno") sref = dyno.at(t);
         else if (fw_mode == MC_MODE_SPEED && mech != "locked") sref = speed_ref.at(t);
         const double speed = plant.omega_m() * kRpm;
-        metrics.add(Sample{t, running, err, speed, sref, idq.x(), idq.y(), tm.i_ref.d, tm.i_ref.q, plant.torque(), ipk});
+        metrics.add(Sample{t, running, err, speed, sref, idq.x(), idq.y(), tm.i_ref.d, tm.i_ref.q, plant.torque(), ipk,
+                           running && unop ? tm.est_iters : -1});
 
         if (trace && k % decim == 0) {
             std::fprintf(trace,
-                         "%.6f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.5f,%.5f,%.3f,%d\n",
+                         "%.6f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.5f,%.5f,%.3f,%d,"
+                         "%.4f,%.4f,%d,%.4g,%.3f\n",
                          t, theta * deg, running ? tm.theta * deg : NAN, err, speed,
                          running ? tm.omega / p * kRpm : NAN, sref, idq.x(), idq.y(), running ? tm.i_ref.d : NAN,
                          running ? tm.i_ref.q : NAN, running ? tm.u_dq.d : NAN, running ? tm.u_dq.q : NAN,
                          plant.torque(), running ? tm.torque_ref : NAN, mech == "inertia" ? load.at(t) : NAN, iabc[0],
-                         iabc[1], iabc[2], tm.vdc, static_cast<int>(tm.state));
+                         iabc[1], iabc[2], tm.vdc, static_cast<int>(tm.state),
+                         running ? tm.theta_raw * deg : NAN, running ? tm.omega_raw / p * kRpm : NAN,
+                         running && unop ? tm.est_iters : 0, running && unop ? tm.est_cost : NAN,
+                         running ? tm.u_inj : NAN);
         }
 
         // The inverter applies the latched duties over (t, t + Ts).

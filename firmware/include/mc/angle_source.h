@@ -7,6 +7,7 @@
 
 typedef enum {
     MC_ANGLE_SRC_ENCODER = 0,
+    MC_ANGLE_SRC_UNOP,          /* Newton-based estimator (thesis ch. 6) + PLL filter */
     MC_ANGLE_SRC_COUNT
 } mc_angle_src_kind_t;
 

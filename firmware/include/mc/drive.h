@@ -7,6 +7,10 @@
 #include "mc/current_ctrl.h"
 #include "mc/deadtime.h"
 #include "mc/encoder.h"
+#include "mc/filters.h"
+#include "mc/injection.h"
+#include "mc/pll.h"
+#include "mc/unop.h"
 #include "mc/speed_ctrl.h"
 #include "mc/svpwm.h"
 #include "mc/torque_ref.h"
@@ -54,6 +58,12 @@ typedef struct {
     uint32_t enc_counts_per_rev;
     float enc_offset_rad;
     float enc_pll_bw_hz, enc_speed_fc_hz;
+    /* sensorless: UNOP + PLL filter (Fig. 6.9), HF injection (6.6) with a notch on the feedback */
+    mc_unop_cfg_t unop;          /* its flux-model map pointer must outlive the drive   */
+    float pll_bw_hz;             /* PLL after the estimator                             */
+    float pll_speed_fc_hz;       /* its speed output filter                             */
+    mc_inj_cfg_t inj;
+    float notch_q;               /* notch at the injection frequency in i_dq feedback   */
     /* current loop */
     float cc_bw_hz;
     bool  cc_decouple;
@@ -82,6 +92,8 @@ typedef struct {
     mc_dq_t   i_ref;             /* MC_MODE_CURRENT [A]              */
     float     torque_ref;        /* MC_MODE_TORQUE [N m]             */
     float     speed_ref;         /* MC_MODE_SPEED  [rad/s mechanical] */
+    float     theta_init;        /* sensorless: rotor angle taken as known at enable [rad]
+                                    (until the initial-position routine provides it)  */
 } mc_drive_cmd_t;
 
 /* Telemetry of the last period (read from outside the ISR). */
@@ -97,6 +109,10 @@ typedef struct {
     mc_dq_t  u_dq;               /* commanded [V]                    */
     mc_ab_t  u_ab;               /* realised by the modulator [V]    */
     float    torque_ref;         /* [N m]                            */
+    float    theta_raw, omega_raw;   /* estimator output before the PLL */
+    int      est_iters;          /* Newton iterations this period     */
+    float    est_cost, est_cond; /* final cost, Hessian conditioning  */
+    float    u_inj;              /* injected d voltage [V]            */
     float    duty[3];
     bool     u_limited, fw_active;
 } mc_drive_telem_t;
@@ -122,6 +138,10 @@ typedef struct {
     float offset[3];             /* calibrated [counts]                      */
 
     mc_encoder_t enc;
+    mc_unop_t unop;
+    mc_pll_t pll;
+    mc_inj_t inj;
+    mc_biquad_t notch_d, notch_q;
     mc_cc_t cc;
     mc_sc_t sc;
     mc_tref_t tref;
