@@ -84,11 +84,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, default=2, metavar="N",
                    help="simulations in parallel (default 2)")
     p.add_argument("--dpi", type=int, default=100, help="plot resolution (default 100)")
+    p.add_argument("--no-plots", action="store_true",
+                   help="skip the PNGs (tests that only need the bounds)")
     p.set_defaults(func=_cmd_report)
+
+    from mctools.fit_adq import add_parser as add_fit_adq
+    add_fit_adq(sub)
     return ap
 
 
 def main(argv=None) -> int:
+    from mctools.fit_adq import FitInputError
     from mctools.preset import PresetError
     from mctools.report import ReportInputError
     from mctools.trace import TraceError
@@ -96,7 +102,7 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (TraceError, PresetError, ReportInputError) as exc:
+    except (TraceError, PresetError, ReportInputError, FitInputError) as exc:
         print(f"mctools {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except RuntimeError as exc:  # e.g. flux inversion outside the model's valid range

@@ -43,6 +43,7 @@ class ReportInputError(Exception):
 # Bounds
 
 _BOUND_RE = re.compile(r"^\s*(abs\s+)?(<=|>=|==|<|>)\s*(\S+)\s*$")
+_RANGE_RE = re.compile(r"^\s*(abs\s+)?in\s*\[\s*([^,\s]+)\s*,\s*([^\]\s]+)\s*\]\s*$")
 _OPS = {
     "<=": lambda a, b: a <= b,
     ">=": lambda a, b: a >= b,
@@ -51,6 +52,7 @@ _OPS = {
     # Exact equality is what "== 0" on counters means; the tolerance only absorbs the decimal
     # round trip of a float through JSON text.
     "==": lambda a, b: math.isclose(a, b, rel_tol=1e-12, abs_tol=0.0),
+    "in": lambda a, b: b[0] <= a <= b[1],
 }
 
 
@@ -59,7 +61,7 @@ class Bound:
     text: str
     use_abs: bool
     op: str
-    limit: float
+    limit: object  # float, or (lo, hi) for "in [lo, hi]"
 
     def holds(self, value) -> bool:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -74,9 +76,19 @@ class Bound:
 
 
 def parse_bound(text: str) -> Bound:
-    """'abs <= X' | '<= X' | '>= X' | '== X' | '< X' | '> X' (abs works with every operator)."""
+    """'abs <= X' | '<= X' | '>= X' | '== X' | '< X' | '> X' | 'in [A, B]' (abs works with every
+    operator; 'abs in [3, 7]' checks a magnitude whose sign convention may differ)."""
     if not isinstance(text, str):
         raise ValueError(f"bound must be a string like \"<= 2\", got {text!r}")
+    r = _RANGE_RE.match(text)
+    if r:
+        try:
+            lo, hi = float(r.group(2)), float(r.group(3))
+        except ValueError:
+            raise ValueError(f"bad bound {text!r}: the range needs two numbers") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+            raise ValueError(f"bad bound {text!r}: need finite lo <= hi")
+        return Bound(text, bool(r.group(1)), "in", (lo, hi))
     m = _BOUND_RE.match(text)
     if not m:
         raise ValueError(f"bad bound {text!r} (expected 'abs <= X', '<= X', '>= X', '== X', "
@@ -496,7 +508,7 @@ def report(args) -> int:
             done += 1
             status = "" if run.ok else f"{run.error} "
             print(f"[{done}/{len(keys)}] {run.label} ... {status}{run.seconds:.1f} s", flush=True)
-            if run.ok:
+            if run.ok and not getattr(args, "no_plots", False):
                 render_plots(run, titles[run.scenario], args.dpi)
             elif run.exit_code not in (0, None):
                 log = run.dir / "mcsim.log"

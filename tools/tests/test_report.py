@@ -327,3 +327,14 @@ def test_run_dir_names_unique():
     assert names[("s", (), "fluxmap")] == "s__fluxmap"
     assert names[("s", ('control.mode="torque"',), "const")] == "s__control.mode=torque__const"
     assert all("/" not in n and '"' not in n for n in names.values())
+
+
+def test_range_bound():
+    from mctools.report import parse_bound
+
+    b = parse_bound("abs in [3, 7]")
+    assert b.holds(-5.0) and b.holds(3.0) and b.holds(7) and not b.holds(-7.5) and not b.holds(2.9)
+    assert not b.holds(None)
+    assert parse_bound("in [-1, 1]").holds(-0.5) and not parse_bound("in [-1, 1]").holds(-5)
+    with pytest.raises(ValueError):
+        parse_bound("in [7, 3]")
