@@ -3,19 +3,13 @@
  * (plain trigonometry, finite-difference derivatives). */
 #ifndef ESTIM_TEST_H
 #define ESTIM_TEST_H
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-#include <math.h>
-#include <stdio.h>
 #include <string.h>
+
+#include "../mc_test.h"
 
 #include "mc/flux_model.h"
 #include "mc/unop.h"
 
-#define PI_D 3.14159265358979323846
 #define DEG (PI_D / 180.0)
 
 /* sun2016 prototype (machines.md, thesis Table 4.1) */
@@ -26,15 +20,6 @@
 #define SUN_TS 1e-4
 #define SUN_P 5
 #define RPM_TO_WE(n) ((n) * 2.0 * PI_D / 60.0 * SUN_P)
-
-#define assert_near(a, b, tol)                                                               \
-    do {                                                                                     \
-        double a_ = (double)(a), b_ = (double)(b), t_ = (double)(tol);                       \
-        if (!(fabs(a_ - b_) <= t_)) {                                                        \
-            fail_msg("%s = %.9g, %s = %.9g, |diff| %.3g > %.3g", #a, a_, #b, b_,             \
-                     fabs(a_ - b_), t_);                                                     \
-        }                                                                                    \
-    } while (0)
 
 static inline double wrapd(double x) { return remainder(x, 2.0 * PI_D); }
 
