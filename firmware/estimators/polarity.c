@@ -1,0 +1,212 @@
+/* Step II polarity: generalized detection (5.6)-(5.7) and the DVI reference (3.5.2). */
+#include "mc/polarity.h"
+
+#include <math.h>
+#include <stddef.h>
+
+#include "mc/angle.h"
+#include "mc/sincos.h"
+#include "mc/transforms.h"
+
+enum { ST_RUN = 0, ST_DONE, ST_FAILED };
+
+/* |delta i| below this gives no usable slope in (5.6) (noise / the turning point) [A] */
+#define DI_MIN 1e-3f
+
+static float absf(float x) { return (x < 0.0f) ? -x : x; }
+
+static mc_ab_t vec(float mag, mc_sincos_t dir)
+{
+    mc_ab_t u;
+    u.alpha = mag * dir.c;
+    u.beta = mag * dir.s;
+    return u;
+}
+
+static float proj(mc_ab_t x, mc_sincos_t dir) { return x.alpha * dir.c + x.beta * dir.s; }
+
+static void zero_duty(mc_abc_t *d)
+{
+    d->a = 0.0f;
+    d->b = 0.0f;
+    d->c = 0.0f;
+}
+
+void mc_polarity_cfg_default(mc_polarity_cfg_t *cfg)
+{
+    cfg->ts = 0.0f;
+    cfg->rs = 0.0f;
+    cfg->model.kind = MC_FLUX_CONST;
+    cfg->model.ld = 0.0f;
+    cfg->model.lq = 0.0f;
+    cfg->model.psi_pm = 0.0f;
+    cfg->model.map = NULL;
+    cfg->v_pol = 200.0f;
+    cfg->n = 4;
+    cfg->l_at_end = false;
+    cfg->i_rest = 0.3f;
+    cfg->i_trip = 0.0f;
+}
+
+bool mc_polarity_start(mc_polarity_t *s, const mc_polarity_cfg_t *cfg, float theta1)
+{
+    s->cfg = *cfg;
+    s->state = ST_FAILED;
+    s->theta1 = theta1;
+    s->theta2 = mc_wrap_pi(theta1);
+    s->c1 = s->c2 = 0.0f;
+    s->flip = false;
+    s->n_valid = 0;
+    s->used = 0;
+    s->v_real = 0.0f;
+    s->calls = 0;
+    s->dir = mc_sincos(theta1);
+    mc_ip_prog_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, 1);
+    if (!(cfg->ts > 0.0f) || !(cfg->v_pol > 0.0f) || cfg->n < 1 || cfg->n > MC_POL_N_MAX ||
+        4 * cfg->n > MC_IP_REC_MAX) {
+        return false;
+    }
+    mc_ab_t up = vec(cfg->v_pol, s->dir), un = vec(-cfg->v_pol, s->dir);
+    /* Fig 5.7: +n, -2n, +n; zero net volt-seconds, so the current ends where it started */
+    bool ok = mc_ip_prog_vector(&s->prog, up, cfg->n, 0) &&
+              mc_ip_prog_vector(&s->prog, un, 2 * cfg->n, 1) &&
+              mc_ip_prog_vector(&s->prog, up, cfg->n, 2);
+    if (ok) {
+        s->state = ST_RUN;
+    }
+    return ok;
+}
+
+/* fold one interval into (5.6)-(5.7) */
+static void fold(mc_polarity_t *s, const mc_ip_rec_t *r)
+{
+    float i0 = proj(r->i0, s->dir), i1 = proj(r->i1, s->dir);
+    float di = i1 - i0;
+    if (absf(di) < DI_MIN) {
+        return;
+    }
+    float ldiff = s->cfg.ts * proj(r->ubar, s->dir) / di;   /* (5.6) */
+    float ie = s->cfg.l_at_end ? i1 : 0.5f * (i0 + i1);
+    mc_dq_t ip, in, psi;
+    float lp[4], ln[4];
+    ip.d = ie;
+    ip.q = 0.0f;
+    in.d = -ie;
+    in.q = 0.0f;
+    mc_flux_eval(&s->cfg.model, ip, &psi, lp, NULL);
+    mc_flux_eval(&s->cfg.model, in, &psi, ln, NULL);
+    float d1 = ldiff - lp[0], d2 = ldiff - ln[0];          /* (5.7) */
+    s->c1 += d1 * d1;
+    s->c2 += d2 * d2;
+    if (s->n_valid < MC_IP_REC_MAX) {
+        s->i_delta[s->n_valid] = i1;
+        s->l_diff[s->n_valid] = ldiff;
+    }
+    s->n_valid++;
+}
+
+mc_ip_status_t mc_polarity_step(mc_polarity_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty)
+{
+    zero_duty(duty);
+    if (s->state != ST_RUN) {
+        return (s->state == ST_DONE) ? MC_IP_DONE : MC_IP_FAILED;
+    }
+    s->calls++;
+    mc_ip_status_t st = mc_ip_prog_step(&s->prog, i_ab, vdc, duty);
+    if (s->prog.n == 1) {
+        mc_ab_t u = s->prog.u_line[1];
+        s->v_real = sqrtf(u.alpha * u.alpha + u.beta * u.beta);
+    }
+    if (st == MC_IP_FAILED || s->prog.overflow) {
+        s->state = ST_FAILED;
+        zero_duty(duty);
+        return MC_IP_FAILED;
+    }
+    /* one record arrives per call: two model evaluations of work per call */
+    for (; s->used < s->prog.n_rec && s->used < MC_IP_REC_MAX; ++s->used) {
+        fold(s, &s->prog.rec[s->used]);
+    }
+    if (st != MC_IP_DONE) {
+        return MC_IP_RUNNING;
+    }
+    if (s->n_valid < 2 || !(s->c1 >= 0.0f) || !(s->c2 >= 0.0f)) {
+        s->state = ST_FAILED;
+        return MC_IP_FAILED;
+    }
+    s->flip = s->c1 > s->c2;
+    s->theta2 = mc_wrap_pi(s->theta1 + (s->flip ? MC_PI : 0.0f));
+    s->state = ST_DONE;
+    return MC_IP_DONE;
+}
+
+/* ---------------- DVI ---------------- */
+
+void mc_dvi_cfg_default(mc_dvi_cfg_t *cfg)
+{
+    cfg->rs = 0.0f;
+    cfg->v = 200.0f;
+    cfg->n = 6;
+    cfg->gap_min = 2;
+    cfg->gap_max = 50;
+    cfg->i_rest = 0.3f;
+    cfg->i_trip = 0.0f;
+}
+
+bool mc_dvi_start(mc_dvi_t *s, const mc_dvi_cfg_t *cfg, float theta1)
+{
+    s->cfg = *cfg;
+    s->state = ST_FAILED;
+    s->theta1 = theta1;
+    s->theta2 = mc_wrap_pi(theta1);
+    s->peak_pos = s->peak_neg = 0.0f;
+    s->flip = false;
+    s->calls = 0;
+    s->dir = mc_sincos(theta1);
+    mc_ip_prog_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, cfg->gap_max);
+    if (!(cfg->v > 0.0f) || cfg->n < 1 || cfg->n > MC_POL_N_MAX) {
+        return false;
+    }
+    mc_ab_t up = vec(cfg->v, s->dir), un = vec(-cfg->v, s->dir);
+    /* the opposite pulse of equal volt-seconds brings the current back to (nearly) zero far
+     * faster than the zero vector (tau = L / Rs, tens of ms); the gap waits for the rest */
+    bool ok = mc_ip_prog_vector(&s->prog, up, cfg->n, 0) &&
+              mc_ip_prog_vector(&s->prog, un, cfg->n, -1) &&
+              mc_ip_prog_gap(&s->prog, cfg->gap_min) &&
+              mc_ip_prog_vector(&s->prog, un, cfg->n, 1) &&
+              mc_ip_prog_vector(&s->prog, up, cfg->n, -1);
+    if (ok) {
+        s->state = ST_RUN;
+    }
+    return ok;
+}
+
+mc_ip_status_t mc_dvi_step(mc_dvi_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty)
+{
+    zero_duty(duty);
+    if (s->state != ST_RUN) {
+        return (s->state == ST_DONE) ? MC_IP_DONE : MC_IP_FAILED;
+    }
+    s->calls++;
+    mc_ip_status_t st = mc_ip_prog_step(&s->prog, i_ab, vdc, duty);
+    if (st == MC_IP_FAILED || s->prog.overflow) {
+        s->state = ST_FAILED;
+        zero_duty(duty);
+        return MC_IP_FAILED;
+    }
+    if (st != MC_IP_DONE) {
+        return MC_IP_RUNNING;
+    }
+    for (int k = 0; k < s->prog.n_rec && k < MC_IP_REC_MAX; ++k) {
+        const mc_ip_rec_t *r = &s->prog.rec[k];
+        float a = absf(proj(r->i1, s->dir));
+        if (r->tag == 0 && a > s->peak_pos) {
+            s->peak_pos = a;
+        } else if (r->tag == 1 && a > s->peak_neg) {
+            s->peak_neg = a;
+        }
+    }
+    s->flip = s->peak_neg > s->peak_pos;
+    s->theta2 = mc_wrap_pi(s->theta1 + (s->flip ? MC_PI : 0.0f));
+    s->state = ST_DONE;
+    return MC_IP_DONE;
+}

@@ -1,0 +1,74 @@
+/* Magnetic polarity (Step II of thesis chapter 5) in the estimated d axis theta1 from Step I:
+ *  - generalized polarity detection (5.3, (5.6)-(5.7)): train +V n, -V 2n, +V n periods in the
+ *    delta axis; every interval gives L_delta^diff(j) (5.6), compared with the model profile
+ *    l_dd(+i_delta, 0) (c1) and l_dd(-i_delta, 0) (c2); c1 > c2 means delta points to the south
+ *    pole and theta2 = theta1 + pi;
+ *  - dual voltage injection, DVI (3.5.2, Fig 3.8): +V for n periods (reset by -V n), gap, -V for
+ *    n periods (reset by +V n); the pulse with the larger peak |i_delta| points north.
+ * The pulse vector is V in the delta direction, limited by the hexagon (mc_svpwm scales it onto
+ * the boundary: the largest magnitude <= V available in that direction, e.g. 176.8 V at 41.5 deg
+ * for 300 V); the realised vector is what enters ubar. Calling convention: mc/initpos.h. */
+#ifndef MC_POLARITY_H
+#define MC_POLARITY_H
+#include "mc/initpos.h"
+
+#define MC_POL_N_MAX 16   /* upper bound of the pulse length n [periods]; 4n <= MC_IP_REC_MAX */
+
+typedef struct {
+    float ts, rs;            /* [s], [ohm] */
+    mc_flux_model_t model;   /* the profile l_dd(i_d, 0) = dpsi_d/di_d at i_q = 0 */
+    float v_pol;             /* [V] requested pulse magnitude (200) */
+    int n;                   /* periods per half pulse (thesis 4) */
+    bool l_at_end;           /* true: l_dd at i_delta(j), literally (5.7); false (default): at
+                                the interval's mean current, where the chord slope (5.6) of a
+                                smooth psi(i) is closest to the derivative */
+    float i_rest, i_trip;    /* [A], see mc_ip_prog_t (no gap in this program: i_rest unused) */
+} mc_polarity_cfg_t;
+
+typedef struct {
+    mc_polarity_cfg_t cfg;
+    mc_ip_prog_t prog;
+    mc_sincos_t dir;         /* of theta1 */
+    int used;                /* records already folded into c1, c2 */
+    int state;               /* internal */
+    /* results */
+    float theta1;            /* input [rad] */
+    float theta2;            /* [-pi, pi) */
+    float c1, c2;            /* (5.7) [H^2] */
+    bool flip;               /* c1 > c2: pi added */
+    int n_valid;             /* intervals used in (5.7) */
+    float v_real;            /* realised |V| of the first pulse [V] */
+    float i_delta[MC_IP_REC_MAX], l_diff[MC_IP_REC_MAX];  /* (i_delta(j), L_delta^diff(j)) */
+    int calls;
+} mc_polarity_t;
+
+/* thesis defaults: v_pol 200 V, n 4, l at the mean current, i_rest 0.3 A; ts, rs, model unset */
+void mc_polarity_cfg_default(mc_polarity_cfg_t *cfg);
+bool mc_polarity_start(mc_polarity_t *s, const mc_polarity_cfg_t *cfg, float theta1);
+mc_ip_status_t mc_polarity_step(mc_polarity_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty);
+
+/* ---- DVI reference ---- */
+typedef struct {
+    float rs;
+    float v;                 /* [V] requested pulse magnitude (200) */
+    int n;                   /* periods per pulse (thesis 7.2.2: 6) */
+    int gap_min, gap_max;
+    float i_rest, i_trip;
+} mc_dvi_cfg_t;
+
+typedef struct {
+    mc_dvi_cfg_t cfg;
+    mc_ip_prog_t prog;
+    mc_sincos_t dir;
+    int state;
+    float theta1, theta2;    /* theta2 in [-pi, pi) */
+    float peak_pos, peak_neg;/* peak |i_delta| of the +V and -V pulses [A] */
+    bool flip;               /* peak_neg > peak_pos */
+    int calls;
+} mc_dvi_t;
+
+void mc_dvi_cfg_default(mc_dvi_cfg_t *cfg);
+bool mc_dvi_start(mc_dvi_t *s, const mc_dvi_cfg_t *cfg, float theta1);
+mc_ip_status_t mc_dvi_step(mc_dvi_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty);
+
+#endif

@@ -1,0 +1,236 @@
+/* Step I initial position (5.5) / (7.1) against the simulated standstill plant of ip_plant.h. */
+#include "ip_plant.h"
+
+static mc_flux_map_t g_map;   /* 13 kB: static rather than on the test stack */
+static int g_map_ready;
+
+static const mc_flux_map_t *sun_map(void)
+{
+    if (!g_map_ready) {
+        fill_sun_map(&g_map);
+        g_map_ready = 1;
+    }
+    return &g_map;
+}
+
+static mc_ip_status_t step_ip(void *e, mc_ab_t i, float vdc, mc_abc_t *d)
+{
+    return mc_initpos_step((mc_initpos_t *)e, i, vdc, d);
+}
+
+static mc_initpos_cfg_t ip_cfg(mc_ip_cost_t cost, int m)
+{
+    mc_initpos_cfg_t c;
+    mc_initpos_cfg_default(&c);
+    c.ts = (float)SUN_TS;
+    c.rs = (float)SUN_RS;
+    c.ld = (float)SUN_LD;
+    c.lq = (float)SUN_LQ;
+    c.model.kind = MC_FLUX_MAP;
+    c.model.map = sun_map();
+    c.cost = cost;
+    c.m = m;
+    return c;
+}
+
+/* run Step I on a fresh plant; returns the error modulo pi [deg] */
+static double run_step1(const mc_initpos_cfg_t *c, int sat, double th_deg, double noise,
+                        mc_initpos_t *s, plant_t *p)
+{
+    plant_init(p, sat, th_deg);
+    p->noise = noise;
+    assert_true(mc_initpos_start(s, c));
+    mc_ip_status_t st;
+    plant_run(p, step_ip, s, 400, &st);
+    assert_int_equal(st, MC_IP_DONE);
+    assert_true(s->theta1 >= 0.0f && s->theta1 < (float)PI_D);
+    return err_mod_pi_deg(s->theta1, th_deg * DEG);
+}
+
+static void test_vectors(void **st)
+{
+    (void)st;
+    mc_duty_t d;
+    mc_ip_direct(MC_IP_V100, 300.0f, &d);
+    assert_near(d.a, 1.0, 0.0);
+    assert_near(d.b, 0.0, 0.0);
+    assert_near(d.u_real.alpha, 200.0, 1e-3);
+    assert_near(d.u_real.beta, 0.0, 1e-3);
+    mc_ip_direct(MC_IP_V010 | MC_IP_V001, 300.0f, &d);   /* V(011) = -V(100) */
+    assert_near(d.u_real.alpha, -200.0, 1e-3);
+    /* the hexagon in the thesis direction 41.5 deg: 173.2 / cos(11.5 deg) = 176.8 V */
+    mc_ab_t u = {200.0f * cosf(41.5f * (float)DEG), 200.0f * sinf(41.5f * (float)DEG)};
+    mc_svpwm(u, 300.0f, &d);
+    double mag = hypot(d.u_real.alpha, d.u_real.beta);
+    assert_near(mag, 173.205 / cos(11.5 * DEG), 0.05);
+    assert_true(d.saturated);
+}
+
+/* The record must hold the vector that really acted between the two samples: with the plant's
+ * one-period delay the first interval of V(100) shows alpha 200 V - Rs i and di = La^-1 u Ts. */
+static void test_timing_record(void **st)
+{
+    (void)st;
+    mc_initpos_cfg_t c = ip_cfg(MC_IP_COST_LINEAR, 5);
+    mc_initpos_t s;
+    plant_t p;
+    double th = 30.0 * DEG;
+    run_step1(&c, 0, 30.0, 0.0, &s, &p);
+    assert_int_equal(s.prog.n_rec, 5);
+    const mc_ip_rec_t *r = &s.prog.rec[0];
+    assert_near(r->i0.alpha, 0.0, 1e-6);
+    assert_near(r->ubar.alpha, 200.0 - 0.5 * SUN_RS * r->i1.alpha, 1e-3);
+    assert_near(r->ubar.beta, -0.5 * SUN_RS * r->i1.beta, 1e-3);
+    /* La^-1 u Ts, u = 200 V alpha (Rs small: 1 % tolerance) */
+    double l1 = 0.5 * (SUN_LD + SUN_LQ), l2 = 0.5 * (SUN_LD - SUN_LQ);
+    double a11 = l1 + l2 * cos(2 * th), a12 = l2 * sin(2 * th), a22 = l1 - l2 * cos(2 * th);
+    double det = a11 * a22 - a12 * a12;
+    assert_near(r->i1.alpha, a22 / det * 200.0 * SUN_TS, 0.01 * 200.0 * SUN_TS / SUN_LD);
+    assert_near(r->i1.beta, -a12 / det * 200.0 * SUN_TS, 0.01 * 200.0 * SUN_TS / SUN_LD);
+    /* the last interval closes 2 calls after its command: 4m pulse calls + 2 + search */
+    assert_true(s.calls >= 4 * 5 + 2);
+    /* cost at the minimum is the resistive trapezoid error only */
+    double g_ok = s.cost_min;
+    assert_true(g_ok < 1.0);
+
+    /* negative control: a plant without the shadow-register delay breaks the voltage/current
+     * pairing, and the fit shows it */
+    plant_init(&p, 0, 30.0);
+    p.no_delay = 1;
+    assert_true(mc_initpos_start(&s, &c));
+    mc_ip_status_t stt;
+    plant_run(&p, step_ip, &s, 400, &stt);
+    assert_int_equal(stt, MC_IP_DONE);
+    print_message("timing: cost_min with delay %.3g V^2, without %.3g V^2\n", g_ok, s.cost_min);
+    assert_true(s.cost_min > 1000.0 * (g_ok + 1e-3));
+}
+
+static void test_linear_sweep(void **st)
+{
+    (void)st;
+    static const struct { int n_dir; bool all; } var[] = {{1, false}, {1, true}, {3, false}};
+    for (unsigned v = 0; v < sizeof var / sizeof var[0]; ++v) {
+        mc_initpos_cfg_t c = ip_cfg(MC_IP_COST_LINEAR, 5);
+        c.n_dir = var[v].n_dir;
+        c.all_pulses = var[v].all;
+        double worst = 0.0;
+        int calls = 0;
+        for (int a = 0; a < 360; a += 15) {
+            mc_initpos_t s;
+            plant_t p;
+            double e = run_step1(&c, 0, a, 0.0, &s, &p);
+            worst = fmax(worst, e);
+            calls = s.calls;
+            assert_true(s.evals <= 36 + MC_IP_GS_MAX + 2);
+        }
+        print_message("linear model, linear cost, n_dir %d all %d: worst %.4f deg, %d calls\n",
+                      var[v].n_dir, (int)var[v].all, worst, calls);
+        assert_true(worst < 1.0);
+    }
+    /* the flux-model costs on the constant model must agree */
+    for (int k = 1; k <= 2; ++k) {
+        mc_initpos_cfg_t c = ip_cfg((mc_ip_cost_t)k, 5);
+        c.model.kind = MC_FLUX_CONST;
+        c.model.ld = (float)SUN_LD;
+        c.model.lq = (float)SUN_LQ;
+        c.model.psi_pm = (float)SUN_PSI;
+        c.model.map = NULL;
+        double worst = 0.0;
+        for (int a = 0; a < 360; a += 15) {
+            mc_initpos_t s;
+            plant_t p;
+            worst = fmax(worst, run_step1(&c, 0, a, 0.0, &s, &p));
+        }
+        print_message("linear model, cost %d on the constant model: worst %.4f deg\n", k, worst);
+        assert_true(worst < 1.0);
+    }
+}
+
+/* Table 7.1 on the saturating machine: mean error and current peak for m = 3, 4, 5. */
+static void test_saturating_table(void **st)
+{
+    (void)st;
+    static const char *name[3] = {"linear (5.5)", "nonlinear (7.1)", "flux diff"};
+    double mean[3][3];
+    print_message("saturating machine, sweep 0..345 deg step 15, noise-free\n");
+    print_message("  m   cost              mean err   max err   I_peak [A]  [p.u. of 13.29 A]\n");
+    for (int m = 3; m <= 5; ++m) {
+        for (int k = 0; k < 3; ++k) {
+            mc_initpos_cfg_t c = ip_cfg((mc_ip_cost_t)k, m);
+            double sum = 0.0, worst = 0.0, ipk = 0.0;
+            int n = 0;
+            for (int a = 0; a < 360; a += 15) {
+                mc_initpos_t s;
+                plant_t p;
+                double e = run_step1(&c, 1, a, 0.0, &s, &p);
+                sum += e;
+                worst = fmax(worst, e);
+                ipk = fmax(ipk, p.i_phase_peak);
+                ++n;
+            }
+            mean[m - 3][k] = sum / n;
+            print_message("  %d   %-16s  %7.2f    %7.2f    %6.2f      %.2f\n", m, name[k],
+                          mean[m - 3][k], worst, ipk, ipk / SUN_IRATED);
+        }
+    }
+    for (int m = 0; m < 3; ++m) {
+        /* the constant-parameter cost is biased by saturation; the model-based costs must be
+         * clearly better (Table 7.1 trend) and both bounded */
+        assert_true(mean[m][0] < 30.0);
+        assert_true(mean[m][1] < mean[m][0]);
+        assert_true(mean[m][2] < 2.0);
+    }
+}
+
+static void test_noise_and_failures(void **st)
+{
+    (void)st;
+    mc_initpos_cfg_t c = ip_cfg(MC_IP_COST_LINEAR, 5);
+    double worst = 0.0;
+    for (int a = 0; a < 360; a += 15) {
+        mc_initpos_t s;
+        plant_t p;
+        worst = fmax(worst, run_step1(&c, 0, a, 0.02, &s, &p));
+    }
+    print_message("linear model, 0.02 A noise: worst %.3f deg\n", worst);
+    assert_true(worst < 3.0);
+
+    mc_initpos_t s;
+    mc_abc_t d;
+    mc_ab_t z = {0.0f, 0.0f};
+    assert_true(mc_initpos_start(&s, &c));
+    assert_int_equal(mc_initpos_step(&s, z, 0.0f, &d), MC_IP_FAILED);   /* no DC link */
+    assert_near(d.a + d.b + d.c, 0.0, 0.0);
+    assert_int_equal(mc_initpos_step(&s, z, 300.0f, &d), MC_IP_FAILED);   /* stays failed */
+    assert_true(mc_initpos_start(&s, &c));
+    mc_ab_t bad = {NAN, 0.0f};
+    assert_int_equal(mc_initpos_step(&s, bad, 300.0f, &d), MC_IP_FAILED);
+    /* over-current trip */
+    c.i_trip = 5.0f;
+    plant_t p;
+    plant_init(&p, 0, 0.0);
+    assert_true(mc_initpos_start(&s, &c));
+    mc_ip_status_t stt;
+    plant_run(&p, step_ip, &s, 400, &stt);
+    assert_int_equal(stt, MC_IP_FAILED);
+    /* invalid configurations */
+    c = ip_cfg(MC_IP_COST_LINEAR, 5);
+    c.m = 0;
+    assert_false(mc_initpos_start(&s, &c));
+    c = ip_cfg(MC_IP_COST_LINEAR, 8);
+    c.n_dir = 3;
+    c.all_pulses = true;   /* 96 records > MC_IP_REC_MAX */
+    assert_false(mc_initpos_start(&s, &c));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_vectors),
+        cmocka_unit_test(test_timing_record),
+        cmocka_unit_test(test_linear_sweep),
+        cmocka_unit_test(test_saturating_table),
+        cmocka_unit_test(test_noise_and_failures),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

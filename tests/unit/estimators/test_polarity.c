@@ -1,0 +1,209 @@
+/* Step II polarity (5.6)-(5.7) and the DVI reference, after Step I, on the saturating plant. */
+#include "ip_plant.h"
+
+#include "mc/polarity.h"
+
+static mc_flux_map_t g_map;   /* 13 kB: static rather than on the test stack */
+
+static mc_ip_status_t step_ip(void *e, mc_ab_t i, float vdc, mc_abc_t *d)
+{
+    return mc_initpos_step((mc_initpos_t *)e, i, vdc, d);
+}
+
+static mc_ip_status_t step_pol(void *e, mc_ab_t i, float vdc, mc_abc_t *d)
+{
+    return mc_polarity_step((mc_polarity_t *)e, i, vdc, d);
+}
+
+static mc_ip_status_t step_dvi(void *e, mc_ab_t i, float vdc, mc_abc_t *d)
+{
+    return mc_dvi_step((mc_dvi_t *)e, i, vdc, d);
+}
+
+static mc_flux_model_t map_model(void)
+{
+    mc_flux_model_t m = {MC_FLUX_MAP, 0.0f, 0.0f, 0.0f, &g_map};
+    return m;
+}
+
+static int setup(void **st)
+{
+    (void)st;
+    fill_sun_map(&g_map);
+    return 0;
+}
+
+/* Step I (linear cost, m = 5, the thesis choice) on the plant; returns theta1 */
+static float step1(plant_t *p, int *calls)
+{
+    mc_initpos_cfg_t c;
+    mc_initpos_cfg_default(&c);
+    c.ts = (float)SUN_TS;
+    c.rs = (float)SUN_RS;
+    c.ld = (float)SUN_LD;
+    c.lq = (float)SUN_LQ;
+    mc_initpos_t s;
+    assert_true(mc_initpos_start(&s, &c));
+    mc_ip_status_t st;
+    *calls += plant_run(p, step_ip, &s, 400, &st);
+    assert_int_equal(st, MC_IP_DONE);
+    return s.theta1;
+}
+
+typedef struct {
+    int wrong, n;
+    double min_margin;    /* min over angles of |log(c1 / c2)| with the right sign */
+    int calls_max;
+} pol_stats_t;
+
+static void sweep_pol(int sat, double noise, const mc_flux_model_t *model, pol_stats_t *ps,
+                      int verbose)
+{
+    memset(ps, 0, sizeof *ps);
+    ps->min_margin = 1e9;
+    mc_polarity_cfg_t c;
+    mc_polarity_cfg_default(&c);
+    c.ts = (float)SUN_TS;
+    c.rs = (float)SUN_RS;
+    c.model = *model;
+    for (int a = 0; a < 360; a += 15) {
+        plant_t p;
+        plant_init(&p, sat, a);
+        p.noise = noise;
+        p.rng = 777u + (uint64_t)a;
+        int calls = 0;
+        float th1 = step1(&p, &calls);
+        mc_polarity_t s;
+        assert_true(mc_polarity_start(&s, &c, th1));
+        mc_ip_status_t st;
+        calls += plant_run(&p, step_pol, &s, 400, &st);
+        assert_int_equal(st, MC_IP_DONE);
+        assert_true(s.theta2 >= -(float)PI_D && s.theta2 < (float)PI_D);
+        double e1 = err_mod_pi_deg(th1, a * DEG), e2 = err_mod_2pi_deg(s.theta2, a * DEG);
+        /* the decision is right when theta2 lies within 90 deg of the true d axis */
+        int ok = e2 < 90.0;
+        ps->wrong += !ok;
+        ps->n++;
+        double lr = log((double)s.c2 / (double)s.c1);   /* > 0: north is delta */
+        double margin = (e2 < 90.0) ? fabs(lr) : -fabs(lr);
+        ps->min_margin = fmin(ps->min_margin, margin);
+        if (calls > ps->calls_max) {
+            ps->calls_max = calls;
+        }
+        if (verbose) {
+            print_message("  %3d deg: theta1 err %5.1f, flip %d, c1 %.3g c2 %.3g, theta2 err %5.1f,"
+                          " |V| %.1f V, %d calls%s\n", a, e1, (int)s.flip, (double)s.c1,
+                          (double)s.c2, e2, (double)s.v_real, calls, ok ? "" : "  WRONG");
+        }
+    }
+}
+
+static void test_polarity_sweep(void **st)
+{
+    (void)st;
+    mc_flux_model_t m = map_model();
+    pol_stats_t ps;
+    print_message("Step I (linear, m 5) + Step II (+4/-8/+4, 200 V), saturating machine:\n");
+    sweep_pol(1, 0.0, &m, &ps, 1);
+    print_message("noise-free: %d/%d wrong, min log margin %.3f, Step I+II %d calls = %.1f ms\n",
+                  ps.wrong, ps.n, ps.min_margin, ps.calls_max, ps.calls_max * SUN_TS * 1e3);
+    assert_int_equal(ps.wrong, 0);
+    /* Step I + II within 5 ms (thesis 4.1 ms) */
+    assert_true(ps.calls_max * SUN_TS <= 5e-3);
+    sweep_pol(1, 0.02, &m, &ps, 0);
+    print_message("0.02 A noise: %d/%d wrong, min log margin %.3f\n", ps.wrong, ps.n,
+                  ps.min_margin);
+    assert_int_equal(ps.wrong, 0);
+}
+
+/* Negative control: a symmetric profile (constant l_dd) gives c1 == c2, no decision (flip
+ * false), so the sweep must then see wrong polarities - the check above can fail. */
+static void test_polarity_needs_asymmetry(void **st)
+{
+    (void)st;
+    mc_flux_model_t m = {MC_FLUX_CONST, (float)SUN_LD, (float)SUN_LQ, (float)SUN_PSI, NULL};
+    pol_stats_t ps;
+    sweep_pol(1, 0.0, &m, &ps, 0);
+    print_message("symmetric profile: %d/%d wrong\n", ps.wrong, ps.n);
+    assert_true(ps.wrong >= ps.n / 3);
+}
+
+static void test_hexagon_and_record(void **st)
+{
+    (void)st;
+    mc_polarity_cfg_t c;
+    mc_polarity_cfg_default(&c);
+    c.ts = (float)SUN_TS;
+    c.rs = (float)SUN_RS;
+    c.model = map_model();
+    plant_t p;
+    plant_init(&p, 1, 41.5);
+    mc_polarity_t s;
+    assert_true(mc_polarity_start(&s, &c, (float)(41.5 * DEG)));
+    mc_ip_status_t stt;
+    plant_run(&p, step_pol, &s, 400, &stt);
+    assert_int_equal(stt, MC_IP_DONE);
+    assert_near(s.v_real, 173.205 / cos(11.5 * DEG), 0.05);
+    assert_int_equal(s.prog.n_rec, 16);
+    assert_int_equal(s.n_valid, 16);
+    assert_false(s.flip);
+    /* (5.6) on the first interval: L ~ l_dd near 0 A, 10.5 mH within saturation */
+    assert_near(s.l_diff[0], SUN_LD, 1.5e-3);
+    /* the train is balanced: the current ends near rest */
+    double iab[2];
+    plant_iab(&p, iab);
+    assert_true(hypot(iab[0], iab[1]) < 0.3);
+    /* south-pole start: the same angle + 180 deg must flip */
+    plant_init(&p, 1, 41.5 + 180.0);
+    assert_true(mc_polarity_start(&s, &c, (float)(41.5 * DEG)));
+    plant_run(&p, step_pol, &s, 400, &stt);
+    assert_true(s.flip);
+    assert_near(err_mod_2pi_deg(s.theta2, (41.5 + 180.0) * DEG), 0.0, 1e-3);
+}
+
+static void test_dvi(void **st)
+{
+    (void)st;
+    mc_dvi_cfg_t c;
+    mc_dvi_cfg_default(&c);
+    c.rs = (float)SUN_RS;
+    for (int pass = 0; pass < 2; ++pass) {
+        double noise = pass ? 0.02 : 0.0;
+        int wrong = 0, n = 0, calls_max = 0;
+        double dmin = 1e9;
+        for (int a = 0; a < 360; a += 15) {
+            plant_t p;
+            plant_init(&p, 1, a);
+            p.noise = noise;
+            p.rng = 99u + (uint64_t)a;
+            int calls = 0;
+            float th1 = step1(&p, &calls);
+            mc_dvi_t s;
+            assert_true(mc_dvi_start(&s, &c, th1));
+            mc_ip_status_t stt;
+            calls += plant_run(&p, step_dvi, &s, 400, &stt);
+            assert_int_equal(stt, MC_IP_DONE);
+            int ok = err_mod_2pi_deg(s.theta2, a * DEG) < 90.0;
+            wrong += !ok;
+            ++n;
+            dmin = fmin(dmin, ok ? fabs(s.peak_pos - s.peak_neg) : -fabs(s.peak_pos - s.peak_neg));
+            calls_max = calls > calls_max ? calls : calls_max;
+        }
+        print_message("DVI (6 Ts, 200 V) noise %.2f A: %d/%d wrong, min peak difference %.3f A, "
+                      "Step I+DVI %d calls\n", noise, wrong, n, dmin, calls_max);
+        if (pass == 0) {
+            assert_int_equal(wrong, 0);
+        }
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_hexagon_and_record),
+        cmocka_unit_test(test_polarity_sweep),
+        cmocka_unit_test(test_polarity_needs_asymmetry),
+        cmocka_unit_test(test_dvi),
+    };
+    return cmocka_run_group_tests(tests, setup, NULL);
+}

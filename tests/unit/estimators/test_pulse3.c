@@ -1,0 +1,103 @@
+/* Three-phase pulse reference method (3.19)-(3.21) + Table 3.1. */
+#include "ip_plant.h"
+
+#include "mc/pulse3.h"
+
+static mc_ip_status_t step_p3(void *e, mc_ab_t i, float vdc, mc_abc_t *d)
+{
+    return mc_pulse3_step((mc_pulse3_t *)e, i, vdc, d);
+}
+
+/* Table 3.1 rows at the sector centres, from the peak law with the firmware phase order
+ * (b at +120 deg: (3.19) with b and c exchanged, see mc/pulse3.h), dI0 > 0 */
+static void test_table(void **st)
+{
+    (void)st;
+    for (int row = 0; row < 6; ++row) {
+        double t = row * 30.0 * DEG;
+        float di[3] = {(float)cos(2 * t), (float)cos(2 * t + 2 * PI_D / 3),
+                       (float)cos(2 * t - 2 * PI_D / 3)};
+        assert_int_equal(mc_pulse3_sector(di), row);
+    }
+    float all_pos[3] = {1.0f, 1.0f, 1.0f};
+    assert_int_equal(mc_pulse3_sector(all_pos), -1);
+}
+
+/* (3.21) + Table 3.1 on exact peak-law data: every angle modulo pi, no 90-deg ambiguity left */
+static void test_angle_exact(void **st)
+{
+    (void)st;
+    double worst = 0.0;
+    for (int a = -180; a < 360; a += 1) {
+        double t = a * DEG + 0.3 * DEG;   /* off the sector edges */
+        float ipk[3] = {(float)(5.0 + 0.4 * cos(2 * t)), (float)(5.0 + 0.4 * cos(2 * t + 2 * PI_D / 3)),
+                        (float)(5.0 + 0.4 * cos(2 * t - 2 * PI_D / 3))};
+        float th, ta;
+        int sec;
+        assert_true(mc_pulse3_angle(ipk, &th, &ta, &sec));
+        assert_true(th >= 0.0f && th < (float)PI_D);
+        assert_true(fabs(ta) <= PI_D / 4 + 1e-6);
+        worst = fmax(worst, err_mod_pi_deg(th, t));
+    }
+    assert_true(worst < 0.01);
+    float flat[3] = {5.0f, 5.0f, 5.0f}, th, ta;
+    int sec;
+    assert_false(mc_pulse3_angle(flat, &th, &ta, &sec));
+}
+
+static void sweep(int sat, int n, double noise, double *mean, double *worst, int *calls,
+                  double *ipk)
+{
+    mc_pulse3_cfg_t c;
+    mc_pulse3_cfg_default(&c);
+    c.rs = (float)SUN_RS;
+    c.n = n;
+    *mean = *worst = *ipk = 0.0;
+    int k = 0;
+    for (int a = 0; a < 360; a += 15) {
+        plant_t p;
+        plant_init(&p, sat, a);
+        p.noise = noise;
+        p.rng = 4242u + (uint64_t)a;
+        mc_pulse3_t s;
+        assert_true(mc_pulse3_start(&s, &c));
+        mc_ip_status_t st;
+        *calls = plant_run(&p, step_p3, &s, 600, &st);
+        assert_int_equal(st, MC_IP_DONE);
+        double e = err_mod_pi_deg(s.theta, a * DEG);
+        *mean += e;
+        *worst = fmax(*worst, e);
+        *ipk = fmax(*ipk, p.i_phase_peak);
+        ++k;
+    }
+    *mean /= k;
+}
+
+static void test_plant(void **st)
+{
+    (void)st;
+    double mean, worst, ipk;
+    int calls;
+    sweep(0, 5, 0.0, &mean, &worst, &calls, &ipk);
+    print_message("linear machine, n 5: mean %.3f deg, worst %.3f deg, %d calls, I_peak %.2f A\n",
+                  mean, worst, calls, ipk);
+    assert_true(worst < 2.0);
+    sweep(0, 5, 0.02, &mean, &worst, &calls, &ipk);
+    print_message("linear machine, n 5, 0.02 A noise: mean %.3f deg, worst %.3f deg\n", mean, worst);
+    assert_true(worst < 10.0);
+    for (int n = 3; n <= 5; ++n) {
+        sweep(1, n, 0.0, &mean, &worst, &calls, &ipk);
+        print_message("saturating machine, n %d: mean %.2f deg, worst %.2f deg, I_peak %.2f A "
+                      "(%.2f p.u.)\n", n, mean, worst, ipk, ipk / SUN_IRATED);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_table),
+        cmocka_unit_test(test_angle_exact),
+        cmocka_unit_test(test_plant),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
