@@ -4,6 +4,7 @@
 #include "mc/angle.h"
 #include "mc/sincos.h"
 #include "mc/transforms.h"
+#include "drive_internal.h"
 
 void mc_drive_cfg_default(mc_drive_cfg_t *c)
 {
@@ -24,6 +25,26 @@ void mc_drive_cfg_default(mc_drive_cfg_t *c)
         .inj = {.kind = MC_INJ_SINE, .v1 = 70.0f, .f_hz = 500.0f, .omega_n1 = 209.44f, .ts = 1.0e-4f},
         .notch_q = 1.0f,
     };
+    c->init_three_step = false;
+    c->step3_speed_tol = 3.0f;
+    c->step3_hold = 0.005f;
+    c->timeout_cal = 0.1f;
+    c->timeout_step12 = 0.02f;
+    c->timeout_step3 = 0.5f;
+    mc_initpos_cfg_default(&c->ip1);
+    c->ip1.ts = c->ts;
+    c->ip1.rs = c->rs;
+    c->ip1.ld = c->ld;
+    c->ip1.lq = c->lq;
+    c->ip1.i_trip = c->i_trip;
+    mc_polarity_cfg_default(&c->ip2);
+    c->ip2.ts = c->ts;
+    c->ip2.rs = c->rs;
+    c->ip2.i_trip = c->i_trip;
+    c->ip2_dvi = false;
+    mc_dvi_cfg_default(&c->dvi);
+    c->dvi.rs = c->rs;
+    c->dvi.i_trip = c->i_trip;
     mc_unop_cfg_default(&c->unop);
     c->unop.ts = c->ts;
     c->unop.rs = c->rs;
@@ -49,7 +70,14 @@ static bool cfg_valid(const mc_drive_cfg_t *c)
                      c->inj.ts == c->ts && (c->inj.kind == MC_INJ_OFF || (c->inj.f_hz > 0.0f && c->inj.f_hz * c->ts <= 0.5f)) &&
                      c->notch_q > 0.0f;
     }
-    return motor && sensing && loops && sensorless;
+    bool startup = c->timeout_cal > 0.0f;
+    if (c->init_three_step) {
+        startup = startup && c->angle_src == MC_ANGLE_SRC_UNOP && c->timeout_step12 > 0.0f &&
+                  c->timeout_step3 > 0.0f && c->step3_speed_tol > 0.0f && c->step3_hold > 0.0f &&
+                  c->ip1.ts == c->ts && (c->ip2_dvi || (c->ip2.ts == c->ts && c->ip2.model.kind == MC_FLUX_MAP &&
+                                                      c->ip2.model.map != 0));
+    }
+    return motor && sensing && loops && sensorless && startup;
 }
 
 static float i_ref_max(const mc_drive_cfg_t *c)
@@ -57,7 +85,7 @@ static float i_ref_max(const mc_drive_cfg_t *c)
     return c->i_max * (1.0f - c->i_headroom);
 }
 
-static void init_blocks(mc_drive_t *d)
+void mc_drive_init_blocks(mc_drive_t *d)
 {
     const mc_drive_cfg_t *c = &d->cfg;
     const mc_encoder_cfg_t ec = {.pole_pairs = c->pole_pairs, .counts_per_rev = c->enc_counts_per_rev,
@@ -80,6 +108,7 @@ static void init_blocks(mc_drive_t *d)
     mc_mtpa_table_fill_linear(&tc.table, &tc.mach, i_ref_max(c));
     mc_tref_init(&d->tref, &tc);
 
+    mc_lpf1_init(&d->step3_speed, 50.0f, c->ts, 0.0f);
     mc_unop_init(&d->unop, &c->unop);
     /* PLL after the estimator: critically damped, the estimator's speed as feed-forward. */
     const float w = MC_2PI * c->pll_bw_hz;
@@ -101,16 +130,19 @@ bool mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, hal_adc_t *adc, hal
     d->cfg = *cfg;
     d->hal = (mc_drive_hal_t){.adc = adc, .pwm = pwm, .qep = qep};
     hal_pwm_enable(pwm, false);
-    d->state = MC_STATE_IDLE;
+    const mc_seq_cfg_t sc = {.ts = cfg->ts, .init_pos = cfg->init_three_step, .timeout_cal = cfg->timeout_cal,
+                             .timeout_step12 = cfg->timeout_step12, .timeout_step3 = cfg->timeout_step3};
+    mc_seq_init(&d->seq, &sc);
     for (int k = 0; k < 3; ++k) {
         d->offset[k] = cfg->adc_offset_nominal;
     }
     if (!cfg_valid(cfg)) {
-        d->state = MC_STATE_FAULT;
-        d->faults = MC_FAULT_CONFIG;
+        mc_seq_fault(&d->seq, MC_FAULT_CONFIG);
+        d->tm.state = d->seq.state;
+        d->tm.faults = d->seq.faults;
         return false;
     }
-    init_blocks(d);
+    mc_drive_init_blocks(d);
     return true;
 }
 
@@ -125,39 +157,9 @@ const mc_drive_telem_t *mc_drive_telemetry(const mc_drive_t *d)
     return &d->tm;
 }
 
-/* Outputs off and duties at 50 % (zero voltage) so a later enable starts from rest. */
-static void outputs_off(mc_drive_t *d)
-{
-    hal_pwm_enable(d->hal.pwm, false);
-    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
-}
-
-static void trip(mc_drive_t *d, uint32_t reason)
-{
-    outputs_off(d);
-    d->faults |= reason;
-    d->state = MC_STATE_FAULT;
-}
-
-/* A new enable (rising edge) always starts clean: offsets re-measured, every block reset. */
 static bool injecting(const mc_drive_t *d)
 {
     return d->cfg.angle_src == MC_ANGLE_SRC_UNOP && d->cfg.inj.kind != MC_INJ_OFF;
-}
-
-static void start_enable(mc_drive_t *d)
-{
-    d->faults = 0u;
-    d->cal_count = 0u;
-    d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
-    init_blocks(d);
-    /* The sensorless estimate starts from the angle given with the enable command. */
-    mc_unop_reset(&d->unop, d->cmd.theta_init, 0.0f);
-    mc_pll_reset(&d->pll, d->cmd.theta_init, 0.0f);
-    d->i_ab_prev = (mc_ab_t){0.0f, 0.0f};
-    d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
-    d->u_hist[0] = d->u_hist[1] = (mc_ab_t){0.0f, 0.0f};
-    d->state = MC_STATE_OFFSET_CAL;
 }
 
 /* Commands change only here, at the start of a period, as one consistent copy. */
@@ -166,40 +168,14 @@ static void take_command(mc_drive_t *d)
     if (d->cmd_seq == d->cmd_seen) {
         return;
     }
-    const bool was_enabled = d->cmd.enable;
     d->cmd = d->cmd_next;
     d->cmd_seen = d->cmd_seq;
-    if ((d->faults & MC_FAULT_CONFIG) != 0u) {
+    if ((d->seq.faults & MC_FAULT_CONFIG) != 0u) {
         return;   /* a rejected configuration never runs */
     }
-    if (d->cmd.enable && !was_enabled) {
-        start_enable(d);
-    } else if (!d->cmd.enable && was_enabled) {
-        outputs_off(d);
-        d->state = MC_STATE_IDLE;
+    if (mc_seq_enable(&d->seq, d->cmd.enable)) {
+        mc_drive_startup_reset(d);   /* a new enable always starts clean */
     }
-}
-
-/* Average the current channels with the outputs off; the offsets must be plausible. */
-static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
-{
-    for (int k = 0; k < 3; ++k) {
-        d->cal_sum[k] += (float)raw->i[k];
-    }
-    if (++d->cal_count < d->cfg.offset_cal_samples) {
-        return;
-    }
-    for (int k = 0; k < 3; ++k) {
-        const float off = d->cal_sum[k] / (float)d->cal_count;
-        if (fabsf(off - d->cfg.adc_offset_nominal) > d->cfg.adc_offset_tol) {
-            trip(d, MC_FAULT_OFFSET_CAL);
-            return;
-        }
-        d->offset[k] = off;
-    }
-    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
-    hal_pwm_enable(d->hal.pwm, true);
-    d->state = MC_STATE_RUN;
 }
 
 static void angle_source(mc_drive_t *d, const mc_angle_in_t *in, mc_angle_out_t *out)
@@ -275,45 +251,30 @@ void mc_drive_isr(mc_drive_t *d)
     hal_qep_sample_t qep;
     hal_qep_read(d->hal.qep, &qep);
 
-    /* 2. Scaling with the calibrated offsets. */
+    /* 2. Scaling with the calibrated offsets; Clarke (2.4), all three channels measured. */
     const float vdc = (float)raw.vdc * c->adc_volts_per_count;
     const mc_abc_t i_abc = {((float)raw.i[0] - d->offset[0]) * c->adc_amps_per_count,
                             ((float)raw.i[1] - d->offset[1]) * c->adc_amps_per_count,
                             ((float)raw.i[2] - d->offset[2]) * c->adc_amps_per_count};
+    const mc_ab_t i_ab = mc_clarke(i_abc);
     d->tm.period++;
     d->tm.i_abc = i_abc;
     d->tm.vdc = vdc;
 
-    /* 3. Sequencing and protection: only RUN goes past this block. */
-    if (d->state == MC_STATE_OFFSET_CAL) {
-        offset_cal(d, &raw);
-    }
-    if (d->state == MC_STATE_RUN) {
-        const float imax = fmaxf(fabsf(i_abc.a), fmaxf(fabsf(i_abc.b), fabsf(i_abc.c)));
-        if (imax > c->i_trip) {
-            trip(d, MC_FAULT_OVERCURRENT);
-        } else if (vdc > c->vdc_max) {
-            trip(d, MC_FAULT_OVERVOLTAGE);
-        } else if (vdc < c->vdc_min) {
-            trip(d, MC_FAULT_UNDERVOLTAGE);
-        }
-    }
-    d->tm.state = d->state;
-    d->tm.faults = d->faults;
-    if (d->state != MC_STATE_RUN) {
+    /* 3. Protection and the startup sequence (offset calibration, Step I and II pulses).
+     *    Only RUN and Step III continue into the control pipeline. */
+    if (!mc_drive_startup(d, &raw, i_abc, i_ab, vdc)) {
+        d->i_ab_prev = i_ab;
         return;
     }
 
-    /* 4. Clarke (2.4); the three channels are all measured. */
-    const mc_ab_t i_ab = mc_clarke(i_abc);
-
-    /* 5. Angle source: it gets i(k-1), i(k) and the voltage applied between them. */
+    /* 4. Angle source: it gets i(k-1), i(k) and the voltage applied between them. */
     const mc_angle_in_t ain = {.i_ab = i_ab, .i_ab_prev = d->i_ab_prev, .u_ab_applied = d->u_hist[1],
                                .vdc = vdc, .qep_count = qep.count};
     mc_angle_out_t ang;
     angle_source(d, &ain, &ang);
 
-    /* 6. Park (2.5) into the controller's frame. While injecting, the current loop sees the
+    /* 5. Park (2.5) into the controller's frame. While injecting, the current loop sees the
      *    currents with the injection frequency notched out, so it does not cancel it. */
     const mc_dq_t i_dq = mc_park(i_ab, mc_sincos(ang.theta));
     mc_dq_t i_fb = i_dq;
@@ -322,32 +283,32 @@ void mc_drive_isr(mc_drive_t *d)
         i_fb.q = mc_biquad_step(&d->notch_q, i_dq.q);
     }
 
-    /* 7. References: current, torque (MTPA / field weakening) or speed. */
-    const mc_dq_t i_ref = references(d, ang.omega, vdc);
+    /* 6. References: current, torque (MTPA / field weakening) or speed; zero during Step III. */
+    const bool step3 = d->seq.state == MC_STATE_INIT_POS;
+    const mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : references(d, ang.omega, vdc);
 
-    /* 8. Current control, limited to the inscribed circle of the voltage hexagon; the HF
+    /* 7. Current control, limited to the inscribed circle of the voltage hexagon; the HF
      *    injection (6.6) rides on the estimated d axis. */
     mc_dq_t u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, vdc * MC_1_SQRT3);
     d->tm.u_inj = injecting(d) ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
     u_dq.d += d->tm.u_inj;
 
-    /* 9. Inverse Park at the middle of the period the voltage will act in, (k+1, k+2): the
+    /* 8. Inverse Park at the middle of the period the voltage will act in, (k+1, k+2): the
      *    one-period update delay plus the half period of the average. */
     const mc_sincos_t sc_u = mc_sincos(mc_wrap_pi(ang.theta + 1.5f * ang.omega * c->ts));
     const mc_ab_t u_ab = mc_park_inv(u_dq, sc_u);
 
-    /* 10. SVPWM (min-max injection), then dead-time compensation with the currents expected
-     *     in that period. */
+    /* 9. SVPWM (min-max injection), then dead-time compensation with the current of that
+     *    period, extrapolated from the last two samples (it carries the injection ripple, which
+     *    decides the sign near zero crossings). */
     mc_duty_t duty;
     mc_svpwm(u_ab, vdc, &duty);
-    /* The current of that period, extrapolated from the last two samples (it carries the
-     * injection ripple, which decides the sign near zero crossings). */
     const mc_ab_t i_next = {i_ab.alpha + 1.5f * (i_ab.alpha - d->i_ab_prev.alpha),
                             i_ab.beta + 1.5f * (i_ab.beta - d->i_ab_prev.beta)};
     mc_dtc_apply(&d->dtc, &duty, mc_clarke_inv(i_next));
     hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
 
-    /* 11. Keep what the estimators need next period, and the telemetry. */
+    /* 10. Keep what the estimators need next period, and the telemetry. */
     d->u_hist[1] = d->u_hist[0];
     d->u_hist[0] = duty.u_real;
     d->i_ab_prev = i_ab;
@@ -362,12 +323,28 @@ void mc_drive_isr(mc_drive_t *d)
     d->tm.duty[2] = duty.c;
     d->tm.u_limited = d->cc.limited;
     d->tm.fw_active = d->tref.fw_active;
+
+    /* 11. Step III hands over to RUN when its convergence test holds (same estimator). */
+    if (step3) {
+        mc_drive_step3_check(d, ang.omega);
+    }
 }
 
 void mc_drive_background(mc_drive_t *d)
 {
-    /* Slow work lives here, never in the ISR. For now: keep the telemetry's state in step when
-     * the ISR returned early (e.g. after a disable), so a reader never sees a stale state. */
-    d->tm.state = d->state;
-    d->tm.faults = d->faults;
+    /* Slow work lives here, never in the ISR. For now: keep the telemetry's state in step with
+     * the sequencer, so a reader never sees a stale state. */
+    d->tm.state = d->seq.state;
+    d->tm.init_step = d->seq.step;
+    d->tm.faults = d->seq.faults;
+}
+
+mc_state_t mc_drive_state(const mc_drive_t *d)
+{
+    return d->seq.state;
+}
+
+uint32_t mc_drive_faults(const mc_drive_t *d)
+{
+    return d->seq.faults;
 }

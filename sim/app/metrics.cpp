@@ -4,6 +4,10 @@
 #include <cmath>
 #include <sstream>
 
+namespace {
+constexpr double kPiM = 3.14159265358979323846;
+}
+
 namespace mcsim {
 
 std::string json_number(double v)
@@ -46,9 +50,44 @@ void Metrics::acc_add(Acc& a, const Sample& s) const
     }
 }
 
+static double wrap180(double deg)
+{
+    double x = std::fmod(deg + 180.0, 360.0);
+    if (x < 0) x += 360.0;
+    return x - 180.0;
+}
+
+void Metrics::add_startup(const Sample& s)
+{
+    constexpr int kIdle = 0, kInit = 4, kRun = 2, kStep3 = 3;
+    if (!std::isfinite(t_enable_) && s.state != kIdle) {
+        t_enable_ = s.t;
+        th0_ = s.theta_e_unwrapped;
+    }
+    if (!std::isfinite(t_enable_)) return;
+    // the rotor must not turn against the intended direction (electrical degrees)
+    reverse_max_ = std::max(reverse_max_, -s.direction * (s.theta_e_unwrapped - th0_) * 180.0 / kPiM);
+    if (s.state == kInit) was_init_ = true;
+    if (s.state == kInit && s.init_step == kStep3 && !std::isfinite(t_step3_)) {
+        t_step3_ = s.t;
+        step12_err_ = wrap180(s.theta2_deg - s.theta_true_deg);
+        step1_err_ = wrap180(2.0 * (s.theta1_deg - s.theta_true_deg)) / 2.0;   // modulo 180 deg
+    }
+    if (was_init_ && s.state == kRun && !std::isfinite(t_run_)) {
+        t_run_ = s.t;
+        init_err_ = s.angle_err_any;
+    }
+    // "enable to < 1 deg": the last sample at or above 1 deg in Step III and the first 20 ms of RUN
+    const bool watch = (s.state == kInit && s.init_step == kStep3) ||
+                       (s.state == kRun && std::isfinite(t_run_) && s.t < t_run_ + 0.02);
+    if (watch && !(std::fabs(s.angle_err_any) < 1.0)) t_last_bad_ = s.t;
+}
+
 void Metrics::add(const Sample& s)
 {
     last_t_ = s.t;
+    ts_ = s.ts;
+    add_startup(s);
     if (s.iters >= 0) {
         iter_sum_ += s.iters;
         iter_n_ += 1;
@@ -111,6 +150,16 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
     os << "  \"settling_time_s\": " << json_number(settling) << ",\n";
     os << "  \"rise_time_s\": " << json_number(std::isfinite(t90_) && std::isfinite(t10_) ? t10_ - t90_ : NAN) << ",\n";
     os << "  \"current_peak_a\": " << json_number(i_peak_) << ",\n";
+    const bool init = std::isfinite(t_step3_);
+    os << "  \"step12_time_s\": " << json_number(init ? t_step3_ - t_enable_ : NAN) << ",\n";
+    os << "  \"step1_err_deg\": " << json_number(step1_err_) << ",\n";
+    os << "  \"step12_err_deg\": " << json_number(step12_err_) << ",\n";
+    os << "  \"polarity_correct\": " << (init ? (std::fabs(step12_err_) < 90.0 ? "true" : "false") : "null") << ",\n";
+    os << "  \"init_pos_err_deg\": " << json_number(init_err_) << ",\n";
+    os << "  \"init_pos_time_s\": "
+       << json_number(init && std::isfinite(t_run_) ? (std::isfinite(t_last_bad_) ? t_last_bad_ + ts_ : t_step3_) - t_enable_ : NAN)
+       << ",\n";
+    os << "  \"reverse_angle_max_deg\": " << json_number(std::isfinite(t_enable_) ? reverse_max_ : NAN) << ",\n";
     os << "  \"newton_iter_mean\": " << json_number(iter_n_ > 0 ? iter_sum_ / iter_n_ : NAN) << ",\n";
     os << "  \"newton_iter_max\": " << json_number(iter_max_ >= 0 ? iter_max_ : NAN) << ",\n";
     for (const auto& [k, v] : extra) os << "  \"" << k << "\": " << v << ",\n";

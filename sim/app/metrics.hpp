@@ -16,6 +16,15 @@ struct Sample {
     double torque;
     double i_peak;          // max |i_abc| (true)
     int iters;              // estimator Newton iterations this period (-1: no estimator)
+    // startup (thesis ch. 5)
+    int state = 2;          // drive state (mc_state_t), init step (mc_init_step_t)
+    int init_step = 0;
+    double angle_err_any = NAN;   // angle error whenever the control pipeline runs (RUN, Step III)
+    double theta_true_deg = 0;    // electrical
+    double theta_e_unwrapped = 0; // electrical angle travelled [rad], for the reverse rotation
+    double theta1_deg = NAN, theta2_deg = NAN;   // Step I (mod 180) and Step II results
+    double direction = 1;         // sign of the intended rotation
+    double ts = 1e-4;
 };
 
 class Metrics {
@@ -34,6 +43,7 @@ private:
         double run_n = 0;
     };
     void acc_add(Acc& a, const Sample& s) const;
+    void add_startup(const Sample& s);
     double start_, settle_from_, band_;
     std::string settle_signal_;
     std::vector<Window> windows_;
@@ -42,6 +52,12 @@ private:
     double angle_err_max_ = 0, i_peak_ = 0;
     double iter_sum_ = 0, iter_n_ = 0;
     double e0_ = NAN, t90_ = NAN, t10_ = NAN;   // rise time of the settle signal's error
+    // startup
+    double t_enable_ = NAN, t_step3_ = NAN, t_run_ = NAN, t_last_bad_ = NAN;
+    double step12_err_ = NAN, step1_err_ = NAN, init_err_ = NAN;
+    double th0_ = NAN, reverse_max_ = 0;
+    bool was_init_ = false;
+    double ts_ = 1e-4;
     int iter_max_ = -1;
     double last_out_of_band_ = -1;     // time of last sample outside the band
     bool any_settle_sample_ = false;

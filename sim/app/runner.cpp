@@ -41,6 +41,7 @@ const char* state_name(mc_state_t s)
     case MC_STATE_OFFSET_CAL: return "OFFSET_CAL";
     case MC_STATE_RUN: return "RUN";
     case MC_STATE_FAULT: return "FAULT";
+    case MC_STATE_INIT_POS: return "INIT_POS";
     }
     return "?";
 }
@@ -53,6 +54,8 @@ std::vector<std::string> fault_names(uint32_t f)
     if (f & MC_FAULT_UNDERVOLTAGE) out.push_back("undervoltage");
     if (f & MC_FAULT_OFFSET_CAL) out.push_back("offset_calibration");
     if (f & MC_FAULT_CONFIG) out.push_back("config");
+    if (f & MC_FAULT_INIT_POS) out.push_back("init_pos");
+    if (f & MC_FAULT_TIMEOUT) out.push_back("timeout");
     return out;
 }
 
@@ -259,10 +262,14 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         u.model.lq = static_cast<float>(mp.lq * sc.f("estimator.l_scale"));
         u.model.psi_pm = static_cast<float>(mp.psi_pm * sc.f("estimator.psi_scale"));
         u.model.map = nullptr;
-        if (unop && sc.s("estimator.model") == "fluxmap") {
+        if (unop) {
+            // The flux map serves the flux-map estimator and always the polarity detection (its
+            // l_dd(i_d, 0) profile, thesis Fig. 5.6).
             const double span = sc.has("estimator.map_span_a") ? sc.f("estimator.map_span_a") : 1.5 * mp.i_rated_peak;
             est_map = make_estimator_map(plant.model(), static_cast<int>(sc.i("estimator.map_points")), span,
                                          sc.f("estimator.l_scale"), sc.f("estimator.psi_scale"));
+        }
+        if (unop && sc.s("estimator.model") == "fluxmap") {
             u.model.kind = MC_FLUX_MAP;
             u.model.map = est_map.get();
         }
@@ -283,6 +290,38 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         dc.inj.omega_n1 = static_cast<float>(n1);
         dc.inj.ts = dc.ts;
         dc.notch_q = static_cast<float>(sc.f("injection.notch_q"));
+
+        // startup: thesis chapter 5
+        dc.init_three_step = unop && sc.s("startup.init_pos") == "three_step";
+        mc_initpos_cfg_default(&dc.ip1);
+        dc.ip1.ts = dc.ts;
+        dc.ip1.rs = u.rs;
+        dc.ip1.ld = u.model.ld;
+        dc.ip1.lq = u.model.lq;
+        const std::string& c1 = sc.s("startup.step1_cost");
+        dc.ip1.cost = c1 == "nonlinear" ? MC_IP_COST_NONLINEAR : (c1 == "fluxdiff" ? MC_IP_COST_FLUXDIFF : MC_IP_COST_LINEAR);
+        dc.ip1.model = mc_flux_model_t{MC_FLUX_MAP, u.model.ld, u.model.lq, u.model.psi_pm, est_map.get()};
+        dc.ip1.m = static_cast<int>(sc.i("startup.step1_m"));
+        dc.ip1.n_dir = static_cast<int>(sc.i("startup.step1_dirs"));
+        dc.ip1.i_trip = dc.i_trip;
+        mc_polarity_cfg_default(&dc.ip2);
+        dc.ip2.ts = dc.ts;
+        dc.ip2.rs = u.rs;
+        dc.ip2.model = dc.ip1.model;
+        dc.ip2.v_pol = static_cast<float>(sc.f("startup.v_pol_v"));
+        dc.ip2.n = static_cast<int>(sc.i("startup.step2_n"));
+        dc.ip2.i_trip = dc.i_trip;
+        mc_dvi_cfg_default(&dc.dvi);
+        dc.dvi.rs = u.rs;
+        dc.dvi.v = dc.ip2.v_pol;
+        dc.dvi.n = static_cast<int>(sc.i("startup.dvi_n"));
+        dc.dvi.i_trip = dc.i_trip;
+        dc.ip2_dvi = sc.s("startup.polarity") == "dvi";
+        dc.step3_speed_tol = static_cast<float>(sc.f("startup.step3_speed_tol_rpm") / kRpm * p);
+        dc.step3_hold = static_cast<float>(sc.f("startup.step3_hold_s"));
+        dc.timeout_step12 = static_cast<float>(sc.f("startup.timeout_step12_s"));
+        dc.timeout_step3 = static_cast<float>(sc.f("startup.timeout_step3_s"));
+        dc.timeout_cal = static_cast<float>(std::max(0.1, 2.0 * sc.i("control.offset_cal_samples") * r.ts));
     }
     const double theta_init_err = sc.f("estimator.theta0_err_deg") * kPi / 180.0;
 
@@ -315,6 +354,16 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     const long decim = sc.i("output.decimation");
 
     Metrics metrics(sc);
+    // the intended direction of rotation, for reverse_angle_max_deg: the last reference's sign
+    double direction = 1.0;
+    {
+        const double dur = sc.f("scenario.duration_s");
+        const std::string& m = sc.s("control.mode");
+        const double ref = m == "speed" ? sc.profile("control.speed_ref_rpm").at(dur)
+                                        : (m == "torque" ? sc.profile("control.torque_ref_nm").at(dur)
+                                                         : sc.profile("control.iq_ref_a").at(dur));
+        if (ref < 0) direction = -1.0;
+    }
     const double duration = sc.f("scenario.duration_s");
     const long periods = static_cast<long>(std::llround(duration / r.ts));
     Progress progress(opt.progress, duration);
@@ -362,8 +411,19 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         if (mech == "dyno") sref = dyno.at(t);
         else if (fw_mode == MC_MODE_SPEED && mech != "locked") sref = speed_ref.at(t);
         const double speed = plant.omega_m() * kRpm;
-        metrics.add(Sample{t, running, err, speed, sref, idq.x(), idq.y(), tm.i_ref.d, tm.i_ref.q, plant.torque(), ipk,
-                           running && unop ? tm.est_iters : -1});
+        Sample smp{t, running, err, speed, sref, idq.x(), idq.y(), tm.i_ref.d, tm.i_ref.q, plant.torque(), ipk,
+                   running && unop ? tm.est_iters : -1};
+        smp.state = static_cast<int>(tm.state);
+        smp.init_step = static_cast<int>(tm.init_step);
+        const bool pipeline = running || (tm.state == MC_STATE_INIT_POS && tm.init_step == MC_INIT_STEP3);
+        smp.angle_err_any = pipeline ? wrap_pi(tm.theta - theta) * deg : NAN;
+        smp.theta_true_deg = theta * deg;
+        smp.theta_e_unwrapped = plant.theta_m() * p;
+        smp.theta1_deg = tm.theta1 * deg;
+        smp.theta2_deg = tm.theta2 * deg;
+        smp.direction = direction;
+        smp.ts = r.ts;
+        metrics.add(smp);
 
         if (trace && k % decim == 0) {
             std::fprintf(trace,

@@ -10,6 +10,9 @@
 #include "mc/filters.h"
 #include "mc/injection.h"
 #include "mc/pll.h"
+#include "mc/initpos.h"
+#include "mc/polarity.h"
+#include "mc/sequencer.h"
 #include "mc/unop.h"
 #include "mc/speed_ctrl.h"
 #include "mc/svpwm.h"
@@ -18,19 +21,6 @@
 #include "hal/pwm.h"
 #include "hal/qep.h"
 
-typedef enum {
-    MC_STATE_IDLE = 0,      /* outputs off, waiting for enable                       */
-    MC_STATE_OFFSET_CAL,    /* outputs off, averaging the current-channel offsets     */
-    MC_STATE_RUN,           /* closed-loop control                                    */
-    MC_STATE_FAULT          /* outputs off until disable + enable                     */
-} mc_state_t;
-
-/* Fault reasons (bit mask, latched until the next enable). */
-#define MC_FAULT_OVERCURRENT   (1u << 0)
-#define MC_FAULT_OVERVOLTAGE   (1u << 1)
-#define MC_FAULT_UNDERVOLTAGE  (1u << 2)
-#define MC_FAULT_OFFSET_CAL    (1u << 3)   /* offsets out of the plausible range       */
-#define MC_FAULT_CONFIG        (1u << 4)   /* configuration rejected at init            */
 
 typedef enum {
     MC_MODE_CURRENT = 0,    /* i_d, i_q references directly                           */
@@ -64,6 +54,17 @@ typedef struct {
     float pll_speed_fc_hz;       /* its speed output filter                             */
     mc_inj_cfg_t inj;
     float notch_q;               /* notch at the injection frequency in i_dq feedback   */
+    /* startup (thesis ch. 5): Step I pulses, Step II polarity, Step III continuous injection */
+    bool  init_three_step;       /* sensorless: run INIT_POS; false: the angle comes with
+                                    the enable command (mc_drive_cmd_t.theta_init)      */
+    mc_initpos_cfg_t ip1;        /* Step I                                              */
+    bool  ip2_dvi;               /* Step II by dual-voltage injection instead of (5.7)  */
+    mc_polarity_cfg_t ip2;       /* Step II; its model must carry the l_dd asymmetry (map) */
+    mc_dvi_cfg_t dvi;
+    float step3_speed_tol;       /* [rad/s el] Step III converged when the filtered speed
+                                    estimate stays below this ...                       */
+    float step3_hold;            /* [s] ... for this long                               */
+    float timeout_cal, timeout_step12, timeout_step3;   /* [s]                          */
     /* current loop */
     float cc_bw_hz;
     bool  cc_decouple;
@@ -99,6 +100,7 @@ typedef struct {
 /* Telemetry of the last period (read from outside the ISR). */
 typedef struct {
     mc_state_t state;
+    mc_init_step_t init_step;
     uint32_t faults;
     uint32_t period;             /* ISR counter                      */
     mc_abc_t i_abc;              /* [A]                              */
@@ -113,6 +115,9 @@ typedef struct {
     int      est_iters;          /* Newton iterations this period     */
     float    est_cost, est_cond; /* final cost, Hessian conditioning  */
     float    u_inj;              /* injected d voltage [V]            */
+    float    theta1, theta2;     /* Step I (mod pi) and Step II results [rad] */
+    float    c1, c2;             /* (5.7) costs, or DVI peak currents        */
+    bool     pol_flip;           /* Step II added pi                         */
     float    duty[3];
     bool     u_limited, fw_active;
 } mc_drive_telem_t;
@@ -131,8 +136,7 @@ typedef struct {
     uint32_t cmd_seen;
     mc_drive_cmd_t cmd;          /* the ISR's copy                           */
 
-    mc_state_t state;
-    uint32_t faults;
+    mc_seq_t seq;                /* state, init step, faults          */
     uint32_t cal_count;
     float cal_sum[3];
     float offset[3];             /* calibrated [counts]                      */
@@ -142,6 +146,11 @@ typedef struct {
     mc_pll_t pll;
     mc_inj_t inj;
     mc_biquad_t notch_d, notch_q;
+    mc_initpos_t ip1;
+    mc_polarity_t ip2;
+    mc_dvi_t dvi;
+    mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
+    uint32_t step3_count;
     mc_cc_t cc;
     mc_sc_t sc;
     mc_tref_t tref;
@@ -158,6 +167,8 @@ bool mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, hal_adc_t *adc, hal
 void mc_drive_command(mc_drive_t *d, const mc_drive_cmd_t *cmd);
 void mc_drive_isr(mc_drive_t *d);          /* the control period, top to bottom               */
 void mc_drive_background(mc_drive_t *d);   /* slow work, outside the ISR                      */
+mc_state_t mc_drive_state(const mc_drive_t *d);
+uint32_t mc_drive_faults(const mc_drive_t *d);
 const mc_drive_telem_t *mc_drive_telemetry(const mc_drive_t *d);
 /* A configuration with the sun2016-ipm-5kw parameters at 10 kHz, for tests and as a template. */
 void mc_drive_cfg_default(mc_drive_cfg_t *cfg);

@@ -84,7 +84,7 @@ static void test_overcurrent_trips_and_latches(void **st)
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     run(&r, (int)r.cfg.offset_cal_samples + 5);
-    assert_int_equal(r.d.state, MC_STATE_RUN);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 
     set_inputs(&r, r.cfg.i_trip + 1.0f, 0.0f, 300.0f);
     run(&r, 1);
@@ -95,19 +95,19 @@ static void test_overcurrent_trips_and_latches(void **st)
     /* the fault stays latched while enabled, even when the cause is gone */
     set_inputs(&r, 0.0f, 0.0f, 300.0f);
     run(&r, 50);
-    assert_int_equal(r.d.state, MC_STATE_FAULT);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
     assert_false(hal_pwm_enabled(&r.pwm));
 
     /* disable, enable: starts clean through the calibration */
     command(&r, false, MC_MODE_CURRENT, 0.0f, 0.0f);
     run(&r, 1);
-    assert_int_equal(r.d.state, MC_STATE_IDLE);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     run(&r, 1);
-    assert_int_equal(r.d.state, MC_STATE_OFFSET_CAL);
-    assert_int_equal(r.d.faults, 0u);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
+    assert_int_equal(mc_drive_faults(&r.d), 0u);
     run(&r, (int)r.cfg.offset_cal_samples);
-    assert_int_equal(r.d.state, MC_STATE_RUN);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 }
 
 static void test_dc_link_limits(void **st)
@@ -119,14 +119,14 @@ static void test_dc_link_limits(void **st)
     run(&r, (int)r.cfg.offset_cal_samples + 2);
     set_inputs(&r, 0.0f, 0.0f, r.cfg.vdc_max + 10.0f);
     run(&r, 1);
-    assert_true(r.d.faults & MC_FAULT_OVERVOLTAGE);
+    assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERVOLTAGE);
 
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     run(&r, (int)r.cfg.offset_cal_samples + 2);
     set_inputs(&r, 0.0f, 0.0f, r.cfg.vdc_min - 10.0f);
     run(&r, 1);
-    assert_true(r.d.faults & MC_FAULT_UNDERVOLTAGE);
+    assert_true(mc_drive_faults(&r.d) & MC_FAULT_UNDERVOLTAGE);
     assert_false(hal_pwm_enabled(&r.pwm));
 }
 
@@ -138,8 +138,8 @@ static void test_implausible_offset_faults(void **st)
     r.adc.sample.i[1] = (uint16_t)(r.adc.sample.i[1] + (uint16_t)(r.cfg.adc_offset_tol + 20.0f));
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     run(&r, (int)r.cfg.offset_cal_samples + 2);
-    assert_int_equal(r.d.state, MC_STATE_FAULT);
-    assert_true(r.d.faults & MC_FAULT_OFFSET_CAL);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_true(mc_drive_faults(&r.d) & MC_FAULT_OFFSET_CAL);
     assert_false(hal_pwm_enabled(&r.pwm));
 }
 
@@ -152,8 +152,8 @@ static void test_bad_config_never_runs(void **st)
     assert_false(mc_drive_init(&r.d, &r.cfg, &r.adc, &r.pwm, &r.qep));
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     run(&r, 300);
-    assert_int_equal(r.d.state, MC_STATE_FAULT);
-    assert_true(r.d.faults & MC_FAULT_CONFIG);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_true(mc_drive_faults(&r.d) & MC_FAULT_CONFIG);
     assert_false(hal_pwm_enabled(&r.pwm));
 }
 
@@ -167,7 +167,7 @@ static void test_voltage_history_and_slew(void **st)
     command(&r, true, MC_MODE_CURRENT, 0.0f, 5.0f);
     /* the ISR that completes the calibration already runs the first control step */
     run(&r, (int)r.cfg.offset_cal_samples);
-    assert_int_equal(r.d.state, MC_STATE_RUN);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     const float step = r.cfg.i_slew * r.cfg.ts;
     assert_float_equal(mc_drive_telemetry(&r.d)->i_ref.q, step, 1e-5f);
     const mc_ab_t u1 = mc_drive_telemetry(&r.d)->u_ab;
@@ -197,7 +197,7 @@ static void test_command_taken_at_period_start(void **st)
     assert_false(r.d.cmd.enable);
     run(&r, 1);
     assert_true(r.d.cmd.enable);
-    assert_int_equal(r.d.state, MC_STATE_OFFSET_CAL);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
 }
 
 int main(void)

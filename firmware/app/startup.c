@@ -1,0 +1,194 @@
+/* The drive's startup: protection, offset calibration and the initial position (thesis ch. 5):
+ * Step I pulse injection, Step II polarity detection, then Step III, which is the normal control
+ * pipeline with zero current references and the injection on, until its convergence test holds.
+ * The sequencer (mc/sequencer.h) owns the states, timeouts and fault reasons. */
+#include <math.h>
+#include "drive_internal.h"
+#include "mc/transforms.h"
+
+/* Outputs off and duties at 50 % (zero voltage) so a later enable starts from rest. */
+static void outputs_off(mc_drive_t *d)
+{
+    hal_pwm_enable(d->hal.pwm, false);
+    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
+}
+
+static void trip(mc_drive_t *d, uint32_t reason)
+{
+    outputs_off(d);
+    mc_seq_fault(&d->seq, reason);
+}
+
+/* Reset of everything the estimator pipeline keeps between periods, with the estimate at theta. */
+static void pipeline_reset(mc_drive_t *d, float theta)
+{
+    mc_unop_reset(&d->unop, theta, 0.0f);
+    mc_pll_reset(&d->pll, theta, 0.0f);
+    mc_inj_reset(&d->inj);
+    mc_cc_reset(&d->cc);
+    mc_biquad_reset(&d->notch_d, 0.0f);
+    mc_biquad_reset(&d->notch_q, 0.0f);
+    mc_lpf1_init(&d->step3_speed, 50.0f, d->cfg.ts, 0.0f);
+    d->step3_count = 0u;
+    d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
+}
+
+void mc_drive_startup_reset(mc_drive_t *d)
+{
+    d->cal_count = 0u;
+    d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
+    mc_drive_init_blocks(d);
+    /* Without the three steps the estimate starts from the angle given with the enable. */
+    pipeline_reset(d, d->cmd.theta_init);
+    d->i_ab_prev = (mc_ab_t){0.0f, 0.0f};
+    d->u_hist[0] = d->u_hist[1] = (mc_ab_t){0.0f, 0.0f};
+    d->tm.theta1 = d->tm.theta2 = 0.0f;
+    d->tm.c1 = d->tm.c2 = 0.0f;
+    d->tm.pol_flip = false;
+}
+
+/* Write duties decided outside the control pipeline and keep the voltage history true, so the
+ * estimator's first Step III sample pairs the currents with the pulse that really acted. */
+static void write_duties(mc_drive_t *d, mc_abc_t duty, float vdc)
+{
+    hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
+    const mc_abc_t v = {(duty.a - 0.5f) * vdc, (duty.b - 0.5f) * vdc, (duty.c - 0.5f) * vdc};
+    d->u_hist[1] = d->u_hist[0];
+    d->u_hist[0] = mc_clarke(v);   /* (2.4) drops the common mode: line-to-neutral vector */
+    d->tm.duty[0] = duty.a;
+    d->tm.duty[1] = duty.b;
+    d->tm.duty[2] = duty.c;
+}
+
+static void protect(mc_drive_t *d, mc_abc_t i, float vdc)
+{
+    const mc_drive_cfg_t *c = &d->cfg;
+    const float imax = fmaxf(fabsf(i.a), fmaxf(fabsf(i.b), fabsf(i.c)));
+    if (imax > c->i_trip) {
+        trip(d, MC_FAULT_OVERCURRENT);
+    } else if (vdc > c->vdc_max) {
+        trip(d, MC_FAULT_OVERVOLTAGE);
+    } else if (vdc < c->vdc_min) {
+        trip(d, MC_FAULT_UNDERVOLTAGE);
+    }
+}
+
+/* Average the current channels with the outputs off; the offsets must be plausible. */
+static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
+{
+    for (int k = 0; k < 3; ++k) {
+        d->cal_sum[k] += (float)raw->i[k];
+    }
+    if (++d->cal_count < d->cfg.offset_cal_samples) {
+        return;
+    }
+    for (int k = 0; k < 3; ++k) {
+        const float off = d->cal_sum[k] / (float)d->cal_count;
+        if (fabsf(off - d->cfg.adc_offset_nominal) > d->cfg.adc_offset_tol) {
+            trip(d, MC_FAULT_OFFSET_CAL);
+            return;
+        }
+        d->offset[k] = off;
+    }
+    mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
+    if (d->seq.state == MC_STATE_INIT_POS && !mc_initpos_start(&d->ip1, &d->cfg.ip1)) {
+        trip(d, MC_FAULT_CONFIG);
+        return;
+    }
+    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
+    hal_pwm_enable(d->hal.pwm, true);
+}
+
+/* Step I, then Step II (generalized polarity detection or DVI); returns the engine status. */
+static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
+{
+    mc_abc_t duty = {0.0f, 0.0f, 0.0f};
+    mc_ip_status_t st;
+    if (d->seq.step == MC_INIT_STEP1) {
+        st = mc_initpos_step(&d->ip1, i_ab, vdc, &duty);
+        write_duties(d, duty, vdc);
+        if (st == MC_IP_DONE) {
+            d->tm.theta1 = d->ip1.theta1;
+            const bool ok = d->cfg.ip2_dvi ? mc_dvi_start(&d->dvi, &d->cfg.dvi, d->ip1.theta1)
+                                           : mc_polarity_start(&d->ip2, &d->cfg.ip2, d->ip1.theta1);
+            if (!ok) {
+                return MC_IP_FAILED;
+            }
+            mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
+            return MC_IP_RUNNING;
+        }
+        return st;
+    }
+    if (d->cfg.ip2_dvi) {
+        st = mc_dvi_step(&d->dvi, i_ab, vdc, &duty);
+    } else {
+        st = mc_polarity_step(&d->ip2, i_ab, vdc, &duty);
+    }
+    write_duties(d, duty, vdc);
+    if (st == MC_IP_DONE) {
+        const float theta2 = d->cfg.ip2_dvi ? d->dvi.theta2 : d->ip2.theta2;
+        d->tm.theta2 = theta2;
+        d->tm.pol_flip = d->cfg.ip2_dvi ? d->dvi.flip : d->ip2.flip;
+        d->tm.c1 = d->cfg.ip2_dvi ? d->dvi.peak_pos : d->ip2.c1;
+        d->tm.c2 = d->cfg.ip2_dvi ? d->dvi.peak_neg : d->ip2.c2;
+        /* Step III continues from theta2 with the running-state estimator itself (no method
+         * switch later): only its state is set here. */
+        pipeline_reset(d, theta2);
+        mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
+    }
+    return st;
+}
+
+bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc, mc_ab_t i_ab, float vdc)
+{
+    const mc_state_t s0 = d->seq.state;
+    if (s0 == MC_STATE_INIT_POS || s0 == MC_STATE_RUN) {
+        protect(d, i_abc, vdc);
+    }
+    switch (d->seq.state) {
+    case MC_STATE_OFFSET_CAL:
+        offset_cal(d, raw);
+        break;
+    case MC_STATE_INIT_POS:
+        if (d->seq.step == MC_INIT_STEP1 || d->seq.step == MC_INIT_STEP2) {
+            if (pulse_steps(d, i_ab, vdc) == MC_IP_FAILED) {
+                trip(d, MC_FAULT_INIT_POS);
+            }
+        }
+        break;
+    case MC_STATE_IDLE:
+    case MC_STATE_FAULT:
+        if (hal_pwm_enabled(d->hal.pwm)) {
+            outputs_off(d);
+        }
+        break;
+    case MC_STATE_RUN:
+    default:
+        break;
+    }
+    mc_seq_tick(&d->seq);
+    if (d->seq.state == MC_STATE_FAULT && hal_pwm_enabled(d->hal.pwm)) {
+        outputs_off(d);   /* a timeout raised by the tick */
+    }
+    d->tm.state = d->seq.state;
+    d->tm.init_step = d->seq.step;
+    d->tm.faults = d->seq.faults;
+    return d->seq.state == MC_STATE_RUN ||
+           (d->seq.state == MC_STATE_INIT_POS && d->seq.step == MC_INIT_STEP3 && s0 == MC_STATE_INIT_POS &&
+            d->seq.ticks > 1u);
+}
+
+void mc_drive_step3_check(mc_drive_t *d, float omega_hat)
+{
+    /* Converged when the estimate has stopped moving: the low-passed |omega_hat| (the rotor is
+     * at rest in Step III) stays below the tolerance for step3_hold, and Step III lasted at
+     * least twice that (the estimate starts at rest too). */
+    const float w = mc_lpf1_step(&d->step3_speed, fabsf(omega_hat));
+    d->step3_count = w < d->cfg.step3_speed_tol ? d->step3_count + 1u : 0u;
+    const uint32_t hold = (uint32_t)(d->cfg.step3_hold / d->cfg.ts + 0.5f);
+    if (d->step3_count >= hold && d->seq.ticks >= 2u * hold) {
+        mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
+        d->tm.state = d->seq.state;
+        d->tm.init_step = d->seq.step;
+    }
+}

@@ -1,0 +1,60 @@
+/* Startup sequencer: IDLE -> OFFSET_CAL -> INIT_POS (Step I, II, III) -> RUN, and FAULT with a
+ * reason. A pure state machine (no HAL, no estimator): the drive reports events and calls
+ * mc_seq_tick() once per period; every state that waits for something has a timeout. */
+#ifndef MC_SEQUENCER_H
+#define MC_SEQUENCER_H
+#include "mc/types.h"
+
+typedef enum {
+    MC_STATE_IDLE = 0,      /* outputs off, waiting for enable                                */
+    MC_STATE_OFFSET_CAL,    /* outputs off, averaging the current-channel offsets              */
+    MC_STATE_RUN,           /* closed-loop control                                             */
+    MC_STATE_FAULT,         /* outputs off until disable + enable                              */
+    MC_STATE_INIT_POS       /* initial position: Step I, II (pulses), III (continuous injection) */
+} mc_state_t;
+
+typedef enum { MC_INIT_NONE = 0, MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3 } mc_init_step_t;
+
+/* Fault reasons (bit mask, latched until the next enable). */
+#define MC_FAULT_OVERCURRENT   (1u << 0)
+#define MC_FAULT_OVERVOLTAGE   (1u << 1)
+#define MC_FAULT_UNDERVOLTAGE  (1u << 2)
+#define MC_FAULT_OFFSET_CAL    (1u << 3)   /* offsets out of the plausible range          */
+#define MC_FAULT_CONFIG        (1u << 4)   /* configuration rejected at init                */
+#define MC_FAULT_INIT_POS      (1u << 5)   /* an initial-position step failed               */
+#define MC_FAULT_TIMEOUT       (1u << 6)   /* a state waited longer than its timeout        */
+
+typedef struct {
+    float ts;               /* [s] */
+    bool  init_pos;         /* run INIT_POS after the calibration (else straight to RUN)     */
+    float timeout_cal;      /* [s] OFFSET_CAL                                                */
+    float timeout_step12;   /* [s] Step I + Step II together                                 */
+    float timeout_step3;    /* [s] Step III until the convergence test holds                 */
+} mc_seq_cfg_t;
+
+typedef struct {
+    mc_seq_cfg_t cfg;
+    mc_state_t state;
+    mc_init_step_t step;
+    uint32_t faults;
+    uint32_t ticks;         /* periods in the current state / step                           */
+    uint32_t limit;         /* timeout of the current state / step in periods (0: none)      */
+    bool enabled;
+} mc_seq_t;
+
+typedef enum {
+    MC_SEQ_CAL_DONE = 0,
+    MC_SEQ_STEP_DONE,       /* Step I or II finished; Step III: the convergence test holds   */
+} mc_seq_event_t;
+
+void mc_seq_init(mc_seq_t *s, const mc_seq_cfg_t *cfg);
+/* Enable (rising edge: clean start at OFFSET_CAL, faults cleared) or disable (IDLE). Returns
+ * true on a rising edge, so the caller resets its blocks. */
+bool mc_seq_enable(mc_seq_t *s, bool on);
+void mc_seq_event(mc_seq_t *s, mc_seq_event_t ev);
+/* Latch a fault reason: FAULT until disable + enable. */
+void mc_seq_fault(mc_seq_t *s, uint32_t reason);
+/* Once per period, after the events: counts and applies the timeouts. */
+void mc_seq_tick(mc_seq_t *s);
+
+#endif
