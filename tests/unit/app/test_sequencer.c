@@ -1,0 +1,319 @@
+/* The startup sequencer alone (mc/sequencer.h), then the drive's startup driven through the host
+ * HAL with a small salient RL plant at standstill: the full IDLE -> OFFSET_CAL -> INIT_POS
+ * (I, II, III) -> RUN path, a fault in the middle of every step, timeouts, and repeated
+ * enable/disable. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "hal_host/host.h"
+#include "mc/drive.h"
+#include "mc/transforms.h"
+
+/* ---------------------------------------------------------------- the state machine alone */
+
+static mc_seq_t seq_new(bool init_pos)
+{
+    mc_seq_t s;
+    const mc_seq_cfg_t c = {.ts = 1e-4f, .init_pos = init_pos, .timeout_cal = 0.01f,
+                            .timeout_step12 = 0.005f, .timeout_step3 = 0.02f};
+    mc_seq_init(&s, &c);
+    return s;
+}
+
+static void test_seq_path_and_timeouts(void **st)
+{
+    (void)st;
+    mc_seq_t s = seq_new(true);
+    assert_int_equal(s.state, MC_STATE_IDLE);
+    assert_true(mc_seq_enable(&s, true));
+    assert_false(mc_seq_enable(&s, true));          /* no second rising edge */
+    assert_int_equal(s.state, MC_STATE_OFFSET_CAL);
+    mc_seq_event(&s, MC_SEQ_STEP_DONE);             /* not this state's event: ignored */
+    assert_int_equal(s.state, MC_STATE_OFFSET_CAL);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    assert_int_equal(s.state, MC_STATE_INIT_POS);
+    assert_int_equal(s.step, MC_INIT_STEP1);
+    for (int k = 0; k < 20; ++k) mc_seq_tick(&s);
+    mc_seq_event(&s, MC_SEQ_STEP_DONE);
+    assert_int_equal(s.step, MC_INIT_STEP2);
+    /* Step I and II share 5 ms: 20 periods used, 30 more allowed */
+    for (int k = 0; k < 30; ++k) mc_seq_tick(&s);
+    assert_int_equal(s.state, MC_STATE_INIT_POS);
+    mc_seq_tick(&s);
+    assert_int_equal(s.state, MC_STATE_FAULT);
+    assert_true(s.faults & MC_FAULT_TIMEOUT);
+    /* a fault stays until disable + enable */
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    assert_int_equal(s.state, MC_STATE_FAULT);
+    assert_false(mc_seq_enable(&s, true));
+    assert_int_equal(s.state, MC_STATE_FAULT);
+    mc_seq_enable(&s, false);
+    assert_int_equal(s.state, MC_STATE_IDLE);
+    assert_true(mc_seq_enable(&s, true));
+    assert_int_equal(s.faults, 0u);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    mc_seq_event(&s, MC_SEQ_STEP_DONE);
+    mc_seq_event(&s, MC_SEQ_STEP_DONE);
+    assert_int_equal(s.step, MC_INIT_STEP3);
+    mc_seq_event(&s, MC_SEQ_STEP_DONE);
+    assert_int_equal(s.state, MC_STATE_RUN);
+    for (int k = 0; k < 10000; ++k) mc_seq_tick(&s);   /* RUN has no timeout */
+    assert_int_equal(s.state, MC_STATE_RUN);
+
+    mc_seq_t g = seq_new(false);                       /* without INIT_POS: straight to RUN */
+    mc_seq_enable(&g, true);
+    mc_seq_event(&g, MC_SEQ_CAL_DONE);
+    assert_int_equal(g.state, MC_STATE_RUN);
+}
+
+/* ---------------------------------------------------------------- the drive with a plant */
+
+#define LD 10.5e-3
+#define LQ 12.9e-3
+#define RS 0.4
+#define TS 1e-4
+#define PI_D 3.14159265358979323846
+
+typedef struct {
+    hal_pwm_t pwm;
+    hal_adc_t adc;
+    hal_qep_t qep;
+    mc_flux_map_t map;
+    mc_drive_cfg_t cfg;
+    mc_drive_t d;
+    double theta_r;        /* rotor angle (standstill) */
+    double id, iq;         /* plant currents */
+    double i_force;        /* added to phase a (A) to provoke an over-current */
+} rig_t;
+
+static uint16_t counts(const mc_drive_cfg_t *c, double amps)
+{
+    return (uint16_t)lrint(c->adc_offset_nominal + amps / c->adc_amps_per_count);
+}
+
+/* One PWM period of a salient RL machine at standstill with the latched duties (exact enough
+ * with 10 sub-steps); zero voltage with the outputs off. */
+static void plant_period(rig_t *r)
+{
+    double ua = 0, ub = 0, uc = 0;
+    if (r->pwm.enabled) {
+        ua = (r->pwm.active[0] - 0.5) * 300.0;
+        ub = (r->pwm.active[1] - 0.5) * 300.0;
+        uc = (r->pwm.active[2] - 0.5) * 300.0;
+    }
+    const double ual = (2.0 * ua - ub - uc) / 3.0, ube = (ub - uc) / sqrt(3.0);
+    const double c = cos(r->theta_r), s = sin(r->theta_r);
+    const double ud = c * ual + s * ube, uq = -s * ual + c * ube;
+    for (int k = 0; k < 10; ++k) {
+        r->id += TS / 10 * (ud - RS * r->id) / LD;
+        r->iq += TS / 10 * (uq - RS * r->iq) / LQ;
+    }
+    if (!r->pwm.enabled) {
+        r->id = r->iq = 0.0;   /* diodes: the current collapses within the period */
+    }
+}
+
+static void sample(rig_t *r)
+{
+    const double c = cos(r->theta_r), s = sin(r->theta_r);
+    const double ial = c * r->id - s * r->iq, ibe = s * r->id + c * r->iq;
+    const double ia = ial + r->i_force, ib = -0.5 * ial + sqrt(3.0) / 2 * ibe, ic = -ia - ib + r->i_force;
+    r->adc.sample.i[0] = counts(&r->cfg, ia);
+    r->adc.sample.i[1] = counts(&r->cfg, ib);
+    r->adc.sample.i[2] = counts(&r->cfg, ic);
+    r->adc.sample.vdc = (uint16_t)lrint(300.0 / r->cfg.adc_volts_per_count);
+}
+
+static void step(rig_t *r, int n)
+{
+    for (int k = 0; k < n; ++k) {
+        hal_host_pwm_latch(&r->pwm);
+        sample(r);
+        mc_drive_isr(&r->d);
+        plant_period(r);
+    }
+}
+
+static void command(rig_t *r, bool enable)
+{
+    const mc_drive_cmd_t c = {.enable = enable, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&r->d, &c);
+}
+
+static void rig_init(rig_t *r, double theta_r)
+{
+    *r = (rig_t){0};
+    r->theta_r = theta_r;
+    hal_host_pwm_init(&r->pwm, (float)TS, 0.0f);
+    r->qep.counts_per_rev = 80000u;
+    /* a linear flux map (the sequencing does not need saturation) on a 3 x 3 grid */
+    r->map.n_d = r->map.n_q = 3;
+    r->map.id0 = r->map.iq0 = -20.0f;
+    r->map.did = r->map.diq = 20.0f;
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            r->map.psi_d[a * 3 + b] = (float)(LD * (-20.0 + 20.0 * a) + 0.34305);
+            r->map.psi_q[a * 3 + b] = (float)(LQ * (-20.0 + 20.0 * b));
+        }
+    }
+    mc_drive_cfg_default(&r->cfg);
+    r->cfg.angle_src = MC_ANGLE_SRC_UNOP;
+    r->cfg.unop.k1 = 0.5f;
+    r->cfg.unop.k2 = 100.0f;
+    r->cfg.unop.omega_base = 314.0f;
+    r->cfg.pll_bw_hz = 30.0f;
+    r->cfg.cc_bw_hz = 250.0f;
+    r->cfg.offset_cal_samples = 64u;
+    r->cfg.init_three_step = true;
+    r->cfg.ip2.model = (mc_flux_model_t){.kind = MC_FLUX_MAP, .ld = (float)LD, .lq = (float)LQ,
+                                         .psi_pm = 0.34305f, .map = &r->map};
+    r->cfg.ip1.model = r->cfg.ip2.model;
+    r->cfg.step3_speed_tol = 3.0f;
+    assert_true(mc_drive_init(&r->d, &r->cfg, &r->adc, &r->pwm, &r->qep));
+}
+
+/* Runs until the state changes (or n periods); returns the periods used. */
+static int run_until_leaves(rig_t *r, mc_state_t st, mc_init_step_t sub, int n)
+{
+    for (int k = 0; k < n; ++k) {
+        if (mc_drive_state(&r->d) != st || r->d.seq.step != sub) {
+            return k;
+        }
+        step(r, 1);
+    }
+    return n;
+}
+
+static void test_drive_full_path(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.7);
+    step(&r, 5);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    command(&r, true);
+    step(&r, 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    const int n1 = run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+    const int n2 = run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+    assert_true(n1 + n2 < 60);   /* thesis: Step I + II in 4.1 ms */
+    /* Step I is right modulo pi on this salient plant */
+    const double e1 = remainder(2.0 * ((double)r.d.tm.theta1 - r.theta_r), 2.0 * PI_D) / 2.0;
+    assert_true(fabs(e1) < 2.0 * PI_D / 180.0);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP3, 5000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_int_equal(mc_drive_faults(&r.d), 0u);
+    /* the estimator keeps the angle (modulo pi: this map has no saturation for the polarity) */
+    const double e = remainder(2.0 * ((double)r.d.tm.theta - r.theta_r), 2.0 * PI_D) / 2.0;
+    assert_true(fabs(e) < 2.0 * PI_D / 180.0);
+}
+
+/* An over-current in the middle of each step: FAULT at once, outputs off, the reason kept; a new
+ * enable starts clean and completes. */
+static void test_fault_in_every_step(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const mc_init_step_t steps[3] = {MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3};
+    for (int k = 0; k < 3; ++k) {
+        rig_init(&r, -1.2);
+        command(&r, true);
+        step(&r, 1);
+        run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+        for (int j = 0; j < k; ++j) {
+            run_until_leaves(&r, MC_STATE_INIT_POS, steps[j], 5000);
+        }
+        assert_int_equal(r.d.seq.step, steps[k]);
+        step(&r, 3);                       /* in the middle of it */
+        r.i_force = 25.0;
+        step(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERCURRENT);
+        assert_false(hal_pwm_enabled(&r.pwm));
+        r.i_force = 0.0;
+        step(&r, 20);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        command(&r, false);
+        step(&r, 1);
+        command(&r, true);
+        step(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
+        assert_int_equal(mc_drive_faults(&r.d), 0u);
+        assert_float_equal(r.d.tm.theta1, 0.0f, 0.0f);
+        run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+        run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+        run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
+        run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP3, 5000);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    }
+}
+
+/* Disable/enable at many points of the sequence: never outputs on outside INIT_POS/RUN, and every
+ * new enable goes through the whole sequence again. */
+static void test_repeated_enable_disable(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 2.0);
+    for (int cyc = 0; cyc < 40; ++cyc) {
+        command(&r, true);
+        const int on_for = 1 + (cyc * 37) % 180;   /* lands in every state and step */
+        for (int k = 0; k < on_for; ++k) {
+            step(&r, 1);
+            const mc_state_t s = mc_drive_state(&r.d);
+            if (s != MC_STATE_INIT_POS && s != MC_STATE_RUN) {
+                assert_false(hal_pwm_enabled(&r.pwm));
+            }
+        }
+        command(&r, false);
+        step(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+        assert_false(hal_pwm_enabled(&r.pwm));
+        step(&r, 3);
+    }
+    command(&r, true);
+    step(&r, 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP3, 5000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+}
+
+/* Step III that never converges (a tolerance no estimate can meet) ends in FAULT(TIMEOUT). */
+static void test_step3_timeout(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.3);
+    r.cfg.step3_speed_tol = 1e-9f;
+    r.cfg.timeout_step3 = 0.05f;
+    assert_true(mc_drive_init(&r.d, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    command(&r, true);
+    step(&r, 64 + 60 + 501);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_true(mc_drive_faults(&r.d) & MC_FAULT_TIMEOUT);
+    assert_false(hal_pwm_enabled(&r.pwm));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_seq_path_and_timeouts),
+        cmocka_unit_test(test_drive_full_path),
+        cmocka_unit_test(test_fault_in_every_step),
+        cmocka_unit_test(test_repeated_enable_disable),
+        cmocka_unit_test(test_step3_timeout),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
