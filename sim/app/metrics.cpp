@@ -67,6 +67,7 @@ void Metrics::add_startup(const Sample& s)
     if (!std::isfinite(t_enable_)) return;
     // the rotor must not turn against the intended direction (electrical degrees)
     reverse_max_ = std::max(reverse_max_, -s.direction * (s.theta_e_unwrapped - th0_) * 180.0 / kPiM);
+    if (s.state == kInit && !was_init_) t_init_ = s.t;
     if (s.state == kInit) was_init_ = true;
     if (s.state == kInit && s.init_step == kStep3 && !std::isfinite(t_step3_)) {
         t_step3_ = s.t;
@@ -152,6 +153,7 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
     os << "  \"current_peak_a\": " << json_number(i_peak_) << ",\n";
     const bool init = std::isfinite(t_step3_);
     os << "  \"step12_time_s\": " << json_number(init ? t_step3_ - t_enable_ : NAN) << ",\n";
+    os << "  \"step12_duration_s\": " << json_number(init ? t_step3_ - t_init_ : NAN) << ",\n";
     os << "  \"step1_err_deg\": " << json_number(step1_err_) << ",\n";
     os << "  \"step12_err_deg\": " << json_number(step12_err_) << ",\n";
     os << "  \"polarity_correct\": " << (init ? (std::fabs(step12_err_) < 90.0 ? "true" : "false") : "null") << ",\n";

@@ -53,7 +53,7 @@ private:
     double iter_sum_ = 0, iter_n_ = 0;
     double e0_ = NAN, t90_ = NAN, t10_ = NAN;   // rise time of the settle signal's error
     // startup
-    double t_enable_ = NAN, t_step3_ = NAN, t_run_ = NAN, t_last_bad_ = NAN;
+    double t_enable_ = NAN, t_init_ = NAN, t_step3_ = NAN, t_run_ = NAN, t_last_bad_ = NAN;
     double step12_err_ = NAN, step1_err_ = NAN, init_err_ = NAN;
     double th0_ = NAN, reverse_max_ = 0;
     bool was_init_ = false;

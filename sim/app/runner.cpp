@@ -184,6 +184,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     const Profile load = sc.profile("mechanics.load_torque_nm");
     const Profile dyno = sc.profile("mechanics.dyno_speed_rpm");
     pc.mech.load_torque = [load](double t) { return load.at(t); };
+    pc.mech.reactive_load = sc.s("mechanics.load_kind") == "reactive";
     pc.mech.dyno_speed = [dyno](double t) { return dyno.at(t) / kRpm; };
     pc.theta_m0 = sc.f("mechanics.theta0_deg") * kPi / 180.0 / p;
     pc.omega_m0 = mech == "dyno" ? dyno.at(0.0) / kRpm : (mech == "locked" ? 0.0 : sc.f("mechanics.speed0_rpm") / kRpm);

@@ -52,6 +52,7 @@ const std::vector<KeySpec>& scenario_schema()
     {"mechanics.theta0_deg", KeyType::Float, "0.0", nullptr, -360, 360, "deg (elec)", "", "Initial electrical rotor angle."},
     {"mechanics.speed0_rpm", KeyType::Float, "0.0", nullptr, -30000, 30000, "rpm", "", "Initial speed."},
     {"mechanics.load_torque_nm", KeyType::Profile, "0.0", nullptr, -1e4, 1e4, "N m", "", "Load torque opposing positive speed (inertia mode)."},
+    {"mechanics.load_kind", KeyType::Enum, "\"active\"", nullptr, 0, 0, "", "active|reactive", "active: the load torque acts whatever the speed (gravity-like); reactive: it opposes the motion and holds the rotor at rest up to its magnitude (friction-like)."},
     {"mechanics.dyno_speed_rpm", KeyType::Profile, "0.0", nullptr, -30000, 30000, "rpm", "", "Dyno speed profile (dyno mode)."},
 
     {"control.ts_s", KeyType::Float, "1e-4", nullptr, 5e-5, 5e-4, "s", "", "Control = PWM period (2 kHz to 20 kHz)."},

@@ -17,7 +17,17 @@ public:
     double accel(double tau, double te, double omega) const {
         if (mode_ == Held) return 0.0;
         if (mode_ == Dyno) return slope_;
-        return (te - cfg_.friction * omega - (load0_ + slope_ * tau)) * inv_j_;
+        const double tl = load0_ + slope_ * tau;
+        if (cfg_.reactive_load) {
+            // Friction-like load: at rest it holds the rotor as long as it can (stiction); the
+            // restoring term pulls the residual speed to zero with a 1 ms time constant.
+            const double drive = te - cfg_.friction * omega;
+            const double atl = tl < 0.0 ? -tl : tl;
+            if ((omega < kRest && omega > -kRest) && (drive <= atl && drive >= -atl)) return -omega * 1e3;
+            const double dir = (omega >= kRest || (omega > -kRest && drive > 0.0)) ? 1.0 : -1.0;
+            return (drive - atl * dir) * inv_j_;
+        }
+        return (te - cfg_.friction * omega - tl) * inv_j_;
     }
     // Speed at the end of the period when imposed (Dyno), to remove the round-off of the ramp.
     bool speed_imposed() const { return mode_ != Inertia; }
@@ -25,6 +35,7 @@ public:
     const MechanicsConfig& config() const { return cfg_; }
 
 private:
+    static constexpr double kRest = 1e-3;   // [rad/s] below this a reactive load may hold the rotor
     enum Mode { Inertia, Dyno, Held };
     double sample_load(double t);
     double sample_dyno(double t);

@@ -25,6 +25,9 @@ struct MechanicsConfig {
     double friction = 1.3e-3;    // [N m s]
     bool locked = false;         // rotor held at theta_m0 (omega = 0) whatever the torque
     std::function<double(double)> load_torque;   // T_load(t) [N m] (Inertia mode), may be empty
+    // false: an active load (gravity-like: the torque acts whatever the speed); true: a reactive
+    // load (friction-like: |T_load| opposes the motion, and at rest holds the rotor up to |T_load|)
+    bool reactive_load = false;
     std::function<double(double)> dyno_speed;    // omega_m(t) [rad/s mech] (Dyno mode)
 };
 
