@@ -90,6 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     from mctools.fit_adq import add_parser as add_fit_adq
     add_fit_adq(sub)
+
+    from mctools.sweep import add_parser as add_sweep
+    add_sweep(sub)
     return ap
 
 

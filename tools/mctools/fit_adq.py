@@ -129,18 +129,21 @@ def machine_figures(m: Machine) -> dict:
 # ---------------------------------------------------------------------------------------------
 # Preset text
 
-_KEY_RE = {k: re.compile(rf"^(\s*{k}\s*=\s*)([^#\r\n]*?)(\s*(?:#.*)?)$") for k in ("a_dq", "a_q0")}
+_KEY_RE = {k: re.compile(rf"^(\s*{k}\s*=\s*)([^#\r\n]*?)(\s*(?:#.*)?)$") for k in ("a_dq", "a_q0", "a_qq")}
 _TABLE_RE = re.compile(r"^\s*\[([^\]]*)\]\s*(?:#.*)?$")
 
 
-def rewrite_preset_text(text: str, a_dq: float, a_q0: float, comment: str | None = None) -> str:
-    """The preset with saturation.a_dq and saturation.a_q0 replaced; nothing else changes except
-    one comment line (`comment`, placed above the first of the two keys, replacing an earlier
-    line of this tool)."""
+def rewrite_preset_text(text: str, a_dq: float, a_q0: float, comment: str | None = None,
+                        a_qq: float | None = None) -> str:
+    """The preset with saturation.a_dq and saturation.a_q0 (and a_qq if given) replaced; nothing
+    else changes except one comment line (`comment`, placed above the first of the keys,
+    replacing an earlier line of this tool)."""
     lines = text.splitlines(keepends=True)
     values = {"a_dq": f"{a_dq:.{A_DQ_DECIMALS}f}", "a_q0": f"{a_q0:.{A_Q0_DECIMALS}f}"}
+    if a_qq is not None:
+        values["a_qq"] = f"{a_qq:.1f}"
     table = None
-    hits = {"a_dq": [], "a_q0": []}
+    hits = {k: [] for k in values}
     old_comment = []
     for n, line in enumerate(lines):
         body = line.rstrip("\r\n")
@@ -153,8 +156,8 @@ def rewrite_preset_text(text: str, a_dq: float, a_q0: float, comment: str | None
             continue
         if table != "saturation":
             continue
-        for key, rx in _KEY_RE.items():
-            if rx.match(body):
+        for key in values:
+            if _KEY_RE[key].match(body):
                 hits[key].append(n)
     for key, where in hits.items():
         if len(where) != 1:
@@ -165,7 +168,7 @@ def rewrite_preset_text(text: str, a_dq: float, a_q0: float, comment: str | None
         eol = lines[n][len(body):]
         m = _KEY_RE[key].match(body)
         lines[n] = m.group(1) + values[key] + m.group(3) + eol
-    first = min(hits["a_dq"][0], hits["a_q0"][0])
+    first = min(where[0] for where in hits.values())
     if comment is not None:
         eol = lines[first][len(lines[first].rstrip("\r\n")):] or "\n"
         new = f"# {comment}{eol}"
@@ -178,8 +181,9 @@ def rewrite_preset_text(text: str, a_dq: float, a_q0: float, comment: str | None
     return "".join(lines)
 
 
-def preset_comment(fit_file: str) -> str:
-    return f"a_q0, a_dq {COMMENT_MARK} against thesis Figs. 6.13-6.15 (result: {fit_file})"
+def preset_comment(fit_file: str, with_a_qq: bool = False) -> str:
+    keys = "a_q0, a_qq, a_dq" if with_a_qq else "a_q0, a_dq"
+    return f"{keys} {COMMENT_MARK} against thesis Figs. 6.13-6.15 (result: {fit_file})"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -213,7 +217,8 @@ def golden_section(f, lo: float, hi: float, n_evals: int, *, x_key=None, log=Non
     a, b = lo, hi
     c, d = b - r * (b - a), a + r * (b - a)
     fc, fd = g(c), g(d)
-    while len(history) < n_evals:
+    idle = 0  # iterations without a new evaluation (all cached by x_key)
+    while len(history) < n_evals and idle < 80:
         before = len(history)
         if fc <= fd:
             b, d, fd = d, c, fc
@@ -223,8 +228,8 @@ def golden_section(f, lo: float, hi: float, n_evals: int, *, x_key=None, log=Non
             a, c, fc = c, d, fd
             d = a + r * (b - a)
             fd = g(d)
-        if len(history) == before and key(a) == key(b):
-            break  # the bracket is below the resolution of x_key
+        # The bracket shrinks below the resolution of x_key: nothing new to evaluate.
+        idle = idle + 1 if len(history) == before else 0
     best = min(history, key=lambda h: h[1])
     return best[0], best[1], history
 
@@ -291,6 +296,7 @@ class Evaluator:
 
     def __init__(self, mcsim, scen_dir: Path, preset_text: str, out_dir: Path, jobs: int):
         self.mcsim, self.scen_dir, self.preset_text = mcsim, scen_dir, preset_text
+        self.a_qq = None  # None: the preset's a_qq
         self.out_dir, self.jobs = out_dir, max(1, jobs)
         self.count = 0
 
@@ -300,7 +306,8 @@ class Evaluator:
         d.mkdir(parents=True, exist_ok=True)
         preset = d / "preset.toml"
         preset.write_text(rewrite_preset_text(self.preset_text, a_dq, a_q0,
-                                              f"fit-adq candidate {self.count}"), encoding="utf-8")
+                                              f"fit-adq candidate {self.count}", a_qq=self.a_qq),
+                          encoding="utf-8")
         scenarios = list(dict.fromkeys(t.scenario for t in TARGETS))
         with ThreadPoolExecutor(max_workers=self.jobs) as pool:
             futs = {s: pool.submit(run_scenario, self.mcsim, self.scen_dir / f"{s}.toml", preset, d / s)
@@ -349,10 +356,14 @@ def fit_adq(args) -> int:
         machine = machine_from_dict(tomllib.loads(text))
     except (tomllib.TOMLDecodeError, ValueError, TypeError) as exc:
         raise FitInputError(f"{preset_path}: {exc}") from None
-    base = machine.model
-    rewrite_preset_text(text, base.a_dq, base.a_q0)  # fail early if the keys are not there
+    orig = machine.model
+    rewrite_preset_text(text, orig.a_dq, orig.a_q0, a_qq=args.a_qq)  # fail early if keys are missing
+    if args.a_qq is not None and args.a_qq < 0:
+        raise FitInputError("--a-qq must be >= 0")
+    # a_qq multiplies |psi_q|^T (T > 0), zero at i = 0: it does not enter psi_pm, Ld, Lq there.
+    base = orig if args.a_qq is None else dataclasses.replace(orig, a_qq=args.a_qq)
     lo = 0.0 if args.lo is None else args.lo
-    hi = base.a_dq if args.hi is None else args.hi
+    hi = orig.a_dq if args.hi is None else args.hi
     if args.evals < 2:
         raise FitInputError("--evals must be at least 2")
     if not (0.0 <= lo < hi):
@@ -379,25 +390,32 @@ def fit_adq(args) -> int:
         vals = evaluate(a_dq, a_q0)
         obj = objective(vals, args.objective)
         results[a_dq] = (a_q0, vals, obj)
-        history.append({"a_dq": a_dq, "a_q0": a_q0, "figures_deg": vals, "objective": obj})
+        history.append({"a_dq": a_dq, "a_q0": a_q0, "a_qq": base.a_qq, "figures_deg": vals, "objective": obj})
         show(a_dq, a_q0, vals, obj, time.monotonic() - t0)
         return obj
 
-    print(f"fit-adq: {preset_path}, a_dq in [{lo:g}, {hi:g}], {args.evals} search evaluations, "
+    print(f"fit-adq: {preset_path}, a_dq in [{lo:g}, {hi:g}], a_qq = {base.a_qq:g}, "
+          f"{args.evals} search evaluations, "
           f"objective {args.objective} of ||ours| - |thesis|| (deg), mcsim {mcsim}")
-    a0_dq = round(base.a_dq, A_DQ_DECIMALS)
-    f(a0_dq)  # today's preset, for the "before" column (a_q0 unchanged up to rounding)
-    before = results[a0_dq][1]
+    # Today's preset as it is, for the "before" column.
+    t0 = time.monotonic()
+    before = evaluate(orig.a_dq, orig.a_q0)
+    obj0 = objective(before, args.objective)
+    history.append({"a_dq": orig.a_dq, "a_q0": orig.a_q0, "a_qq": orig.a_qq, "figures_deg": before,
+                    "objective": obj0, "preset_as_is": True})
+    show(orig.a_dq, orig.a_q0, before, obj0, time.monotonic() - t0)
+    evaluate.a_qq = args.a_qq
     best_dq, best_obj, _ = golden_section(f, lo, hi, args.evals, x_key=lambda x: round(max(x, 0.0), A_DQ_DECIMALS))
-    if results[a0_dq][2] <= best_obj:
-        best_dq = a0_dq
+    if args.a_qq is None and obj0 < best_obj:
+        best_dq = round(orig.a_dq, A_DQ_DECIMALS)
+        results[best_dq] = (orig.a_q0, before, obj0)
     a_q0_best, after, _ = results[best_dq]
     errs = [math.inf if v is None else abs(abs(v) - abs(t.thesis_deg)) for v, t in zip(after, TARGETS)]
     ok = max(errs) <= args.tol
 
     new_model = dataclasses.replace(base, a_dq=best_dq, a_q0=a_q0_best)
     new_machine = dataclasses.replace(machine, model=new_model)
-    ss_before, ss_after = small_signal(base), small_signal(new_model)
+    ss_before, ss_after = small_signal(orig), small_signal(new_model)
     figs_before, figs_after = machine_figures(machine), machine_figures(new_machine)
     fit_file = Path(args.fit_file)
     cmd_line = "mctools fit-adq " + shlex.join(
@@ -405,6 +423,7 @@ def fit_adq(args) -> int:
          "--out", args.out, "--evals", str(args.evals), "--objective", args.objective,
          *(["--lo", f"{args.lo:g}"] if args.lo is not None else []),
          *(["--hi", f"{args.hi:g}"] if args.hi is not None else []),
+         *(["--a-qq", f"{args.a_qq:g}"] if args.a_qq is not None else []),
          *(["--write"] if args.write else [])])
     example = mcsim_command("mcsim", scen_dir / f"{TARGETS[0].scenario}.toml",
                             Path("<preset with a_dq, a_q0>"), Path("<dir>"))[1:]
@@ -422,8 +441,8 @@ def fit_adq(args) -> int:
         "search_interval": [lo, hi],
         "tolerance_deg": args.tol,
         "within_tolerance": ok,
-        "before": {"a_dq": base.a_dq, "a_q0": base.a_q0},
-        "after": {"a_dq": best_dq, "a_q0": a_q0_best},
+        "before": {"a_dq": orig.a_dq, "a_q0": orig.a_q0, "a_qq": orig.a_qq},
+        "after": {"a_dq": best_dq, "a_q0": a_q0_best, "a_qq": base.a_qq},
         "figures": _figure_rows(before, after),
         "small_signal_at_i0": {
             "preset": {"psi_pm_wb": machine.psi_pm_wb, "ld_h": machine.ld_h, "lq_h": machine.lq_h},
@@ -438,7 +457,8 @@ def fit_adq(args) -> int:
     (out_dir / "fit.json").write_text(text_out, encoding="utf-8")
 
     print()
-    print(f"fit-adq: a_dq {base.a_dq:g} -> {best_dq:g}, a_q0 {base.a_q0:g} -> {a_q0_best:g} "
+    print(f"fit-adq: a_dq {orig.a_dq:g} -> {best_dq:g}, a_q0 {orig.a_q0:g} -> {a_q0_best:g}"
+          + (f", a_qq {orig.a_qq:g} -> {base.a_qq:g}" if args.a_qq is not None else "") + " "
           f"({args.objective} {results[best_dq][2]:.4g})")
     print(f"  {'figure':40s} {'thesis':>8s} {'before':>8s} {'after':>8s}")
     for t, b, a in zip(TARGETS, before, after):
@@ -458,9 +478,11 @@ def fit_adq(args) -> int:
               f"(> {args.tol:g}); preset not written", file=sys.stderr)
         return 1
     if args.write:
-        new_text = rewrite_preset_text(text, best_dq, a_q0_best, preset_comment(_rel_path(fit_file)))
+        new_text = rewrite_preset_text(text, best_dq, a_q0_best,
+                                       preset_comment(_rel_path(fit_file), args.a_qq is not None),
+                                       a_qq=args.a_qq)
         preset_path.write_text(new_text, encoding="utf-8")
-        print(f"  wrote a_dq, a_q0 to {preset_path}")
+        print(f"  wrote a_dq, a_q0{', a_qq' if args.a_qq is not None else ''} to {preset_path}")
     return 0
 
 
@@ -482,10 +504,13 @@ def add_parser(sub) -> None:
     p.add_argument("--lo", type=float, metavar="A_DQ", help="search interval start (default 0)")
     p.add_argument("--hi", type=float, metavar="A_DQ",
                    help="search interval end (default: the preset's a_dq)")
+    p.add_argument("--a-qq", type=float, metavar="VALUE",
+                   help="also set the q-axis self-saturation a_qq to VALUE (written with --write); "
+                        "it vanishes at i = 0, so psi_pm, Ld, Lq stay (default: keep the preset's)")
     p.add_argument("--evals", type=int, default=14, metavar="N",
                    help="golden-section evaluations (default 14; one more for the preset as is)")
-    p.add_argument("--objective", choices=("sse", "max"), default="sse",
-                   help="sum of squared or largest magnitude error (default sse)")
+    p.add_argument("--objective", choices=("sse", "max"), default="max",
+                   help="largest or sum of squared magnitude errors (default max, the acceptance criterion)")
     p.add_argument("--tol", type=float, default=TOLERANCE_DEG, metavar="DEG",
                    help=f"acceptance per figure, deg (default {TOLERANCE_DEG:g})")
     p.add_argument("--jobs", type=int, default=2, metavar="N", help="simulations in parallel (default 2)")

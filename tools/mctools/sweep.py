@@ -1,0 +1,731 @@
+"""`mctools sweep`: initial-position studies of thesis ch. 5 / 7.2 run with mcsim.
+
+* `angles`   one run per initial angle (mechanics.theta0_deg): per-angle table and distribution
+             of the startup metrics (step1_err_deg, step12_err_deg, polarity_correct,
+             init_pos_err_deg, init_pos_time_s, ...); optional pass/fail flags (exit 1).
+* `table7_1` thesis Table 7.1: mean |Step I error| of the linear (5.5) and nonlinear (7.1) cost
+             for m = 3, 4, 5 and the Step I phase-current peak in per unit of the rated peak.
+* `noise`    thesis Fig. 7.4: Step II polarity decisions (generalized vs DVI) over many seeded
+             trials with random initial angles, per current-noise level.
+
+Every number comes from the metrics.json (and, for the Step I current peak, the trace.csv) of
+`mcsim run` processes, `--jobs` at a time. Results are printed as markdown and can be written as
+JSON (`--json`) and markdown (`--md`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import random
+import subprocess
+import sys
+import time
+import tomllib
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from mctools.report import ReportInputError, _clear_outputs, find_mcsim
+
+DASH = "—"
+# Thesis values quoted in the issue (experiments).
+THESIS_ANGLES = {"step12_err_deg": "exp. mean 11.52°", "init_pos_err_deg": "exp. mean 0.91°",
+                 "step12_time_s": "4.1 ms (Step I + II only)"}
+THESIS_TABLE7_1 = {3: (13.14, 12.5, 0.39), 4: (11.92, 10.27, 0.52), 5: (10.77, 7.15, 0.69)}
+COSTS = ("linear", "nonlinear")
+METHODS = ("generalized", "dvi")
+ANGLE_METRICS = (  # (metric, what) of the distribution table
+    ("step1_err_deg", "Step I error (mod 180°)"),
+    ("step12_err_deg", "pulse-only error (after Step II)"),
+    ("init_pos_err_deg", "final error (Step III → RUN)"),
+    ("init_pos_time_s", "enable to < 1°"),
+    ("step12_time_s", "enable → Step III (offset cal. + Step I + II)"),
+    ("reverse_angle_max_deg", "reverse rotation"),
+)
+
+
+class SweepInputError(ReportInputError):
+    """Bad arguments or scenario; the CLI turns it into exit status 2 (as ReportInputError)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Argument helpers
+
+def parse_floats(text: str, what: str) -> list[float]:
+    out = []
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        try:
+            v = float(part)
+        except ValueError:
+            raise SweepInputError(f"{what}: {part!r} is not a number") from None
+        if not math.isfinite(v):
+            raise SweepInputError(f"{what}: {part!r} is not finite")
+        out.append(v)
+    if not out:
+        raise SweepInputError(f"{what}: empty list")
+    if len(set(out)) != len(out):
+        raise SweepInputError(f"{what}: duplicate value in {text!r}")
+    return out
+
+
+def parse_ints(text: str, what: str, lo: int, hi: int) -> list[int]:
+    vals = parse_floats(text, what)
+    for v in vals:
+        if v != int(v) or not lo <= v <= hi:
+            raise SweepInputError(f"{what}: {v:g} is not an integer in {lo}..{hi}")
+    return [int(v) for v in vals]
+
+
+def angle_list(step_deg: float | None, angles: str | None, default_step: float) -> list[float]:
+    if angles is not None:
+        vals = parse_floats(angles, "--angles")
+        bad = [v for v in vals if not -360.0 <= v <= 360.0]
+        if bad:
+            raise SweepInputError(f"--angles: {bad[0]:g} is outside -360..360 deg")
+        return vals
+    step = default_step if step_deg is None else step_deg
+    if not (math.isfinite(step) and 0.0 < step <= 360.0):
+        raise SweepInputError(f"--step-deg must be in (0, 360], got {step:g}")
+    n = math.ceil(360.0 / step - 1e-9)
+    return [round(k * step, 9) for k in range(n)]
+
+
+def parse_sets(sets: list[str] | None, reserved: tuple[str, ...]) -> tuple[str, ...]:
+    out = []
+    for s in sets or []:
+        k = s.split("=", 1)[0].strip()
+        if "=" not in s or not k:
+            raise SweepInputError(f"--set {s!r} is not key=value")
+        if k in reserved:
+            raise SweepInputError(f"--set {k}: this command sets it itself")
+        out.append(s)
+    return tuple(out)
+
+
+def check_common(args) -> tuple[Path, str]:
+    if args.jobs < 1:
+        raise SweepInputError("--jobs must be at least 1")
+    scenario = Path(args.scenario)
+    if not scenario.is_file():
+        raise SweepInputError(f"{scenario}: no such scenario file")
+    try:
+        tomllib.loads(scenario.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise SweepInputError(f"{scenario}: not valid TOML: {exc}") from None
+    return scenario, find_mcsim(args.mcsim)
+
+
+def f_toml(v: float) -> str:
+    """A float as a TOML float literal (mcsim reads --set values as TOML)."""
+    return repr(float(v))
+
+
+# ---------------------------------------------------------------------------------------------
+# Runs
+
+@dataclass
+class Point:
+    label: str
+    sets: tuple[str, ...]
+    dir: Path
+    info: dict = field(default_factory=dict)  # the swept values (recorded in the JSON)
+    exit_code: int | None = None
+    seconds: float = 0.0
+    metrics: dict | None = None
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def execute(p: Point, mcsim: str, scenario: Path) -> Point:
+    try:
+        p.dir.mkdir(parents=True, exist_ok=True)
+        _clear_outputs(p.dir)
+    except OSError as exc:
+        p.error = f"run failed ({exc.strerror or exc})"
+        return p
+    cmd = [mcsim, "run", str(scenario)]
+    for s in p.sets:
+        cmd += ["--set", s]
+    cmd += ["--out", str(p.dir), "--quiet"]
+    t0 = time.monotonic()
+    try:
+        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              stdin=subprocess.DEVNULL)
+        p.exit_code = proc.returncode
+        log = proc.stdout.decode("utf-8", errors="replace")
+    except OSError as exc:
+        p.exit_code = 127
+        log = f"cannot start {mcsim}: {exc}\n"
+    p.seconds = time.monotonic() - t0
+    if p.exit_code != 0:
+        (p.dir / "mcsim.log").write_text(" ".join(cmd) + "\n" + log, encoding="utf-8")
+        p.error = f"run failed (exit {p.exit_code})"
+        return p
+    try:
+        data = json.loads((p.dir / "metrics.json").read_text(encoding="utf-8"))
+        if not isinstance(data, dict):
+            raise ValueError("not a JSON object")
+        p.metrics = data
+    except FileNotFoundError:
+        p.error = "run failed (no metrics.json)"
+    except (ValueError, UnicodeDecodeError):
+        p.error = "run failed (bad metrics.json)"
+    return p
+
+
+def run_points(points: list[Point], mcsim: str, scenario: Path, jobs: int, prefix: str) -> None:
+    """Runs every point, `jobs` mcsim processes at a time, with progress lines (every run up to
+    200 runs, else about every 2 %, and every failure)."""
+    n = len(points)
+    every = 1 if n <= 200 else max(1, n // 50)
+    done, t0 = 0, time.monotonic()
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        futures = [pool.submit(execute, p, mcsim, scenario) for p in points]
+        for fut in as_completed(futures):
+            p = fut.result()
+            done += 1
+            if not p.ok:
+                print(f"[{done}/{n}] {prefix} {p.label} ... {p.error}", flush=True)
+                log = p.dir / "mcsim.log"
+                if log.is_file():
+                    for ln in log.read_text(encoding="utf-8", errors="replace").splitlines()[-3:]:
+                        print(f"    {ln}", file=sys.stderr)
+            elif done % every == 0 or done == n:
+                if every == 1:
+                    print(f"[{done}/{n}] {prefix} {p.label} ... {p.seconds:.2f} s", flush=True)
+                else:
+                    print(f"[{done}/{n}] {prefix} ... {time.monotonic() - t0:.0f} s elapsed",
+                          flush=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# Numbers
+
+def number(v) -> float | None:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return None
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def metric(p: Point, key: str):
+    return None if p.metrics is None else p.metrics.get(key)
+
+
+def distribution(values: list, labels: list | None = None) -> dict:
+    """mean, mean abs, max abs (with where), min, max, std of the finite numbers; `missing`
+    counts nulls, absent keys and failed runs."""
+    pairs = [(number(v), labels[i] if labels else i) for i, v in enumerate(values)]
+    xs = [(v, lab) for v, lab in pairs if v is not None]
+    d = {"n": len(xs), "missing": len(values) - len(xs)}
+    if not xs:
+        d.update(mean=None, abs_mean=None, abs_max=None, abs_max_at=None, min=None, max=None,
+                 std=None)
+        return d
+    vals = [v for v, _ in xs]
+    mean = sum(vals) / len(vals)
+    worst = max(xs, key=lambda x: abs(x[0]))
+    d.update(mean=mean, abs_mean=sum(abs(v) for v in vals) / len(vals), abs_max=abs(worst[0]),
+             abs_max_at=worst[1], min=min(vals), max=max(vals),
+             std=math.sqrt(sum((v - mean) ** 2 for v in vals) / len(vals)))
+    return d
+
+
+def fmt(v, digits: int = 2, unit: str = "") -> str:
+    if v is None:
+        return DASH
+    if isinstance(v, bool):
+        return "yes" if v else "**no**"
+    return f"{v:.{digits}f}{unit}"
+
+
+def fmt_ms(v) -> str:
+    return DASH if v is None else f"{1e3 * v:.1f} ms"
+
+
+def sets_text(sets) -> str:
+    return " ".join(f"--set {s}" for s in sets)
+
+
+def write_outputs(args, md: str, data: dict) -> None:
+    print(md)
+    if args.md:
+        Path(args.md).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.md).write_text(md + "\n", encoding="utf-8")
+        print(f"wrote {args.md}")
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {args.json}")
+
+
+def angle_dir_name(a: float) -> str:
+    return f"theta_{a:+08.3f}".replace(".", "p")
+
+
+# ---------------------------------------------------------------------------------------------
+# angles
+
+def summarize_angles(points: list[Point]) -> dict:
+    labels = [p.info["theta0_deg"] for p in points]
+    s = {"runs": len(points), "failed_runs": sum(1 for p in points if not p.ok)}
+    for key, _ in ANGLE_METRICS:
+        s[key] = distribution([metric(p, key) for p in points], labels)
+    pol = [metric(p, "polarity_correct") for p in points]
+    s["polarity_correct"] = sum(1 for v in pol if v is True)
+    s["polarity_wrong_at"] = [lab for lab, v in zip(labels, pol) if v is False]
+    s["polarity_undecided_at"] = [lab for lab, v in zip(labels, pol) if v is not True and v is not False]
+    s["not_run_state_at"] = [lab for lab, p in zip(labels, points)
+                             if p.ok and metric(p, "final_state") != "RUN"]
+    s["faults_at"] = [lab for lab, p in zip(labels, points) if metric(p, "faults")]
+    return s
+
+
+def angle_violations(points: list[Point], args) -> list[str]:
+    out = []
+    for p in points:
+        a = f"theta0 = {p.info['theta0_deg']:g} deg"
+        if not p.ok:
+            out.append(f"{a}: {p.error}")
+            continue
+        if args.expect_polarity and metric(p, "polarity_correct") is not True:
+            out.append(f"{a}: polarity_correct is {json.dumps(metric(p, 'polarity_correct'))}")
+        if args.max_final_err_deg is not None:
+            e = number(metric(p, "init_pos_err_deg"))
+            if e is None or abs(e) > args.max_final_err_deg:
+                out.append(f"{a}: |init_pos_err_deg| {fmt(e)} > {args.max_final_err_deg:g}")
+        if args.max_time_s is not None:
+            t = number(metric(p, "init_pos_time_s"))
+            if t is None or t > args.max_time_s:
+                out.append(f"{a}: init_pos_time_s {fmt(t, 4)} > {args.max_time_s:g}")
+    return out
+
+
+def angles_markdown(points, summary, args, scenario) -> str:
+    cmd = f"mctools sweep angles {scenario}" + (f" {sets_text(args.sets_)}" if args.sets_ else "")
+    n = summary["runs"]
+    first = ", ".join(f"{p.info['theta0_deg']:g}" for p in points[:4])
+    lines = [f"### Initial-angle sweep: {n} angles", "",
+             f"`{cmd}` (angles {first}{', ...' if n > 4 else ''}; errors = estimate − true, "
+             f"degrees electrical).", "",
+             f"Polarity correct in **{summary['polarity_correct']} / {n}** runs"
+             + (f"; wrong at {', '.join(f'{a:g}' for a in summary['polarity_wrong_at'])}"
+                if summary["polarity_wrong_at"] else "")
+             + (f"; undecided (null / failed run) at "
+                f"{', '.join(f'{a:g}' for a in summary['polarity_undecided_at'])}"
+                if summary["polarity_undecided_at"] else "") + ".", ""]
+    if summary["failed_runs"]:
+        lines += [f"**{summary['failed_runs']} run(s) failed.**", ""]
+    if summary["not_run_state_at"]:
+        lines += ["Not in RUN at the end: "
+                  + ", ".join(f"{a:g}" for a in summary["not_run_state_at"]) + ".", ""]
+    lines += ["| quantity | metric | mean | mean abs | max abs (at θ0) | min / max | n | thesis |",
+              "|---|---|---|---|---|---|---|---|"]
+    for key, what in ANGLE_METRICS:
+        d = summary[key]
+        if key.endswith("_s"):
+            f1 = fmt_ms
+            at = f" ({d['abs_max_at']:g}°)" if d["abs_max_at"] is not None else ""
+            row = [f1(d["mean"]), f1(d["abs_mean"]), f1(d["abs_max"]) + at,
+                   f"{f1(d['min'])} / {f1(d['max'])}"]
+        else:
+            at = f" ({d['abs_max_at']:g}°)" if d["abs_max_at"] is not None else ""
+            row = [fmt(d["mean"], 2, "°"), fmt(d["abs_mean"], 2, "°"),
+                   fmt(d["abs_max"], 2, "°") + at,
+                   f"{fmt(d['min'], 2, '°')} / {fmt(d['max'], 2, '°')}"]
+        missing = f" ({d['missing']} null)" if d["missing"] else ""
+        lines.append(f"| {what} | `{key}` | " + " | ".join(row)
+                     + f" | {d['n']}{missing} | {THESIS_ANGLES.get(key, DASH)} |")
+    lines += ["", "| θ0 | Step I err | pulse-only err | polarity | final err | enable → < 1° "
+              "| Step I + II | reverse | end state |", "|---|---|---|---|---|---|---|---|---|"]
+    for p in points:
+        if not p.ok:
+            lines.append(f"| {p.info['theta0_deg']:g}° | {p.error} |  |  |  |  |  |  |  |")
+            continue
+        faults = metric(p, "faults") or []
+        end = str(metric(p, "final_state")) + (f" ({', '.join(faults)})" if faults else "")
+        pol = metric(p, "polarity_correct")
+        lines.append(
+            f"| {p.info['theta0_deg']:g}° | {fmt(number(metric(p, 'step1_err_deg')), 2, '°')} "
+            f"| {fmt(number(metric(p, 'step12_err_deg')), 2, '°')} "
+            f"| {fmt(pol) if isinstance(pol, bool) else DASH} "
+            f"| {fmt(number(metric(p, 'init_pos_err_deg')), 2, '°')} "
+            f"| {fmt_ms(number(metric(p, 'init_pos_time_s')))} "
+            f"| {fmt_ms(number(metric(p, 'step12_time_s')))} "
+            f"| {fmt(number(metric(p, 'reverse_angle_max_deg')), 2, '°')} | {end} |")
+    return "\n".join(lines)
+
+
+def cmd_angles(args) -> int:
+    scenario, mcsim = check_common(args)
+    angles = angle_list(args.step_deg, args.angles, 5.0)
+    args.sets_ = parse_sets(args.set, ("mechanics.theta0_deg",))
+    for flag in ("max_final_err_deg", "max_time_s"):
+        v = getattr(args, flag)
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise SweepInputError(f"--{flag.replace('_', '-')} must be a positive number")
+    out = Path(args.out or "out/sweep/angles")
+    points = [Point(f"theta0={a:g}", (*args.sets_, f"mechanics.theta0_deg={f_toml(a)}"),
+                    out / angle_dir_name(a), {"theta0_deg": a}) for a in angles]
+    run_points(points, mcsim, scenario, args.jobs, "angles")
+    summary = summarize_angles(points)
+    violations = angle_violations(points, args)
+    md = angles_markdown(points, summary, args, scenario)
+    data = {"command": "angles", "scenario": str(scenario), "sets": list(args.sets_),
+            "summary": summary, "violations": violations,
+            "runs": [{**p.info, "dir": str(p.dir), "error": p.error,
+                      "metrics": {k: metric(p, k) for k in (
+                          "step1_err_deg", "step12_err_deg", "polarity_correct",
+                          "init_pos_err_deg", "init_pos_time_s", "step12_time_s",
+                          "reverse_angle_max_deg", "current_peak_a", "final_state", "faults")}}
+                     for p in points]}
+    write_outputs(args, md, data)
+    for v in violations:
+        print(f"sweep angles: FAIL {v}", file=sys.stderr)
+    checks = [f for f, on in (("polarity", args.expect_polarity),
+                              (f"|final err| <= {args.max_final_err_deg:g} deg"
+                               if args.max_final_err_deg is not None else "", True),
+                              (f"time <= {args.max_time_s:g} s"
+                               if args.max_time_s is not None else "", True)) if on and f]
+    print(f"sweep angles: {len(points)} runs, {summary['failed_runs']} failed, polarity correct "
+          f"{summary['polarity_correct']}/{len(points)}"
+          + (f"; checks ({', '.join(checks)}): {len(violations)} violation(s)" if checks else ""))
+    return 1 if violations or summary["failed_runs"] else 0
+
+
+# ---------------------------------------------------------------------------------------------
+# table7_1
+
+def step1_peak_a(trace_path: Path, m: int, ts_s: float) -> float | None:
+    """Largest |ia|, |ib|, |ic| of trace.csv over the Step I pulses: from the first row in state 4
+    (INIT_POS) for 4 m + 4 periods. Step I (one direction) is V(x) m, V(~x) 2m, V(x) m; the
+    currents of its last pulse end at row 4m + 3 and Step II's first current appears 6 rows later,
+    so the window holds Step I only. Needs output.decimation = 1."""
+    from mctools.trace import TraceError, load_trace
+
+    try:
+        tr = load_trace(trace_path)
+    except TraceError:
+        return None
+    cols = ("state", "ia_a", "ib_a", "ic_a")
+    if any(c not in tr for c in cols):
+        return None
+    t, state = tr.t, tr["state"]
+    idx = [k for k in range(len(t)) if state[k] == 4]
+    if not idx:
+        return None
+    t0 = t[idx[0]]
+    t_end = t0 + (4 * m + 4) * ts_s + 0.5 * ts_s
+    peak = None
+    for k in range(idx[0], len(t)):
+        if t[k] > t_end:
+            break
+        v = max(abs(tr["ia_a"][k]), abs(tr["ib_a"][k]), abs(tr["ic_a"][k]))
+        if math.isfinite(v):
+            peak = v if peak is None else max(peak, v)
+    return peak
+
+
+def scenario_value(scenario: Path, sets: tuple[str, ...], dotted: str, default):
+    """The value of a scenario key as mcsim will see it: a --set wins over the file."""
+    for s in reversed(sets):
+        k, v = s.split("=", 1)
+        if k.strip() == dotted:
+            try:
+                return tomllib.loads(f"x = {v}")["x"]
+            except tomllib.TOMLDecodeError:
+                return v.strip()
+    node = tomllib.loads(scenario.read_text(encoding="utf-8"))
+    for part in dotted.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return default
+        node = node[part]
+    return node
+
+
+def rated_peak_a(scenario: Path, sets) -> tuple[float | None, str]:
+    from mctools.preset import PresetError, load_preset
+
+    name = scenario_value(scenario, sets, "machine.preset", "sun2016-ipm-5kw")
+    try:
+        i = load_preset(str(name)).i_rated_peak_a
+    except (PresetError, OSError, ValueError) as exc:
+        print(f"sweep table7_1: warning: preset {name}: {exc}; per unit from the metrics' "
+              f"current_limit_a", file=sys.stderr)
+        return None, str(name)
+    return (i if math.isfinite(i) else None), str(name)
+
+
+def summarize_table7_1(points: list[Point], ms: list[int], i_rated: float | None) -> dict:
+    rows = {}
+    for m in ms:
+        row = {"m": m}
+        for cost in COSTS:
+            pts = [p for p in points if p.info["m"] == m and p.info["cost"] == cost]
+            row[cost] = distribution([metric(p, "step1_err_deg") for p in pts],
+                                     [p.info["theta0_deg"] for p in pts])
+        pts = [p for p in points if p.info["m"] == m]
+        peaks = [p.info.get("step1_peak_a") for p in pts]
+        dist = distribution(peaks, [p.info["theta0_deg"] for p in pts])
+        base = i_rated
+        if base is None:  # the configured limit defaults to the rated peak
+            base = next((number(metric(p, "current_limit_a")) for p in pts
+                         if number(metric(p, "current_limit_a"))), None)
+        row["peak_a"] = dist["max"]
+        row["peak_mean_a"] = dist["mean"]
+        row["peak_missing"] = dist["missing"]
+        row["peak_pu"] = dist["max"] / base if base and dist["max"] is not None else None
+        row["peak_mean_pu"] = dist["mean"] / base if base and dist["mean"] is not None else None
+        row["thesis"] = dict(zip(("linear", "nonlinear", "peak_pu"), THESIS_TABLE7_1.get(m, ())))
+        rows[m] = row
+    return {"i_rated_peak_a": i_rated, "rows": [rows[m] for m in ms],
+            "failed_runs": sum(1 for p in points if not p.ok)}
+
+
+def table7_1_markdown(summary: dict, args, scenario, n_angles: int, preset: str) -> str:
+    base = summary["i_rated_peak_a"]
+    cmd = (f"mctools sweep table7_1 {scenario} --m {','.join(str(r['m']) for r in summary['rows'])}"
+           f" {args.angles_text}" + (f" {sets_text(args.sets_)}" if args.sets_ else ""))
+    lines = [f"### Table 7.1: Step I error, linear (5.5) vs nonlinear (7.1) cost", "",
+             f"`{cmd}`: {n_angles} initial angles per (m, cost). Error = mean (max) of "
+             f"|`step1_err_deg`| (Step I, modulo 180°). Peak = largest phase current at the sample "
+             f"instants over the Step I pulses (from `trace.csv`; max over the angles, mean in "
+             f"brackets), per unit of the rated peak "
+             f"{f'{base:g} A' if base else '(current_limit_a)'} of `{preset}`.", "",
+             "| m | linear: ours mean (max) | thesis | nonlinear: ours mean (max) | thesis "
+             "| peak ours | p.u. ours (mean) | p.u. thesis |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in summary["rows"]:
+        th = r["thesis"]
+        cells = []
+        for cost in COSTS:
+            d = r[cost]
+            miss = f", {d['missing']} null" if d["missing"] else ""
+            cells.append(f"{fmt(d['abs_mean'], 2, '°')} ({fmt(d['abs_max'], 1, '°')}{miss})")
+            cells.append(fmt(th.get(cost), 2, "°"))
+        lines.append(f"| {r['m']} | " + " | ".join(cells)
+                     + f" | {fmt(r['peak_a'], 2, ' A')} | {fmt(r['peak_pu'], 2)} "
+                       f"({fmt(r['peak_mean_pu'], 2)}) | {fmt(th.get('peak_pu'), 2)} |")
+    if summary["failed_runs"]:
+        lines += ["", f"**{summary['failed_runs']} run(s) failed.**"]
+    return "\n".join(lines)
+
+
+def cmd_table7_1(args) -> int:
+    scenario, mcsim = check_common(args)
+    ms = parse_ints(args.m, "--m", 1, 16)
+    args.angles_text = (f"--angles {args.angles}" if args.angles is not None else
+                        f"--step-deg {15.0 if args.step_deg is None else args.step_deg:g}")
+    angles = angle_list(args.step_deg, args.angles, 15.0)
+    args.sets_ = parse_sets(args.set, ("mechanics.theta0_deg", "startup.step1_m",
+                                       "startup.step1_cost", "startup.step1_dirs",
+                                       "output.decimation", "output.trace"))
+    ts = scenario_value(scenario, args.sets_, "control.ts_s", 1e-4)
+    if isinstance(ts, bool) or not isinstance(ts, (int, float)) or ts <= 0:
+        raise SweepInputError(f"control.ts_s: {ts!r} is not a positive number")
+    out = Path(args.out or "out/sweep/table7_1")
+    points = []
+    for m in ms:
+        for cost in COSTS:
+            for a in angles:
+                sets = (*args.sets_, "startup.init_pos=\"three_step\"", f"startup.step1_m={m}",
+                        f"startup.step1_cost=\"{cost}\"", "output.decimation=1",
+                        "output.trace=true", f"mechanics.theta0_deg={f_toml(a)}")
+                points.append(Point(f"m={m} {cost} theta0={a:g}", sets,
+                                    out / f"m{m}_{cost}" / angle_dir_name(a),
+                                    {"m": m, "cost": cost, "theta0_deg": a}))
+    run_points(points, mcsim, scenario, args.jobs, "table7_1")
+    for p in points:
+        p.info["step1_peak_a"] = step1_peak_a(p.dir / "trace.csv", p.info["m"], float(ts)) \
+            if p.ok else None
+    i_rated, preset = rated_peak_a(scenario, args.sets_)
+    summary = summarize_table7_1(points, ms, i_rated)
+    md = table7_1_markdown(summary, args, scenario, len(angles), preset)
+    data = {"command": "table7_1", "scenario": str(scenario), "sets": list(args.sets_),
+            "angles_deg": angles, "summary": summary,
+            "runs": [{**p.info, "dir": str(p.dir), "error": p.error,
+                      "step1_err_deg": metric(p, "step1_err_deg")} for p in points]}
+    write_outputs(args, md, data)
+    print(f"sweep table7_1: {len(points)} runs, {summary['failed_runs']} failed")
+    return 1 if summary["failed_runs"] else 0
+
+
+# ---------------------------------------------------------------------------------------------
+# noise
+
+def trial_angles(trials: int, seed: int) -> list[float]:
+    """Uniform initial angles in [0, 360) deg, one per trial, reproducible from `seed` (rounded
+    to 1e-3 deg so the recorded value is exactly the one passed to mcsim)."""
+    rng = random.Random(seed)
+    return [round(rng.uniform(0.0, 360.0), 3) % 360.0 for _ in range(trials)]
+
+
+def summarize_noise(points: list[Point], methods, levels, min_pct: float) -> dict:
+    res = {}
+    for method in methods:
+        rows = []
+        for lv in levels:
+            pts = [p for p in points if p.info["method"] == method and p.info["noise_a"] == lv]
+            vals = [metric(p, "polarity_correct") for p in pts]
+            correct = sum(1 for v in vals if v is True)
+            undecided = sum(1 for v in vals if v is not True and v is not False)
+            rows.append({"noise_a": lv, "trials": len(pts), "correct": correct,
+                         "wrong": sum(1 for v in vals if v is False), "undecided": undecided,
+                         "failed_runs": sum(1 for p in pts if not p.ok),
+                         "pct": 100.0 * correct / len(pts) if pts else None,
+                         "wrong_seeds": [p.info["seed"] for p, v in zip(pts, vals) if v is not True][:50]})
+        # the limit: the highest level below the first one that misses min_pct (levels ascending)
+        limit, first_fail = None, None
+        for r in sorted(rows, key=lambda r: r["noise_a"]):
+            if r["pct"] is not None and r["pct"] >= min_pct:
+                limit = r["noise_a"]
+            else:
+                first_fail = r["noise_a"]
+                break
+        res[method] = {"levels": rows, "limit_a": limit, "first_fail_a": first_fail}
+    return res
+
+
+def noise_markdown(summary: dict, args, scenario, methods, levels) -> str:
+    cmd = (f"mctools sweep noise {scenario} --levels {','.join(f'{v:g}' for v in levels)} "
+           f"--trials {args.trials} --methods {','.join(methods)}"
+           + (f" {sets_text(args.sets_)}" if args.sets_ else ""))
+    lines = ["### Step II polarity decision vs current noise (Fig. 7.4)", "",
+             f"`{cmd}`: per method and level {args.trials} trials, scenario.seed = 1..{args.trials}, "
+             f"initial angles uniform in [0, 360)° from seed {args.angle_seed} (the same angles for "
+             f"every level and method). Percentage of runs with `polarity_correct` true (a null "
+             f"or failed run counts as wrong).", "",
+             "| noise rms | " + " | ".join(methods) + " |", "|---|" + "---|" * len(methods)]
+    for i, lv in enumerate(levels):
+        cells = []
+        for method in methods:
+            r = summary[method]["levels"][i]
+            mark = "" if r["pct"] is not None and r["pct"] >= args.min_pct else " ✗"
+            cells.append(f"{r['pct']:.1f} % ({r['correct']}/{r['trials']}){mark}"
+                         if r["pct"] is not None else DASH)
+        lines.append(f"| {lv:g} A | " + " | ".join(cells) + " |")
+    lines.append("")
+    for method in methods:
+        s = summary[method]
+        lim = f"{s['limit_a']:g} A" if s["limit_a"] is not None else "none of the levels"
+        fail = f"; first below at {s['first_fail_a']:g} A" if s["first_fail_a"] is not None else \
+            "; no level below"
+        lines.append(f"- {method}: ≥ {args.min_pct:g} % correct up to {lim}{fail}.")
+    return "\n".join(lines)
+
+
+def cmd_noise(args) -> int:
+    scenario, mcsim = check_common(args)
+    levels = parse_floats(args.levels, "--levels")
+    if any(not 0.0 <= v <= 10.0 for v in levels):
+        raise SweepInputError("--levels: each level must be in 0..10 A (sensors.i_noise_rms_a)")
+    levels = sorted(levels)
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    if not methods or any(m not in METHODS for m in methods) or len(set(methods)) != len(methods):
+        raise SweepInputError(f"--methods: {args.methods!r} (choose from {', '.join(METHODS)}, "
+                              f"no duplicates)")
+    if not 1 <= args.trials <= 100000:
+        raise SweepInputError("--trials must be in 1..100000")
+    if not 0.0 < args.min_pct <= 100.0:
+        raise SweepInputError("--min-pct must be in (0, 100]")
+    args.sets_ = parse_sets(args.set, ("mechanics.theta0_deg", "scenario.seed",
+                                       "sensors.i_noise_rms_a", "startup.polarity"))
+    out = Path(args.out or "out/sweep/noise")
+    angles = trial_angles(args.trials, args.angle_seed)
+    points = []
+    for method in methods:
+        for lv in levels:
+            for seed, a in enumerate(angles, start=1):
+                sets = (*args.sets_, "startup.init_pos=\"three_step\"",
+                        f"startup.polarity=\"{method}\"", f"sensors.i_noise_rms_a={f_toml(lv)}",
+                        f"scenario.seed={seed}", f"mechanics.theta0_deg={f_toml(a)}")
+                points.append(Point(f"{method} noise={lv:g} seed={seed}", sets,
+                                    out / method / f"noise_{lv:g}" / f"seed_{seed:05d}",
+                                    {"method": method, "noise_a": lv, "seed": seed,
+                                     "theta0_deg": a}))
+    run_points(points, mcsim, scenario, args.jobs, "noise")
+    summary = summarize_noise(points, methods, levels, args.min_pct)
+    md = noise_markdown(summary, args, scenario, methods, levels)
+    data = {"command": "noise", "scenario": str(scenario), "sets": list(args.sets_),
+            "trials": args.trials, "angle_seed": args.angle_seed, "min_pct": args.min_pct,
+            "angles_deg": angles, "summary": summary,
+            "runs": [{**p.info, "error": p.error,
+                      "polarity_correct": metric(p, "polarity_correct"),
+                      "step12_err_deg": metric(p, "step12_err_deg")} for p in points]}
+    write_outputs(args, md, data)
+    failed = sum(1 for p in points if not p.ok)
+    print(f"sweep noise: {len(points)} runs, {failed} failed; "
+          + "; ".join(f"{m} >= {args.min_pct:g} % up to "
+                      + (f"{summary[m]['limit_a']:g} A" if summary[m]["limit_a"] is not None
+                         else "(none)") for m in methods))
+    return 1 if failed else 0
+
+
+# ---------------------------------------------------------------------------------------------
+# CLI
+
+def _common(p, default_out: str) -> None:
+    p.add_argument("scenario", metavar="SCENARIO.toml", help="scenario file run for every point")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="extra mcsim --set for every run (repeatable; value is TOML)")
+    p.add_argument("--mcsim", metavar="PATH",
+                   help="simulator binary (default: build/host/sim/app/mcsim, else mcsim on PATH)")
+    p.add_argument("--out", metavar="DIR", help=f"run folders (default {default_out})")
+    p.add_argument("--jobs", type=int, default=2, metavar="N",
+                   help="simulations in parallel (default 2)")
+    p.add_argument("--json", metavar="FILE", help="write the results as JSON")
+    p.add_argument("--md", metavar="FILE", help="also write the printed markdown summary here")
+
+
+def _angle_args(p, default_step: float) -> None:
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--step-deg", type=float, metavar="DEG",
+                   help=f"angles 0, DEG, 2 DEG, ... below 360 (default {default_step:g})")
+    g.add_argument("--angles", metavar="A,B,...", help="explicit initial angles in degrees")
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("sweep", help="initial-position sweeps with mcsim (thesis ch. 5, 7.2)")
+    ssub = p.add_subparsers(dest="sweep_command", required=True, metavar="SWEEP")
+
+    a = ssub.add_parser("angles", help="one run per initial angle: distribution of the startup "
+                                       "metrics, optional pass/fail checks")
+    _common(a, "out/sweep/angles")
+    _angle_args(a, 5.0)
+    a.add_argument("--expect-polarity", action="store_true",
+                   help="exit 1 unless polarity_correct is true in every run")
+    a.add_argument("--max-final-err-deg", type=float, metavar="X",
+                   help="exit 1 if any |init_pos_err_deg| > X (or null)")
+    a.add_argument("--max-time-s", type=float, metavar="T",
+                   help="exit 1 if any init_pos_time_s > T (or null)")
+    a.set_defaults(func=cmd_angles)
+
+    t = ssub.add_parser("table7_1", help="thesis Table 7.1: Step I error, linear vs nonlinear "
+                                         "cost, for several m, and the current peak in p.u.")
+    _common(t, "out/sweep/table7_1")
+    _angle_args(t, 15.0)
+    t.add_argument("--m", default="3,4,5", metavar="M,M,...",
+                   help="Step I pulse lengths (default 3,4,5)")
+    t.set_defaults(func=cmd_table7_1)
+
+    n = ssub.add_parser("noise", help="thesis Fig. 7.4: polarity decisions vs current noise, "
+                                      "seeded trials with random initial angles")
+    _common(n, "out/sweep/noise")
+    n.add_argument("--levels", default="0.02,0.05,0.1,0.2", metavar="A,A,...",
+                   help="current noise rms levels in A (default 0.02,0.05,0.1,0.2)")
+    n.add_argument("--trials", type=int, default=1000, metavar="N",
+                   help="trials per method and level, scenario.seed = 1..N (default 1000)")
+    n.add_argument("--methods", default="generalized,dvi", metavar="M,M",
+                   help="Step II methods (default generalized,dvi)")
+    n.add_argument("--angle-seed", type=int, default=1, metavar="S",
+                   help="seed of the random initial angles (default 1)")
+    n.add_argument("--min-pct", type=float, default=99.0, metavar="P",
+                   help="a level works when at least P %% of the trials are right (default 99)")
+    n.set_defaults(func=cmd_noise)
