@@ -78,6 +78,10 @@ void Metrics::add_startup(const Sample& s)
         t_run_ = s.t;
         init_err_ = s.angle_err_any;
     }
+    if (s.state == kRun && std::isfinite(t_run_) && s.t < t_run_ + 0.02 && std::isfinite(s.angle_err_any)) {
+        post_sum_ += s.angle_err_any;
+        post_n_ += 1;
+    }
     // "enable to < 1 deg": the last sample at or above 1 deg in Step III and the first 20 ms of RUN
     const bool watch = (s.state == kInit && s.init_step == kStep3) ||
                        (s.state == kRun && std::isfinite(t_run_) && s.t < t_run_ + 0.02);
@@ -158,6 +162,7 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
     os << "  \"step12_err_deg\": " << json_number(step12_err_) << ",\n";
     os << "  \"polarity_correct\": " << (init ? (std::fabs(step12_err_) < 90.0 ? "true" : "false") : "null") << ",\n";
     os << "  \"init_pos_err_deg\": " << json_number(init_err_) << ",\n";
+    os << "  \"init_pos_err_mean_deg\": " << json_number(post_n_ > 0 ? post_sum_ / post_n_ : NAN) << ",\n";
     os << "  \"init_pos_time_s\": "
        << json_number(init && std::isfinite(t_run_) ? (std::isfinite(t_last_bad_) ? t_last_bad_ + ts_ : t_step3_) - t_enable_ : NAN)
        << ",\n";

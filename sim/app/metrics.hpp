@@ -55,6 +55,7 @@ private:
     // startup
     double t_enable_ = NAN, t_init_ = NAN, t_step3_ = NAN, t_run_ = NAN, t_last_bad_ = NAN;
     double step12_err_ = NAN, step1_err_ = NAN, init_err_ = NAN;
+    double post_sum_ = 0, post_n_ = 0;   // mean error over the 20 ms after the hand-over
     double th0_ = NAN, reverse_max_ = 0;
     bool was_init_ = false;
     double ts_ = 1e-4;
