@@ -37,6 +37,10 @@ void mc_drive_cfg_default(mc_drive_cfg_t *c)
     c->ip1.ld = c->ld;
     c->ip1.lq = c->lq;
     c->ip1.i_trip = c->i_trip;
+    c->ip1_pulse3 = false;
+    mc_pulse3_cfg_default(&c->pulse3);
+    c->pulse3.rs = c->rs;
+    c->pulse3.i_trip = c->i_trip;
     mc_polarity_cfg_default(&c->ip2);
     c->ip2.ts = c->ts;
     c->ip2.rs = c->rs;

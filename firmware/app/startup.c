@@ -91,7 +91,9 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         d->offset[k] = off;
     }
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
-    if (d->seq.state == MC_STATE_INIT_POS && !mc_initpos_start(&d->ip1, &d->cfg.ip1)) {
+    const bool started = d->cfg.ip1_pulse3 ? mc_pulse3_start(&d->pulse3, &d->cfg.pulse3)
+                                           : mc_initpos_start(&d->ip1, &d->cfg.ip1);
+    if (d->seq.state == MC_STATE_INIT_POS && !started) {
         trip(d, MC_FAULT_CONFIG);
         return;
     }
@@ -105,12 +107,14 @@ static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     mc_abc_t duty = {0.0f, 0.0f, 0.0f};
     mc_ip_status_t st;
     if (d->seq.step == MC_INIT_STEP1) {
-        st = mc_initpos_step(&d->ip1, i_ab, vdc, &duty);
+        st = d->cfg.ip1_pulse3 ? mc_pulse3_step(&d->pulse3, i_ab, vdc, &duty)
+                               : mc_initpos_step(&d->ip1, i_ab, vdc, &duty);
         write_duties(d, duty, vdc);
         if (st == MC_IP_DONE) {
-            d->tm.theta1 = d->ip1.theta1;
-            const bool ok = d->cfg.ip2_dvi ? mc_dvi_start(&d->dvi, &d->cfg.dvi, d->ip1.theta1)
-                                           : mc_polarity_start(&d->ip2, &d->cfg.ip2, d->ip1.theta1);
+            const float theta1 = d->cfg.ip1_pulse3 ? d->pulse3.theta : d->ip1.theta1;
+            d->tm.theta1 = theta1;
+            const bool ok = d->cfg.ip2_dvi ? mc_dvi_start(&d->dvi, &d->cfg.dvi, theta1)
+                                           : mc_polarity_start(&d->ip2, &d->cfg.ip2, theta1);
             if (!ok) {
                 return MC_IP_FAILED;
             }

@@ -305,6 +305,11 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         dc.ip1.m = static_cast<int>(sc.i("startup.step1_m"));
         dc.ip1.n_dir = static_cast<int>(sc.i("startup.step1_dirs"));
         dc.ip1.i_trip = dc.i_trip;
+        dc.ip1_pulse3 = sc.s("startup.step1_method") == "three_phase";
+        mc_pulse3_cfg_default(&dc.pulse3);
+        dc.pulse3.rs = u.rs;
+        dc.pulse3.n = dc.ip1.m;
+        dc.pulse3.i_trip = dc.i_trip;
         mc_polarity_cfg_default(&dc.ip2);
         dc.ip2.ts = dc.ts;
         dc.ip2.rs = u.rs;

@@ -105,6 +105,7 @@ const std::vector<KeySpec>& scenario_schema()
     {"injection.n1_rpm", KeyType::Float, "400.0", nullptr, 0, 1e5, "rpm", "", "N1 of (6.6): injection fades to zero at this speed; K1, K2 are zero above it."},
     {"injection.notch_q", KeyType::Float, "1.0", nullptr, 0.1, 50, "1", "", "Quality factor of the notch that keeps the injection out of the current feedback."},
     {"startup.init_pos", KeyType::Enum, "\"given\"", nullptr, 0, 0, "", "given|three_step", "Sensorless start: the initial angle handed to the estimator (given, plus estimator.theta0_err_deg), or the thesis' three steps (pulse injection, polarity detection, continuous injection)."},
+    {"startup.step1_method", KeyType::Enum, "\"pulses\"", nullptr, 0, 0, "", "pulses|three_phase", "Step I: the thesis' pulse injection with the cost (5.5)/(7.1), or the three-phase pulse reference method (3.21) with Table 3.1."},
     {"startup.step1_cost", KeyType::Enum, "\"nonlinear\"", nullptr, 0, 0, "", "linear|nonlinear|fluxdiff", "Step I cost: (5.5) with constant Ld, Lq; (7.1) with the flux map's differential inductances; or flux differences of the map."},
     {"startup.step1_m", KeyType::Int, "5", nullptr, 1, 16, "periods", "", "Step I pulse length m: V(100) m, V(011) 2m, V(100) m."},
     {"startup.step1_dirs", KeyType::Int, "1", nullptr, 1, 3, "", "", "Step I pulse directions (phase A, then B, C)."},

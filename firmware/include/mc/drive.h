@@ -12,6 +12,7 @@
 #include "mc/pll.h"
 #include "mc/initpos.h"
 #include "mc/polarity.h"
+#include "mc/pulse3.h"
 #include "mc/sequencer.h"
 #include "mc/unop.h"
 #include "mc/speed_ctrl.h"
@@ -58,6 +59,8 @@ typedef struct {
     bool  init_three_step;       /* sensorless: run INIT_POS; false: the angle comes with
                                     the enable command (mc_drive_cmd_t.theta_init)      */
     mc_initpos_cfg_t ip1;        /* Step I                                              */
+    bool  ip1_pulse3;            /* Step I by the three-phase pulse reference (3.21)    */
+    mc_pulse3_cfg_t pulse3;
     bool  ip2_dvi;               /* Step II by dual-voltage injection instead of (5.7)  */
     mc_polarity_cfg_t ip2;       /* Step II; its model must carry the l_dd asymmetry (map) */
     mc_dvi_cfg_t dvi;
@@ -147,6 +150,7 @@ typedef struct {
     mc_inj_t inj;
     mc_biquad_t notch_d, notch_q;
     mc_initpos_t ip1;
+    mc_pulse3_t pulse3;
     mc_polarity_t ip2;
     mc_dvi_t dvi;
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
