@@ -86,6 +86,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dpi", type=int, default=100, help="plot resolution (default 100)")
     p.add_argument("--no-plots", action="store_true",
                    help="skip the PNGs (tests that only need the bounds)")
+    p.add_argument("--no-sweeps", action="store_true",
+                   help="skip the sweeps of <scenarios>/sweeps.toml (they run unless --only)")
     p.set_defaults(func=_cmd_report)
 
     from mctools.fit_adq import add_parser as add_fit_adq

@@ -476,6 +476,59 @@ def find_mcsim(given: str | None) -> str:
     return found
 
 
+SWEEP_KEYS = {"title", "args"}
+
+
+def load_sweeps(scen_dir: Path) -> list[dict]:
+    """scenarios/thesis/sweeps.toml: [[sweep]] tables with a title and the `mctools sweep`
+    arguments (scenario paths relative to the scenarios folder). Optional file."""
+    path = scen_dir / "sweeps.toml"
+    if not path.exists():
+        return []
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ReportInputError(f"{path}: not valid TOML: {exc}") from None
+    sweeps = data.get("sweep", [])
+    for i, sw in enumerate(sweeps, start=1):
+        unknown = sorted(set(sw) - SWEEP_KEYS)
+        if unknown or not isinstance(sw.get("title"), str) or not _is_str_list(sw.get("args")):
+            raise ReportInputError(f"{path}: sweep {i}: needs title (string) and args (list of "
+                                   f"strings){'; unknown ' + ', '.join(unknown) if unknown else ''}")
+    return sweeps
+
+
+def run_sweeps(scen_dir: Path, out_dir: Path, mcsim: str, jobs: int) -> tuple[str, list[str]]:
+    """Run every [[sweep]] through `mctools sweep` and return its markdown for the doc (the
+    sweeps' own summaries, verbatim) and the titles of those that failed."""
+    sweeps = load_sweeps(scen_dir)
+    if not sweeps:
+        return "", []
+    parts = ["\n## Sweeps (initial position, thesis chapter 5 and 7.2)\n\n"
+             "Run by the same command from `" + str(scen_dir / "sweeps.toml") + "`; each block "
+             "is the summary `mctools sweep` prints.\n"]
+    failed = []
+    for i, sw in enumerate(sweeps, start=1):
+        argv = list(sw["args"])
+        argv[1] = str(scen_dir / argv[1])   # [command, scenario, ...]
+        md = out_dir / f"sweep_{i}.md"
+        cmd = [sys.executable, "-m", "mctools", "sweep", *argv, "--mcsim", mcsim, "--jobs", str(jobs),
+               "--out", str(out_dir / f"sweep_{i}"), "--md", str(md)]
+        print(f"[sweep {i}/{len(sweeps)}] {sw['title']} ...", flush=True)
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        parts.append(f"\n### {sw['title']}\n\n")
+        if r.returncode != 0 or not md.exists():
+            failed.append(sw["title"])
+            parts.append(f"sweep failed (exit {r.returncode})\n")
+            continue
+        body = md.read_text(encoding="utf-8")
+        # the sweep's own heading is replaced by the title above; keep the summary, not the
+        # per-angle rows (they are in the run folders)
+        lines = [ln for ln in body.splitlines() if not ln.startswith("### ")]
+        parts.append("\n".join(lines).strip() + "\n")
+    return "".join(parts), failed
+
+
 def report(args) -> int:
     scen_dir = Path(args.scenarios)
     out_dir = Path(args.out)
@@ -515,8 +568,13 @@ def report(args) -> int:
                 for ln in log.read_text(encoding="utf-8", errors="replace").splitlines()[-5:]:
                     print(f"    {ln}", file=sys.stderr)
 
+    doc = build_doc(checks, runs, args, scen_dir, doc_path)
+    sweep_failures = []
+    if not args.only and not getattr(args, "no_sweeps", False):
+        sweep_md, sweep_failures = run_sweeps(scen_dir, out_dir, mcsim, args.jobs)
+        doc += sweep_md
     doc_path.parent.mkdir(parents=True, exist_ok=True)
-    doc_path.write_text(build_doc(checks, runs, args, scen_dir, doc_path), encoding="utf-8")
+    doc_path.write_text(doc, encoding="utf-8")
 
     n_bounds = sum(1 for c in checks if c.bounds)
     failed = []
@@ -534,4 +592,6 @@ def report(args) -> int:
     if run_failures:
         print(f"report: {len(run_failures)} of {len(runs)} runs failed: "
               + ", ".join(r.label for r in run_failures))
-    return 1 if failed or run_failures else 0
+    if sweep_failures:
+        print(f"report: sweeps failed: {', '.join(sweep_failures)}")
+    return 1 if failed or run_failures or sweep_failures else 0

@@ -332,3 +332,34 @@ def test_step_and_angles_exclusive(setup, capsys):
         cli.main(["sweep", "angles", str(root / "good.toml"), "--step-deg", "5", "--angles", "1"])
     assert ex.value.code == 2
     assert "not allowed with argument" in capsys.readouterr().err
+
+
+def test_report_appends_sweeps(setup):
+    """`mctools report` runs <scenarios>/sweeps.toml through `mctools sweep` and appends the
+    summaries to the doc; --no-sweeps and --only skip them."""
+    root, fake = setup
+    scen = root / "scen_report"
+    scen.mkdir(exist_ok=True)
+    (scen / "good.toml").write_text('[scenario]\nname = "good"\n')
+    (scen / "expected.toml").write_text(
+        '[[check]]\nscenario = "good"\nmodels = ["fluxmap"]\nmetric = "step12_err_deg"\n'
+        'what = "w"\nthesis = "t"\n')
+    (scen / "sweeps.toml").write_text(
+        '[[sweep]]\ntitle = "a few angles"\nargs = ["angles", "good.toml", "--angles", "0,90"]\n')
+    doc = root / "rep.md"
+    buf_out, buf_err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(buf_out), contextlib.redirect_stderr(buf_err):
+        rc = cli.main(["report", "--mcsim", str(fake), "--scenarios", str(scen), "--out",
+                       str(root / "rep_out"), "--doc", str(doc), "--no-plots", "--jobs", "1"])
+    assert rc == 0, buf_err.getvalue()
+    text = doc.read_text()
+    assert "## Sweeps" in text and "### a few angles" in text and "Polarity correct" in text
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        rc = cli.main(["report", "--mcsim", str(fake), "--scenarios", str(scen), "--out",
+                       str(root / "rep_out2"), "--doc", str(doc), "--no-plots", "--no-sweeps"])
+    assert rc == 0 and "## Sweeps" not in doc.read_text()
+    (scen / "sweeps.toml").write_text('[[sweep]]\ntitle = 3\n')
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        rc = cli.main(["report", "--mcsim", str(fake), "--scenarios", str(scen), "--out",
+                       str(root / "rep_out3"), "--doc", str(doc), "--no-plots"])
+    assert rc == 2
