@@ -254,6 +254,23 @@ def _clear_outputs(d: Path) -> None:
     shutil.rmtree(d / "plots", ignore_errors=True)
 
 
+def run_mcsim(mcsim: str, scenario: Path, sets, out_dir: Path) -> tuple[int, str, float, list[str]]:
+    """One `mcsim run`: (exit code, its output, wall seconds, the command). 127 if it cannot
+    start. Shared by report and sweep."""
+    cmd = [mcsim, "run", str(scenario)]
+    for s in sets:
+        cmd += ["--set", s]
+    cmd += ["--out", str(out_dir), "--quiet"]
+    t0 = time.monotonic()
+    try:
+        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              stdin=subprocess.DEVNULL)
+        code, log = proc.returncode, proc.stdout.decode("utf-8", errors="replace")
+    except OSError as exc:
+        code, log = 127, f"cannot start {mcsim}: {exc}\n"
+    return code, log, time.monotonic() - t0, cmd
+
+
 def execute(run: Run, mcsim: str, scen_dir: Path) -> Run:
     try:
         run.dir.mkdir(parents=True, exist_ok=True)
@@ -261,20 +278,8 @@ def execute(run: Run, mcsim: str, scen_dir: Path) -> Run:
     except OSError as exc:
         run.error = f"run failed ({exc.strerror or exc})"
         return run
-    cmd = [mcsim, "run", str(scen_dir / f"{run.scenario}.toml")]
-    for s in (*run.sets, model_set(run.model)):
-        cmd += ["--set", s]
-    cmd += ["--out", str(run.dir), "--quiet"]
-    t0 = time.monotonic()
-    try:
-        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                              stdin=subprocess.DEVNULL)
-        run.exit_code = proc.returncode
-        log = proc.stdout.decode("utf-8", errors="replace")
-    except OSError as exc:
-        run.exit_code = 127
-        log = f"cannot start {mcsim}: {exc}\n"
-    run.seconds = time.monotonic() - t0
+    run.exit_code, log, run.seconds, cmd = run_mcsim(
+        mcsim, scen_dir / f"{run.scenario}.toml", (*run.sets, model_set(run.model)), run.dir)
     (run.dir / "mcsim.log").write_text(" ".join(cmd) + "\n" + log, encoding="utf-8")
     if run.exit_code != 0:
         run.error = f"run failed (exit {run.exit_code})"
@@ -523,8 +528,15 @@ def run_sweeps(scen_dir: Path, out_dir: Path, mcsim: str, jobs: int) -> tuple[st
             continue
         body = md.read_text(encoding="utf-8")
         # the sweep's own heading is replaced by the title above; keep the summary, not the
-        # per-angle rows (they are in the run folders)
-        lines = [ln for ln in body.splitlines() if not ln.startswith("### ")]
+        # per-angle table (it is in the sweep's own .md in the run folder)
+        lines, skipping = [], False
+        for ln in body.splitlines():
+            if ln.startswith("| θ0 |"):
+                skipping = True
+            elif skipping and not ln.startswith("|"):
+                skipping = False
+            if not skipping and not ln.startswith("### "):
+                lines.append(ln)
         parts.append("\n".join(lines).strip() + "\n")
     return "".join(parts), failed
 

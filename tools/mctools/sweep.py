@@ -26,7 +26,7 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mctools.report import ReportInputError, _clear_outputs, find_mcsim
+from mctools.report import ReportInputError, _clear_outputs, find_mcsim, run_mcsim
 
 DASH = "—"
 # Thesis values quoted in the issue (experiments).
@@ -151,20 +151,7 @@ def execute(p: Point, mcsim: str, scenario: Path) -> Point:
     except OSError as exc:
         p.error = f"run failed ({exc.strerror or exc})"
         return p
-    cmd = [mcsim, "run", str(scenario)]
-    for s in p.sets:
-        cmd += ["--set", s]
-    cmd += ["--out", str(p.dir), "--quiet"]
-    t0 = time.monotonic()
-    try:
-        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                              stdin=subprocess.DEVNULL)
-        p.exit_code = proc.returncode
-        log = proc.stdout.decode("utf-8", errors="replace")
-    except OSError as exc:
-        p.exit_code = 127
-        log = f"cannot start {mcsim}: {exc}\n"
-    p.seconds = time.monotonic() - t0
+    p.exit_code, log, p.seconds, cmd = run_mcsim(mcsim, Path(scenario), p.sets, p.dir)
     if p.exit_code != 0:
         (p.dir / "mcsim.log").write_text(" ".join(cmd) + "\n" + log, encoding="utf-8")
         p.error = f"run failed (exit {p.exit_code})"
@@ -344,11 +331,12 @@ def angles_markdown(points, summary, args, scenario) -> str:
         missing = f" ({d['missing']} null)" if d["missing"] else ""
         lines.append(f"| {what} | `{key}` | " + " | ".join(row)
                      + f" | {d['n']}{missing} | {THESIS_ANGLES.get(key, DASH)} |")
-    lines += ["", "| θ0 | Step I err | pulse-only err | polarity | final err | enable → < 1° "
-              "| Step I + II | reverse | end state |", "|---|---|---|---|---|---|---|---|---|"]
+    lines += ["", "| θ0 | Step I err | pulse-only err | polarity | hand-over err | final err (20 ms mean) "
+              "| enable → < 1° | Step I + II | reverse | end state |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
     for p in points:
         if not p.ok:
-            lines.append(f"| {p.info['theta0_deg']:g}° | {p.error} |  |  |  |  |  |  |  |")
+            lines.append(f"| {p.info['theta0_deg']:g}° | {p.error} |  |  |  |  |  |  |  |  |")
             continue
         faults = metric(p, "faults") or []
         end = str(metric(p, "final_state")) + (f" ({', '.join(faults)})" if faults else "")
@@ -358,6 +346,7 @@ def angles_markdown(points, summary, args, scenario) -> str:
             f"| {fmt(number(metric(p, 'step12_err_deg')), 2, '°')} "
             f"| {fmt(pol) if isinstance(pol, bool) else DASH} "
             f"| {fmt(number(metric(p, 'init_pos_err_deg')), 2, '°')} "
+            f"| {fmt(number(metric(p, 'init_pos_err_mean_deg')), 2, '°')} "
             f"| {fmt_ms(number(metric(p, 'init_pos_time_s')))} "
             f"| {fmt_ms(number(metric(p, 'step12_time_s')))} "
             f"| {fmt(number(metric(p, 'reverse_angle_max_deg')), 2, '°')} | {end} |")
