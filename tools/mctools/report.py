@@ -271,6 +271,19 @@ def run_mcsim(mcsim: str, scenario: Path, sets, out_dir: Path) -> tuple[int, str
     return code, log, time.monotonic() - t0, cmd
 
 
+def read_metrics(run_dir: Path) -> tuple[dict | None, str | None]:
+    """(metrics, None) from run_dir/metrics.json, or (None, the reason the run counts as failed)."""
+    try:
+        data = json.loads((run_dir / "metrics.json").read_text(encoding="utf-8"))
+        if not isinstance(data, dict):
+            raise ValueError("not a JSON object")
+        return data, None
+    except FileNotFoundError:
+        return None, "run failed (no metrics.json)"
+    except (ValueError, UnicodeDecodeError):
+        return None, "run failed (bad metrics.json)"
+
+
 def execute(run: Run, mcsim: str, scen_dir: Path) -> Run:
     try:
         run.dir.mkdir(parents=True, exist_ok=True)
@@ -284,15 +297,7 @@ def execute(run: Run, mcsim: str, scen_dir: Path) -> Run:
     if run.exit_code != 0:
         run.error = f"run failed (exit {run.exit_code})"
         return run
-    try:
-        data = json.loads((run.dir / "metrics.json").read_text(encoding="utf-8"))
-        if not isinstance(data, dict):
-            raise ValueError("not a JSON object")
-        run.metrics = data
-    except FileNotFoundError:
-        run.error = "run failed (no metrics.json)"
-    except (ValueError, UnicodeDecodeError):
-        run.error = "run failed (bad metrics.json)"
+    run.metrics, run.error = read_metrics(run.dir)
     return run
 
 

@@ -26,7 +26,7 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mctools.report import ReportInputError, _clear_outputs, find_mcsim, run_mcsim
+from mctools.report import ReportInputError, _clear_outputs, find_mcsim, read_metrics, run_mcsim
 
 DASH = "—"
 # Thesis values quoted in the issue (experiments).
@@ -156,15 +156,7 @@ def execute(p: Point, mcsim: str, scenario: Path) -> Point:
         (p.dir / "mcsim.log").write_text(" ".join(cmd) + "\n" + log, encoding="utf-8")
         p.error = f"run failed (exit {p.exit_code})"
         return p
-    try:
-        data = json.loads((p.dir / "metrics.json").read_text(encoding="utf-8"))
-        if not isinstance(data, dict):
-            raise ValueError("not a JSON object")
-        p.metrics = data
-    except FileNotFoundError:
-        p.error = "run failed (no metrics.json)"
-    except (ValueError, UnicodeDecodeError):
-        p.error = "run failed (bad metrics.json)"
+    p.metrics, p.error = read_metrics(p.dir)
     return p
 
 
