@@ -118,23 +118,20 @@ Resolved resolve(const Scenario& sc)
 std::unique_ptr<mc_flux_map_t> make_estimator_map(const FluxModel& m, int n, double span, double l_scale,
                                                   double psi_scale)
 {
+    const GridAxis axis{-span, span, n};
+    const FluxMapTable t = tabulate_flux_map(m, axis, axis);
     auto map = std::make_unique<mc_flux_map_t>();
     map->n_d = n;
     map->n_q = n;
-    map->id0 = static_cast<float>(-span);
-    map->iq0 = static_cast<float>(-span);
-    map->did = static_cast<float>(2.0 * span / (n - 1));
-    map->diq = static_cast<float>(2.0 * span / (n - 1));
+    map->id0 = map->iq0 = static_cast<float>(-span);
+    map->did = map->diq = static_cast<float>(axis.step());
     const Vec2 psi0 = m.flux(Vec2::Zero());
     for (int a = 0; a < n; ++a) {
         for (int b = 0; b < n; ++b) {
-            const Vec2 i(-span + a * 2.0 * span / (n - 1), -span + b * 2.0 * span / (n - 1));
-            const Vec2 psi = m.flux(i);
+            const Vec2 psi = t.node(a, b);
             // mismatch: the magnet part scales with psi_scale, the current-dependent part with l_scale
-            const double pd = psi_scale * psi0.x() + l_scale * (psi.x() - psi0.x());
-            const double pq = l_scale * (psi.y() - psi0.y());
-            map->psi_d[a * n + b] = static_cast<float>(pd);
-            map->psi_q[a * n + b] = static_cast<float>(pq);
+            map->psi_d[a * n + b] = static_cast<float>(psi_scale * psi0.x() + l_scale * (psi.x() - psi0.x()));
+            map->psi_q[a * n + b] = static_cast<float>(l_scale * (psi.y() - psi0.y()));
         }
     }
     return map;
