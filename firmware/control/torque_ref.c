@@ -135,6 +135,38 @@ void mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg)
     }
     s->fw_active = false;
     s->i_limited = false;
+    s->mtpa_valid = false;   /* new parameters: the cached MTPA point no longer holds */
+    s->mtpa_torque = 0.0f;
+    s->mtpa_i = (mc_dq_t){0.0f, 0.0f};
+    s->mtpa_limited = false;
+}
+
+/* Step 1: MTPA point for |T| inside the circle (2.21), (2.24). */
+static void tref_mtpa(mc_tref_t *s, const tref_ctx_t *c)
+{
+    const float i_max = s->cfg.i_max;
+    const float t_tol = 1.0e-5f * (c->torque + 1.0f);
+    const float i_tol = 1.0e-5f * (i_max * i_max + 1.0f);
+    float x_hi = i_max;
+    float x;
+    bool beyond;
+    mc_dq_t i;
+
+    if (s->cfg.use_table && s->cfg.table.i_max < x_hi) {
+        x_hi = s->cfg.table.i_max;
+    }
+    x = tref_solve(c, TREF_MTPA_TORQUE, 0.0f, x_hi, t_tol, &beyond);
+    s->mtpa_limited = beyond;
+    i = tref_point(c, TREF_MTPA_TORQUE, x);
+    if (!s->cfg.use_table && i.d * i.d + i.q * i.q > i_max * i_max) {
+        /* analytic search runs on iq, so its range may overshoot the circle: stop on it */
+        x = tref_solve(c, TREF_MTPA_CIRCLE, 0.0f, x, i_tol, &beyond);
+        i = tref_point(c, TREF_MTPA_CIRCLE, x);
+        s->mtpa_limited = true;
+    }
+    s->mtpa_i = i;
+    s->mtpa_torque = c->torque;
+    s->mtpa_valid = true;
 }
 
 mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc)
@@ -144,7 +176,6 @@ mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc)
     const float i_tol = 1.0e-5f * (i_max * i_max + 1.0f);
     tref_ctx_t c;
     mc_dq_t i;
-    float x_hi;
     float x;
     bool beyond;
     bool neg = (torque < 0.0f);
@@ -158,22 +189,16 @@ mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc)
     c.omega = fabsf(omega_e);
     c.u_max = (vdc > 0.0f) ? s->cfg.u_margin * vdc * MC_1_SQRT3 : 0.0f;
     s->fw_active = false;
-    s->i_limited = false;
 
-    /* 1. MTPA point inside the circle (2.21), (2.24). */
-    x_hi = i_max;
-    if (s->cfg.use_table && s->cfg.table.i_max < x_hi) {
-        x_hi = s->cfg.table.i_max;
+    /* 1. MTPA point inside the circle (2.21), (2.24). It depends on |T| and the parameters only,
+     *    and |T| repeats between speed-loop updates (held for sc_decimation periods) or stays put
+     *    in torque mode: solve only when it changed. The search is deterministic, so the reused
+     *    point is the very one a new search would find. */
+    if (!s->mtpa_valid || s->mtpa_torque != c.torque) {
+        tref_mtpa(s, &c);
     }
-    x = tref_solve(&c, TREF_MTPA_TORQUE, 0.0f, x_hi, t_tol, &beyond);
-    s->i_limited = beyond;
-    i = tref_point(&c, TREF_MTPA_TORQUE, x);
-    if (!s->cfg.use_table && i.d * i.d + i.q * i.q > i_max * i_max) {
-        /* analytic search runs on iq, so its range may overshoot the circle: stop on it */
-        x = tref_solve(&c, TREF_MTPA_CIRCLE, 0.0f, x, i_tol, &beyond);
-        i = tref_point(&c, TREF_MTPA_CIRCLE, x);
-        s->i_limited = true;
-    }
+    i = s->mtpa_i;
+    s->i_limited = s->mtpa_limited;
 
     /* 2. Field weakening (2.20), (2.26). */
     if (tref_fw_id(&c, i.q) < i.d) {

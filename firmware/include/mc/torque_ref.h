@@ -15,14 +15,21 @@ typedef struct {
 } mc_tref_cfg_t;
 
 typedef struct {
-    mc_tref_cfg_t cfg;
+    mc_tref_cfg_t cfg;          /* set by mc_tref_init only: it also drops the cached MTPA point */
     bool fw_active;             /* field weakening moved id away from MTPA                  */
     bool i_limited;             /* torque not reachable within i_max (or the voltage limit)  */
+    /* Last MTPA point (step 1): a function of |T| and cfg only, reused while |T| is unchanged
+     * (in speed mode |T| changes at the speed-loop rate, not every period). */
+    bool    mtpa_valid;
+    float   mtpa_torque;        /* |T| it was solved for [N m]                              */
+    mc_dq_t mtpa_i;             /* MTPA point, iq >= 0 [A]                                  */
+    bool    mtpa_limited;       /* |T| beyond the current circle                            */
 } mc_tref_t;
 
 void    mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg);
 /* torque [N m], omega_e [rad/s electrical], vdc [V] -> current reference [A]. Bounded work (a few
- * root searches of at most 32 steps each); continuous in omega_e and torque. */
+ * root searches of at most 32 steps each, the MTPA one skipped while |T| repeats); continuous in
+ * omega_e and torque. */
 mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc);
 
 #endif

@@ -259,6 +259,72 @@ static void test_continuity_across_base_speed(void **state)
     }
 }
 
+/* Exact equality with a fresh block: the cached MTPA point must be the very one a new search finds. */
+static void assert_same_as_fresh(mc_tref_t *s, const mc_tref_cfg_t *cfg, float t, float we, float vdc)
+{
+    mc_tref_t f;
+    mc_tref_init(&f, cfg);
+    const mc_dq_t a = mc_tref_step(s, t, we, vdc);
+    const mc_dq_t b = mc_tref_step(&f, t, we, vdc);
+    if (!(a.d == b.d && a.q == b.q && s->fw_active == f.fw_active && s->i_limited == f.i_limited)) {
+        fail_msg("T=%g we=%g: (%.9g, %.9g, fw %d, lim %d) != fresh (%.9g, %.9g, fw %d, lim %d)", (double)t,
+                 (double)we, (double)a.d, (double)a.q, s->fw_active, s->i_limited, (double)b.d, (double)b.q,
+                 f.fw_active, f.i_limited);
+    }
+}
+
+/* The MTPA point is solved once per |T| and reused: it must follow every change of |T|, of the
+ * speed and voltage (field weakening is decided every call), and of the parameters (init). */
+static void test_mtpa_cache_follows_inputs(void **state)
+{
+    (void)state;
+    const bool modes[] = {false, true};
+    for (int m = 0; m < 2; ++m) {
+        mc_tref_t s;
+        make(&s, modes[m], 1.0f);
+        const mc_tref_cfg_t cfg = s.cfg;
+        const float lo = (float)rpm_to_we(300.0);
+        const float hi = (float)rpm_to_we(1500.0);
+        assert_same_as_fresh(&s, &cfg, 20.0f, lo, (float)VDC);
+        assert_true(s.mtpa_valid);
+        assert_same_as_fresh(&s, &cfg, 20.0f, lo, (float)VDC);      /* hit                          */
+        assert_same_as_fresh(&s, &cfg, 20.0f, hi, (float)VDC);      /* hit, now field weakening     */
+        assert_true(s.fw_active);
+        assert_same_as_fresh(&s, &cfg, 20.0f, lo, 0.5f * (float)VDC);   /* hit, other voltage      */
+        assert_same_as_fresh(&s, &cfg, -20.0f, -lo, (float)VDC);    /* same |T|: mirrored           */
+        assert_same_as_fresh(&s, &cfg, 20.000002f, lo, (float)VDC); /* one ulp more: solved again   */
+        assert_true(s.mtpa_torque == 20.000002f);
+        assert_same_as_fresh(&s, &cfg, 5.0f, lo, (float)VDC);       /* new |T|                      */
+        assert_same_as_fresh(&s, &cfg, 50.0f, lo, (float)VDC);      /* beyond the circle: limited   */
+        assert_true(s.i_limited);
+        assert_same_as_fresh(&s, &cfg, 5.0f, lo, (float)VDC);       /* and back: limit cleared      */
+        assert_false(s.i_limited);
+        assert_same_as_fresh(&s, &cfg, NAN, lo, (float)VDC);        /* NaN counts as zero torque    */
+        assert_same_as_fresh(&s, &cfg, 0.0f, lo, (float)VDC);
+    }
+
+    /* new parameters through mc_tref_init drop the cached point, even for the same |T| */
+    mc_tref_t s;
+    make(&s, false, 1.0f);
+    const float we = (float)rpm_to_we(300.0);
+    const mc_dq_t a = mc_tref_step(&s, 20.0f, we, (float)VDC);
+    mc_tref_cfg_t cfg = s.cfg;
+    cfg.mach.lq = 2.0f * (float)LQ;
+    mc_tref_init(&s, &cfg);
+    assert_false(s.mtpa_valid);
+    assert_same_as_fresh(&s, &cfg, 20.0f, we, (float)VDC);
+    const mc_dq_t b = mc_tref_step(&s, 20.0f, we, (float)VDC);
+    assert_true(b.d < a.d - 0.1f);   /* more saliency, more negative id: really the new point */
+    cfg.i_max = 5.0f;
+    mc_tref_init(&s, &cfg);
+    assert_same_as_fresh(&s, &cfg, 20.0f, we, (float)VDC);
+    assert_true(s.i_limited);
+    cfg.use_table = true;
+    mc_mtpa_table_fill_linear(&cfg.table, &cfg.mach, 5.0f);
+    mc_tref_init(&s, &cfg);
+    assert_same_as_fresh(&s, &cfg, 20.0f, we, (float)VDC);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -269,6 +335,7 @@ int main(void)
         cmocka_unit_test(test_field_weakening_holds_ellipse),
         cmocka_unit_test(test_field_weakening_circle_limit),
         cmocka_unit_test(test_continuity_across_base_speed),
+        cmocka_unit_test(test_mtpa_cache_follows_inputs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
