@@ -1,5 +1,6 @@
 #include "core_test.h"
 #include <float.h>
+#include <string.h>
 #include "mc/angle.h"
 
 /* reference: nearest multiple of 2 pi removed, in double */
@@ -71,12 +72,69 @@ static void test_huge_inputs_stay_in_range(void **st)
     }
 }
 
+/* The general path of mc_wrap_pi (nearest turn count, Cody-Waite 2 pi split), which the fast
+ * paths for |x| < 3 pi must reproduce bit for bit. */
+static float general_wrap(float x)
+{
+    const float hi = 6.28125f;
+    const float lo = 1.9353071795864769e-3f;
+    const float y = x * 0.15915494309189535f;
+    const float k = (float)(int32_t)(y + ((y >= 0.0f) ? 0.5f : -0.5f));
+    float r = (x - k * hi) - k * lo;
+    if (r >= MC_PI) {
+        r -= MC_2PI;
+    } else if (r < -MC_PI) {
+        r += MC_2PI;
+    }
+    return r;
+}
+
+static float float_from_bits(uint32_t b)
+{
+    float x;
+    memcpy(&x, &b, sizeof x);
+    return x;
+}
+
+static void check_same_as_general(float x)
+{
+    const float r = mc_wrap_pi(x);
+    const float g = general_wrap(x);
+    if (memcmp(&r, &g, sizeof r) != 0) {
+        fail_msg("mc_wrap_pi(%.9g) = %.9g, general path %.9g", (double)x, (double)r, (double)g);
+    }
+}
+
+static void test_fast_paths_match_general(void **st)
+{
+    (void)st;
+    /* a sparse sweep of all float bit patterns up to |x| = 20 (both signs, subnormals included) */
+    const uint32_t top = 0x41a00000u;   /* 20.0f */
+    for (uint32_t b = 0u; b <= top; b += 97u) {
+        check_same_as_general(float_from_bits(b));
+        check_same_as_general(float_from_bits(b | 0x80000000u));
+    }
+    /* every float within 4096 ulps of the path boundaries +-pi, +-3 pi */
+    const float edges[] = {MC_PI, -MC_PI, 9.42477796076937972f, -9.42477796076937972f};
+    for (size_t e = 0; e < sizeof edges / sizeof edges[0]; ++e) {
+        float up = edges[e];
+        float dn = edges[e];
+        for (int j = 0; j < 4096; ++j) {
+            check_same_as_general(up);
+            check_same_as_general(dn);
+            up = nextafterf(up, INFINITY);
+            dn = nextafterf(dn, -INFINITY);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_known_values),
         cmocka_unit_test(test_range_and_accuracy),
         cmocka_unit_test(test_huge_inputs_stay_in_range),
+        cmocka_unit_test(test_fast_paths_match_general),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
