@@ -6,6 +6,8 @@ void mc_encoder_init(mc_encoder_t *s, const mc_encoder_cfg_t *cfg)
     s->cfg = *cfg;
     /* (2.18); applied to (count * p mod cpr) so the electrical angle stays exact in float */
     s->rad_per_count = MC_2PI / (float)cfg->counts_per_rev;
+    s->narrow = cfg->pole_pairs >= 1 &&
+                (uint64_t)cfg->counts_per_rev * (uint64_t)cfg->pole_pairs <= (uint64_t)UINT32_MAX;
     /* Critically damped second-order PLL: s^2 + kp s + ki with both poles at -w. */
     const float w = MC_2PI * cfg->pll_bw_hz;
     const mc_pll_cfg_t pc = {.kp = 2.0f * w, .ki = w * w, .ts = cfg->ts, .speed_fc_hz = cfg->speed_fc_hz};
@@ -20,8 +22,17 @@ void mc_encoder_reset(mc_encoder_t *s)
 
 void mc_encoder_step(mc_encoder_t *s, const mc_angle_in_t *in, mc_angle_out_t *out)
 {
-    const uint64_t cpr = s->cfg.counts_per_rev;
-    const uint32_t elec = (uint32_t)(((uint64_t)in->qep_count * (uint64_t)s->cfg.pole_pairs) % cpr);
+    uint32_t elec;
+    if (s->narrow) {
+        /* (count * p) mod cpr = ((count mod cpr) * p) mod cpr, and with cpr * p < 2^32 nothing
+         * overflows: two 32-bit divisions (hardware UDIV on the M4) instead of the 64-bit one,
+         * which is a library call there. Same residue, so the same angle. */
+        const uint32_t cpr = s->cfg.counts_per_rev;
+        elec = ((in->qep_count % cpr) * (uint32_t)s->cfg.pole_pairs) % cpr;
+    } else {
+        const uint64_t cpr = s->cfg.counts_per_rev;
+        elec = (uint32_t)(((uint64_t)in->qep_count * (uint64_t)s->cfg.pole_pairs) % cpr);
+    }
     const float theta = mc_wrap_pi((float)elec * s->rad_per_count + s->cfg.offset_rad);
     if (!s->primed) {
         mc_pll_reset(&s->pll, theta, 0.0f);

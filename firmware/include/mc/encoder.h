@@ -18,6 +18,7 @@ typedef struct {
     mc_encoder_cfg_t cfg;
     mc_pll_t pll;
     float rad_per_count;       /* electrical rad per (count * p) */
+    bool narrow;               /* counts_per_rev * p fits 32 bits: 32-bit residue arithmetic */
     bool primed;
 } mc_encoder_t;
 
