@@ -74,6 +74,9 @@ void PwmSequencer::sort_pending() {
 
 void PwmSequencer::predecide(double t, const std::array<double, 3>& i_abc, double di_max) {
     if (t_dead_ <= 0.0) return;  // without dead time every commanded edge changes the voltage
+    bool any = false;            // usually all were decided at the period start
+    for (int k = next_; k < n_; ++k) any |= ev_[k].kind == CmdRise || ev_[k].kind == CmdFall;
+    if (!any) return;
     bool moved = false;
     for (int k = next_; k < n_; ++k) {
         Event& e = ev_[k];

@@ -82,6 +82,22 @@ public:
         return j;
     }
 
+    void current_jacobian(const Vec2& psi, Vec2* i, Mat2* g) const override {
+        if (!int_exp_) {
+            FluxModel::current_jacobian(psi, i, g);
+            return;
+        }
+        // current() and di_dpsi() with the powers shared; same expressions term by term.
+        const double d = psi.x(), q = psi.y();
+        const double ad = std::abs(d), aq = std::abs(q);
+        const double du = ipow(ad, iu_), qv = ipow(aq, iv_);
+        const double ds = p_.a_dd * ipow(ad, is_), qt = p_.a_qq * ipow(aq, it_);
+        const double xd = cd_ * du * qv * aq * aq, xq = cq_ * du * ad * ad * qv;
+        *i = Vec2((p_.a_d0 + ds + xd) * d - p_.i_f, (p_.a_q0 + qt + xq) * q);
+        const double jdq = p_.a_dq * du * d * qv * q;
+        *g << p_.a_d0 + (p_.S + 1) * ds + (p_.U + 1) * xd, jdq, jdq, p_.a_q0 + (p_.T + 1) * qt + (p_.V + 1) * xq;
+    }
+
     // W(psi) - W(psi0), with W the closed-form antiderivative (raw_energy); dW/dpsi = i exactly.
     double energy(const Vec2& psi) const override { return raw_energy(psi) - w0_; }
     std::string kind() const override { return "analytic"; }

@@ -10,46 +10,17 @@
 
 #include "mcsim/inverter.hpp"
 #include "mcsim/mechanics.hpp"
+#include "rotation.hpp"
+#include "hermite.hpp"
 
 namespace mcsim {
+
+using detail::rotate_angle;
+using detail::rotate_small;
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// cos/sin of (theta0 + d) from cos/sin of theta0. The stage angles of one period stay within a
-// few 0.1 rad of the period's base angle, where a Taylor series to d^14 is exact in double
-// (next term < 1e-19 at |d| = 0.3); that replaces a libm sincos per RK4 stage.
-inline void rotate_angle(double c0, double s0, double d, double* c, double* s) {
-    double cd, sd;
-    if (std::fabs(d) < 0.3) {
-        // Horner with reciprocal constants: a division per term would cost more than libm.
-        const double d2 = d * d;
-        sd = d * (1.0 + d2 * (-1.0 / 6 + d2 * (1.0 / 120 + d2 * (-1.0 / 5040 + d2 * (1.0 / 362880 +
-                 d2 * (-1.0 / 39916800 + d2 * (1.0 / 6227020800.0)))))));
-        cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24 + d2 * (-1.0 / 720 + d2 * (1.0 / 40320 + d2 * (-1.0 / 3628800 +
-                 d2 * (1.0 / 479001600.0 + d2 * (-1.0 / 87178291200.0)))))));
-    } else {
-        cd = std::cos(d);
-        sd = std::sin(d);
-    }
-    *c = c0 * cd - s0 * sd;
-    *s = s0 * cd + c0 * sd;
-}
-
-// Same within one RK4 step, where |d| <= w_e h stays below ~0.05: to d^5 / d^6 the relative error
-// is < 2e-13 at |d| = 0.05, far below the RK4 truncation.
-inline void rotate_small(double c0, double s0, double d, double* c, double* s) {
-    if (std::fabs(d) >= 0.05) {
-        rotate_angle(c0, s0, d, c, s);
-        return;
-    }
-    const double d2 = d * d;
-    const double sd = d * (1.0 + d2 * (-1.0 / 6 + d2 * (1.0 / 120)));
-    const double cd = 1.0 + d2 * (-0.5 + d2 * (1.0 / 24 + d2 * (-1.0 / 720)));
-    *c = c0 * cd - s0 * sd;
-    *s = s0 * cd + c0 * sd;
-}
 
 // RK4 state: the machine state plus the integrands of the energy ledger and of the period-average
 // terminal voltage, so that they are integrated with the same order as the state they belong to
@@ -94,12 +65,22 @@ struct Plant::Impl {
     Vec2 u_dq_avg = Vec2::Zero(), u_ab_avg = Vec2::Zero();
     std::array<double, 3> v_avg{{0, 0, 0}};
 
+    // Enabled periods: the Hermite integrator's point and the Jacobian at the period end (kept
+    // for the next period while the state is not changed in between).
+    detail::HermiteStepper hs;
+    Mat2 g_dq = Mat2::Identity();
+    bool g_valid = false;
+    double c_end = 1, s_end = 0;  // cos, sin of p th after an enabled period
+    bool cs_end_valid = false;
+    unsigned cs_carried = 0;
+
     // per-period constants used by the stages
     double p = 1, rs = 0, th_base = 0, c0 = 1, s0 = 0;
     double th_step = 0, c_step = 1, s_step = 0;  // angle at the start of the current RK4 step
     Vec2 u_ab = Vec2::Zero();
 
-    Impl(const PlantConfig& c, std::unique_ptr<FluxModel> m) : cfg(c), model(std::move(m)), mech(c.mech) {}
+    Impl(const PlantConfig& c, std::unique_ptr<FluxModel> m)
+        : cfg(c), model(std::move(m)), mech(c.mech), hs(*model, mech, c.machine.pole_pairs, c.machine.rs) {}
 
     void sincos_at(double theta_m, double* c, double* s) const {
         rotate_angle(c0, s0, p * (theta_m - th_base), c, s);
@@ -183,6 +164,7 @@ struct Plant::Impl {
     }
 
     int steps_for(double len, double h_max) const {
+        if (len <= h_max * (1.0 + 1e-9)) return 1;  // nearly always: skips the libm ceil
         const int n = static_cast<int>(std::ceil(len / h_max - 1e-9));
         return n < 1 ? 1 : n;
     }
@@ -201,11 +183,58 @@ struct Plant::Impl {
     // stationary frame: di_ab/dt = R(theta) (G (u - Rs i - w_e J psi) + w_e J i), G = di/dpsi,
     // |u| <= 2/3 vdc; x2 margin for the change of G (saturation) and of the state in the period.
     double current_rate_bound() const {
-        const Mat2 g = model->di_dpsi(psi);
+        const Mat2& g = g_dq;  // exact at the period start (hermite_begin)
         const double gn = std::max(std::fabs(g(0, 0)) + std::fabs(g(0, 1)), std::fabs(g(1, 0)) + std::fabs(g(1, 1)));
         const double we = std::fabs(p * w);
         const double in = i.norm();
         return 2.0 * (gn * (cfg.inverter.vdc + rs * in + we * psi.norm()) + we * in);
+    }
+
+    // Enabled periods (hermite.hpp): start from the rotor-frame state, end by re-evaluating the
+    // model at the final flux so that i = current(psi) holds exactly between periods.
+    void hermite_begin() {
+        double c, s;
+        sincos_at(th, &c, &s);
+        if (!g_valid) model->current_jacobian(psi, &i, &g_dq);
+        hs.begin(psi, i, g_dq, th, w, c, s, cfg.energy_ledger);
+    }
+
+    void hermite_end() {
+        const auto& pt = hs.point();
+        psi = hs.psi_dq();
+        th = pt.th;
+        w = pt.w;
+        model->current_jacobian(psi, &i, &g_dq);
+        g_valid = true;
+        c_end = pt.c;
+        s_end = pt.s;
+        cs_end_valid = true;
+    }
+
+    void hermite_intervals(double tau0, double tau1, const std::array<double, 3>& v, int n) {
+        const Vec2 u = clarke_phase_voltages(v);
+        const double len = tau1 - tau0;
+        if (!(len > 0.0)) return;
+        if (cfg.energy_ledger) {
+            for (int k = 0; k < 3; ++k) v_avg[k] += v[k] * len;
+            u_ab_avg += u * len;
+        }
+        if (n == 1) {
+            hs.interval(tau0, tau1, u.x(), u.y());
+            return;
+        }
+        const double h = len / n;
+        for (int k = 0; k < n; ++k) hs.interval(tau0 + k * h, k + 1 == n ? tau1 : tau0 + (k + 1) * h, u.x(), u.y());
+    }
+
+    std::array<double, 3> hp_switched_voltages(const std::array<int, 3>& lv) const {
+        const double half = 0.5 * cfg.inverter.vdc;
+        std::array<double, 3> v{{lv[0] * half, lv[1] * half, lv[2] * half}};
+        if (cfg.inverter.v_device != 0.0) {
+            const auto ia = hs.phase_currents();
+            for (int k = 0; k < 3; ++k) v[k] -= device_drop(ia[k], cfg.inverter);
+        }
+        return v;
     }
 
     void go_floating(St& x) {
@@ -327,6 +356,8 @@ void Plant::reset_state(const Vec2& psi_dq, double theta_m, double omega_m) {
     m.th = theta_m;
     m.w = m.cfg.mech.locked ? 0.0 : omega_m;
     m.floating = false;
+    m.g_valid = false;
+    m.cs_end_valid = false;
     m.latched[0] = m.latched[1] = m.latched[2] = false;
     m.i = m.model->current(psi_dq);
     m.w_init = m.model->energy(psi_dq);
@@ -340,8 +371,14 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
     const double w_start = m.mech.begin_period(t0, Ts, m.w);
     if (m.mech.speed_imposed()) m.w = w_start;
     m.th_base = m.th_step = m.th;
-    m.c0 = m.c_step = std::cos(m.p * m.th);
-    m.s0 = m.s_step = std::sin(m.p * m.th);
+    if (m.cs_end_valid && (++m.cs_carried & 63) != 0) {
+        // The integrator's rotated pair (to round-off); libm re-bases it every 64th period.
+        m.c0 = m.c_step = m.c_end;
+        m.s0 = m.s_step = m.s_end;
+    } else {
+        m.c0 = m.c_step = std::cos(m.p * m.th);
+        m.s0 = m.s_step = std::sin(m.p * m.th);
+    }
     m.v_avg = {0.0, 0.0, 0.0};
     m.u_ab_avg = Vec2::Zero();
     St x{m.psi.x(), m.psi.y(), m.th, m.w, 0, 0, 0, 0, 0};
@@ -353,28 +390,41 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
     if (outputs_enabled) m.latched[0] = m.latched[1] = m.latched[2] = false;
 
     const InverterConfig& inv = m.cfg.inverter;
+    m.cs_end_valid = false;
     if (!outputs_enabled) {
+        m.g_valid = false;
         m.disabled_period(x, Ts);
-    } else if (inv.mode == InverterConfig::Mode::Averaged) {
-        const auto v = averaged_phase_voltages(duty, m.phase_currents(), inv, Ts);
-        m.interval(x, 0.0, Ts, v, m.cfg.substeps);
     } else {
-        const double h_max = Ts / m.cfg.substeps;
-        m.seq.begin(t0, Ts, duty, inv);
-        const double di_max = inv.t_dead > 0.0 ? m.current_rate_bound() : 0.0;
-        m.seq.predecide(t0, m.phase_currents(), di_max);
-        double tau = 0.0, te;
-        while (m.seq.next_time(&te)) {
-            const double tau_e = te - t0;
-            if (tau_e > tau) {
-                m.interval(x, tau, tau_e, m.switched_voltages(m.seq.levels()), m.steps_for(tau_e - tau, h_max));
-                tau = tau_e;
+        m.hermite_begin();
+        if (inv.mode == InverterConfig::Mode::Averaged) {
+            const auto v = averaged_phase_voltages(duty, m.hs.phase_currents(), inv, Ts);
+            m.hermite_intervals(0.0, Ts, v, m.cfg.substeps);
+        } else {
+            const double h_max = Ts / m.cfg.substeps;
+            m.seq.begin(t0, Ts, duty, inv);
+            const double di_max = inv.t_dead > 0.0 ? m.current_rate_bound() : 0.0;
+            m.seq.predecide(t0, m.hs.phase_currents(), di_max);
+            double tau = 0.0, te;
+            while (m.seq.next_time(&te)) {
+                const double tau_e = te - t0;
+                if (tau_e > tau) {
+                    m.hermite_intervals(tau, tau_e, m.hp_switched_voltages(m.seq.levels()),
+                                        m.steps_for(tau_e - tau, h_max));
+                    tau = tau_e;
+                }
+                const auto ia = m.hs.phase_currents();
+                m.seq.apply(te, ia);
+                m.seq.predecide(te, ia, di_max);
             }
-            const auto ia = m.phase_currents();
-            m.seq.apply(te, ia);
-            m.seq.predecide(te, ia, di_max);
+            m.hermite_intervals(tau, Ts, m.hp_switched_voltages(m.seq.levels()), m.steps_for(Ts - tau, h_max));
         }
-        m.interval(x, tau, Ts, m.switched_voltages(m.seq.levels()), m.steps_for(Ts - tau, h_max));
+        m.hermite_end();
+        const detail::HLedger& led = m.hs.ledger();
+        x.ein = led.ein;
+        x.cu = led.cu;
+        x.mech = led.mech;
+        x.ud = led.ud;
+        x.uq = led.uq;
     }
 
     m.t = t0 + Ts;
@@ -386,7 +436,7 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
     m.ledger.electrical_in += x.ein;
     m.ledger.copper_loss += x.cu;
     m.ledger.mech_out += x.mech;
-    m.ledger.magnetic = 1.5 * (m.model->energy(m.psi) - m.w_init);
+    if (m.cfg.energy_ledger || !outputs_enabled) m.ledger.magnetic = 1.5 * (m.model->energy(m.psi) - m.w_init);
 }
 
 double Plant::time() const { return impl_->t; }
@@ -394,15 +444,27 @@ Vec2 Plant::psi_dq() const { return impl_->psi; }
 Vec2 Plant::i_dq() const { return impl_->i; }
 std::array<double, 3> Plant::i_abc() const {
     const Impl& m = *impl_;
-    const double th = m.p * m.th;
-    const double c = std::cos(th), s = std::sin(th);
+    double c, s;
+    if (m.cs_end_valid) {  // cos, sin of p theta_m carried by the integrator to the period end
+        c = m.c_end;
+        s = m.s_end;
+    } else {
+        c = std::cos(m.p * m.th);
+        s = std::sin(m.p * m.th);
+    }
     return inverse_clarke(Vec2(c * m.i.x() - s * m.i.y(), s * m.i.x() + c * m.i.y()));
 }
 double Plant::theta_e() const {
-    double a = std::fmod(impl_->p * impl_->th + kPi, 2.0 * kPi);
-    if (a < 0) a += 2.0 * kPi;
-    a -= kPi;
-    return a >= kPi ? -kPi : a;
+    const double a = impl_->p * impl_->th;
+    if (a >= -kPi && a < kPi) return a;
+    // Number of turns by truncation (no libm): exact enough for |a| < 1e12 rad.
+    double x = (a + kPi) * (0.5 / kPi);
+    double turns = static_cast<double>(static_cast<long long>(x));
+    if (turns > x) turns -= 1.0;
+    double r = a - turns * (2.0 * kPi);
+    if (r >= kPi) r -= 2.0 * kPi;
+    if (r < -kPi) r += 2.0 * kPi;
+    return r;
 }
 double Plant::theta_m() const { return impl_->th; }
 double Plant::omega_m() const { return impl_->w; }

@@ -43,6 +43,12 @@ public:
     virtual ~FluxModel() = default;
     virtual Vec2 current(const Vec2& psi) const = 0;             // i_dq(psi_dq) [A]
     virtual Mat2 di_dpsi(const Vec2& psi) const = 0;            // Jacobian [1/H]
+    // Both at once: the plant needs them together at every integration point, and a model that
+    // shares the powers of psi between them is about twice as fast as the two calls.
+    virtual void current_jacobian(const Vec2& psi, Vec2* i, Mat2* g) const {
+        *i = current(psi);
+        *g = di_dpsi(psi);
+    }
     virtual Vec2 flux(const Vec2& i) const;                      // psi_dq(i_dq) by Newton [Wb]
     // Differential inductance matrix L = (di/dpsi)^-1 at current i [H].
     Mat2 l_diff(const Vec2& i) const { return di_dpsi(flux(i)).inverse(); }

@@ -29,6 +29,20 @@ public:
         }
         return (te - cfg_.friction * omega - tl) * inv_j_;
     }
+    // d accel/dt along the trajectory, given dT_e/dt and the accel itself (the plant's Hermite
+    // integrator needs the end-point derivatives of omega' as well as omega').
+    double jerk(double tau, double te, double te_dot, double omega, double alpha) const {
+        if (mode_ != Inertia) return 0.0;  // Held: 0; Dyno: the profile is linear in the period
+        if (cfg_.reactive_load) {
+            const double drive = te - cfg_.friction * omega;
+            const double tl = load0_ + slope_ * tau;  // |T_load| changes at slope_ sign(T_load)
+            const double atl = tl < 0.0 ? -tl : tl;
+            if ((omega < kRest && omega > -kRest) && (drive <= atl && drive >= -atl)) return -alpha * 1e3;
+            const double dir = (omega >= kRest || (omega > -kRest && drive > 0.0)) ? 1.0 : -1.0;
+            return (te_dot - cfg_.friction * alpha - dir * (tl < 0.0 ? -slope_ : slope_)) * inv_j_;
+        }
+        return (te_dot - cfg_.friction * alpha - slope_) * inv_j_;
+    }
     // Speed at the end of the period when imposed (Dyno), to remove the round-off of the ramp.
     bool speed_imposed() const { return mode_ != Inertia; }
     double omega_end() const { return omega_end_; }

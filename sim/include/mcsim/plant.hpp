@@ -41,6 +41,11 @@ struct PlantConfig {
     // ceil(length / (Ts/substeps)) steps (at least one), the averaged inverter `substeps` steps.
     // 2 keeps the i_dq error below 1e-6 A at 785 rad/s electrical (docs/plant.md).
     int substeps = 2;
+    // Keep the energy ledger and the period-average voltages (energy(), u_dq_avg_last(),
+    // u_ab_avg_last(), v_phase_avg_last()) while the outputs are enabled. Verification runs need
+    // them; the scenario runner reads none of them and switches them off (~20 % of the plant's
+    // time). Periods with the outputs disabled always keep them.
+    bool energy_ledger = true;
 };
 
 // Energy ledger since construction [J]; all three-phase (1.5 factor applied).
