@@ -9,41 +9,42 @@ namespace mcsim {
 namespace {
 constexpr double kTwoPi = 6.28318530717958647692;
 
+// round-half-away-from-zero, clamped to [0, max_count]; NaN maps to 0.
 uint16_t to_counts(double x, double max_count) {
-    const double c = std::round(x);
-    if (!(c > 0.0)) return 0;  // also maps NaN to 0
-    return static_cast<uint16_t>(c > max_count ? max_count : c);
+    if (!(x >= 0.5)) return 0;
+    if (x >= max_count) return static_cast<uint16_t>(max_count);
+    return static_cast<uint16_t>(x + 0.5);  // truncation of a positive value: the same as round
 }
 }  // namespace
 
 Sensors::Sensors(const AdcConfig& adc, const EncoderConfig& enc, uint64_t seed)
-    : adc_(adc), enc_(enc), rng_(seed) {
+    : adc_(adc), enc_(enc), n01_(seed) {
     if (adc.bits < 2 || adc.bits > 16) throw std::invalid_argument("AdcConfig.bits must be 2..16");
     if (!(adc.i_full_scale > 0.0) || !(adc.vdc_full_scale > 0.0))
         throw std::invalid_argument("AdcConfig full scales must be > 0");
     if (enc.lines < 1) throw std::invalid_argument("EncoderConfig.lines must be >= 1");
+    max_count_ = std::ldexp(1.0, adc_.bits) - 1.0;
+    amps_per_count_ = 2.0 * adc_.i_full_scale / max_count_;
+    offset_counts_ = std::ldexp(1.0, adc_.bits - 1);
+    volts_per_count_ = adc_.vdc_full_scale / max_count_;
 }
 
-double Sensors::amps_per_count() const {
-    return 2.0 * adc_.i_full_scale / (std::ldexp(1.0, adc_.bits) - 1.0);
-}
-double Sensors::offset_counts() const { return std::ldexp(1.0, adc_.bits - 1); }
-double Sensors::volts_per_count() const {
-    return adc_.vdc_full_scale / (std::ldexp(1.0, adc_.bits) - 1.0);
-}
+double Sensors::amps_per_count() const { return amps_per_count_; }
+double Sensors::offset_counts() const { return offset_counts_; }
+double Sensors::volts_per_count() const { return volts_per_count_; }
 
 AdcSample Sensors::sample_adc(const Plant& p) {
     AdcSample s{};
-    const double max_count = std::ldexp(1.0, adc_.bits) - 1.0;
+    const double max_count = max_count_;
     const auto i = p.i_abc();
-    const double apc = amps_per_count(), mid = offset_counts();
+    const double inv_apc = 1.0 / amps_per_count_, mid = offset_counts_;
     // Draw order is fixed (a, b, c, vdc) so a seed reproduces a run exactly.
     for (int k = 0; k < 3; ++k) {
-        const double meas = i[k] * (1.0 + adc_.gain_err[k]) + adc_.offset_err[k] + adc_.i_noise_rms * n01_(rng_);
-        s.i[k] = to_counts(meas / apc + mid, max_count);
+        const double meas = i[k] * (1.0 + adc_.gain_err[k]) + adc_.offset_err[k] + adc_.i_noise_rms * n01_();
+        s.i[k] = to_counts(meas * inv_apc + mid, max_count);
     }
     const double vdc = p.config().inverter.vdc;
-    s.vdc = to_counts(vdc * (1.0 + adc_.vdc_noise_rel * n01_(rng_)) / volts_per_count(), max_count);
+    s.vdc = to_counts(vdc * (1.0 + adc_.vdc_noise_rel * n01_()) / volts_per_count_, max_count);
     return s;
 }
 

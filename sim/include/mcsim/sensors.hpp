@@ -1,11 +1,61 @@
 // Sensors sampled at the PWM period boundary (ADC at PWM centre of V000): phase currents through
 // a 12-bit ADC with gain/offset error and white noise, Vdc with noise, quadrature encoder.
 #pragma once
+#include <cmath>
 #include <cstdint>
-#include <random>
 #include "mcsim/plant.hpp"
 
 namespace mcsim {
+
+// Standard normal draws for the sensor noise: xoshiro256** (seeded through splitmix64) and the
+// Marsaglia polar method, which yields two draws per logarithm. Written out because the
+// mt19937_64 + std::normal_distribution pair cost more per PWM period than the firmware's ISR.
+class NormalRng {
+public:
+    explicit NormalRng(uint64_t seed) {
+        for (uint64_t& w : s_) {  // splitmix64: any seed, including 0, gives a non-zero state
+            seed += 0x9e3779b97f4a7c15ULL;
+            uint64_t z = seed;
+            z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+            z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+            w = z ^ (z >> 31);
+        }
+    }
+    double operator()() {
+        if (have_spare_) {
+            have_spare_ = false;
+            return spare_;
+        }
+        double u, v, r2;
+        do {
+            u = 2.0 * uniform() - 1.0;
+            v = 2.0 * uniform() - 1.0;
+            r2 = u * u + v * v;
+        } while (r2 >= 1.0 || r2 == 0.0);
+        const double f = std::sqrt(-2.0 * std::log(r2) / r2);
+        spare_ = v * f;
+        have_spare_ = true;
+        return u * f;
+    }
+
+private:
+    static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+    uint64_t next() {
+        const uint64_t r = rotl(s_[1] * 5, 7) * 9, t = s_[1] << 17;
+        s_[2] ^= s_[0];
+        s_[3] ^= s_[1];
+        s_[1] ^= s_[2];
+        s_[0] ^= s_[3];
+        s_[2] ^= t;
+        s_[3] = rotl(s_[3], 45);
+        return r;
+    }
+    double uniform() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+
+    uint64_t s_[4];
+    double spare_ = 0.0;
+    bool have_spare_ = false;
+};
 
 struct AdcConfig {
     int bits = 12;
@@ -48,8 +98,8 @@ public:
 private:
     AdcConfig adc_;
     EncoderConfig enc_;
-    std::mt19937_64 rng_;
-    std::normal_distribution<double> n01_{0.0, 1.0};
+    NormalRng n01_;
+    double max_count_ = 0, amps_per_count_ = 0, offset_counts_ = 0, volts_per_count_ = 0;
     bool index_seen_ = false;
     uint32_t index_count_ = 0;
     bool have_prev_ = false;
