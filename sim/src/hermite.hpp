@@ -17,12 +17,12 @@
 namespace mcsim::detail {
 
 // One integration point (stationary frame; G = d i_ab / d psi_ab is symmetric).
-struct HPoint {
-    double px = 0, py = 0;             // psi_ab [Wb]
-    double ix = 0, iy = 0;             // i_ab [A]
-    double gxx = 0, gxy = 0, gyy = 0;  // [1/H]
-    double th = 0, w = 0, te = 0;      // theta_m [rad], omega_m [rad/s], T_e [N m]
-    double c = 1, s = 0;               // cos, sin of p theta_m
+struct HPoint {  // no initialisers: one is built per interval, every field is written
+    double px, py;       // psi_ab [Wb]
+    double ix, iy;       // i_ab [A]
+    double gxx, gxy, gyy;  // [1/H]
+    double th, w, te;    // theta_m [rad], omega_m [rad/s], T_e [N m]
+    double c, s;         // cos, sin of p theta_m
 };
 
 // Integrals over the intervals since begin(): three-phase energies [J] and int u_dq dt [V s].
@@ -55,7 +55,7 @@ private:
     const Mechanics& mech_;
     double p_, rs_;
     bool ledger_ = true;
-    HPoint a_;
+    HPoint a_{};
     HLedger led_;
 };
 

@@ -74,48 +74,52 @@ void PwmSequencer::sort_pending() {
 
 void PwmSequencer::predecide(double t, const std::array<double, 3>& i_abc, double di_max) {
     if (t_dead_ <= 0.0) return;  // without dead time every commanded edge changes the voltage
-    bool any = false;            // usually all were decided at the period start
-    for (int k = next_; k < n_; ++k) any |= ev_[k].kind == CmdRise || ev_[k].kind == CmdFall;
-    if (!any) return;
-    bool moved = false;
+    // One pass to find each phase's pending events (at most a rise, a fall and a delayed turn-on
+    // per phase), then the decisions phase by phase: rise first, the fall depends on it.
+    int rise[3] = {-1, -1, -1}, fall[3] = {-1, -1, -1}, high[3] = {-1, -1, -1};
+    bool any = false;
     for (int k = next_; k < n_; ++k) {
-        Event& e = ev_[k];
-        if (e.kind != CmdRise && e.kind != CmdFall) continue;
-        const int x = e.phase;
+        const Event& e = ev_[k];
+        if (e.kind == CmdRise) rise[e.phase] = k, any = true;
+        else if (e.kind == CmdFall) fall[e.phase] = k, any = true;
+        else if (e.kind == SetHigh) high[e.phase] = k;
+    }
+    if (!any) return;  // usually everything was decided at the period start
+    bool moved = false, dropped = false;
+    for (int x = 0; x < 3; ++x) {
         const double i = i_abc[x];
-        if (std::fabs(i) - di_max * (e.t - t) <= i_band_) continue;
-        if (e.kind == CmdRise) {
+        const double margin = std::fabs(i) - i_band_;
+        if (rise[x] >= 0) {
+            Event& e = ev_[rise[x]];
+            if (margin - di_max * (e.t - t) <= 0.0) continue;  // and the fall waits for it
             if (i > 0.0) {
                 e.t += t_dead_;
                 moved = true;
             }
             e.kind = SetHigh;
-            continue;
+            high[x] = rise[x];
         }
-        // A fall depends on the rise of the same pulse (swallowing): wait until it is decided.
-        bool rise_pending = false;
-        for (int j = next_; j < n_; ++j) rise_pending |= ev_[j].phase == x && ev_[j].kind == CmdRise;
-        if (rise_pending) continue;
+        if (fall[x] < 0) continue;
+        Event& e = ev_[fall[x]];
+        if (margin - di_max * (e.t - t) <= 0.0) continue;
         if (i < 0.0) {
             e.t = std::min(e.t + t_dead_, t_end_);
             e.kind = SetLow;
             moved = true;
-            continue;
-        }
-        int high = -1;
-        for (int j = next_; j < n_; ++j)
-            if (ev_[j].phase == x && ev_[j].kind == SetHigh && ev_[j].t >= e.t) high = j;
-        if (high < 0) {
+        } else if (high[x] >= 0 && ev_[high[x]].t >= e.t) {
+            // Swallowed pulse: the turn-on would come after the turn-off; both disappear.
+            e.kind = Dropped;
+            ev_[high[x]].kind = Dropped;
+            dropped = true;
+        } else {
             e.kind = SetLow;
-            continue;
         }
-        // Swallowed pulse: drop both events (higher index first so k stays valid).
-        const int a = std::max(k, high), b = std::min(k, high);
-        for (int j = a; j + 1 < n_; ++j) ev_[j] = ev_[j + 1];
-        --n_;
-        for (int j = b; j + 1 < n_; ++j) ev_[j] = ev_[j + 1];
-        --n_;
-        k = b - 1;
+    }
+    if (dropped) {
+        int w = next_;
+        for (int k = next_; k < n_; ++k)
+            if (ev_[k].kind != Dropped) ev_[w++] = ev_[k];
+        n_ = w;
     }
     if (moved) sort_pending();
 }
@@ -171,6 +175,7 @@ void PwmSequencer::apply(double t, const std::array<double, 3>& i_abc) {
                 break;
             case SetHigh: level_[x] = +1; break;
             case SetLow: level_[x] = -1; break;
+            case Dropped: break;  // removed by predecide before it could be due
         }
     }
 }

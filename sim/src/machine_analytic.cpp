@@ -132,9 +132,17 @@ private:
     }
 
     static double ipow(double a, int n) {
-        double r = 1.0;
-        for (; n > 0; --n) r *= a;
-        return r;
+        switch (n) {  // the fitted exponents: 0..3 (a predictable branch, no loop)
+            case 0: return 1.0;
+            case 1: return a;
+            case 2: return a * a;
+            case 3: return a * a * a;
+            default: {
+                double r = 1.0;
+                for (; n > 0; --n) r *= a;
+                return r;
+            }
+        }
     }
 
     SaturationParams p_;

@@ -1,5 +1,6 @@
-// The plant: flux-linkage state model (4.1)/(4.5) integrated with RK4 between switching
-// instants, inverter, mechanics and the energy ledger. Equations and measured errors:
+// The plant: flux-linkage state model (4.1)/(4.5) integrated between switching instants (Hermite,
+// hermite.hpp; RK4 as the reference and with the outputs disabled), inverter, mechanics and the
+// energy ledger. Equations and measured errors:
 // docs/plant.md.
 #include "mcsim/plant.hpp"
 
@@ -169,13 +170,11 @@ struct Plant::Impl {
         return n < 1 ? 1 : n;
     }
 
-    std::array<double, 3> switched_voltages(const std::array<int, 3>& lv) const {
+    std::array<double, 3> switched_voltages(const std::array<int, 3>& lv, const std::array<double, 3>& ia) const {
         const double half = 0.5 * cfg.inverter.vdc;
         std::array<double, 3> v{{lv[0] * half, lv[1] * half, lv[2] * half}};
-        if (cfg.inverter.v_device != 0.0) {
-            const auto ia = phase_currents();
+        if (cfg.inverter.v_device != 0.0)
             for (int k = 0; k < 3; ++k) v[k] -= device_drop(ia[k], cfg.inverter);
-        }
         return v;
     }
 
@@ -225,16 +224,6 @@ struct Plant::Impl {
         }
         const double h = len / n;
         for (int k = 0; k < n; ++k) hs.interval(tau0 + k * h, k + 1 == n ? tau1 : tau0 + (k + 1) * h, u.x(), u.y());
-    }
-
-    std::array<double, 3> hp_switched_voltages(const std::array<int, 3>& lv) const {
-        const double half = 0.5 * cfg.inverter.vdc;
-        std::array<double, 3> v{{lv[0] * half, lv[1] * half, lv[2] * half}};
-        if (cfg.inverter.v_device != 0.0) {
-            const auto ia = hs.phase_currents();
-            for (int k = 0; k < 3; ++k) v[k] -= device_drop(ia[k], cfg.inverter);
-        }
-        return v;
     }
 
     void go_floating(St& x) {
@@ -395,36 +384,48 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
         m.g_valid = false;
         m.disabled_period(x, Ts);
     } else {
-        m.hermite_begin();
+        // Hermite by default; classical RK4 on request (the independent reference of the tests).
+        const bool rk4 = m.cfg.integrator == PlantConfig::Integrator::Rk4;
+        if (rk4) {
+            m.g_dq = m.model->di_dpsi(m.psi);
+            m.g_valid = false;
+        } else {
+            m.hermite_begin();
+        }
+        auto currents = [&] { return rk4 ? m.phase_currents() : m.hs.phase_currents(); };
+        auto advance = [&](double a, double b, const std::array<double, 3>& v, int n) {
+            if (rk4) m.interval(x, a, b, v, n);
+            else m.hermite_intervals(a, b, v, n);
+        };
         if (inv.mode == InverterConfig::Mode::Averaged) {
-            const auto v = averaged_phase_voltages(duty, m.hs.phase_currents(), inv, Ts);
-            m.hermite_intervals(0.0, Ts, v, m.cfg.substeps);
+            advance(0.0, Ts, averaged_phase_voltages(duty, currents(), inv, Ts), m.cfg.substeps);
         } else {
             const double h_max = Ts / m.cfg.substeps;
             m.seq.begin(t0, Ts, duty, inv);
             const double di_max = inv.t_dead > 0.0 ? m.current_rate_bound() : 0.0;
-            m.seq.predecide(t0, m.hs.phase_currents(), di_max);
+            m.seq.predecide(t0, currents(), di_max);
             double tau = 0.0, te;
             while (m.seq.next_time(&te)) {
                 const double tau_e = te - t0;
                 if (tau_e > tau) {
-                    m.hermite_intervals(tau, tau_e, m.hp_switched_voltages(m.seq.levels()),
-                                        m.steps_for(tau_e - tau, h_max));
+                    advance(tau, tau_e, m.switched_voltages(m.seq.levels(), currents()), m.steps_for(tau_e - tau, h_max));
                     tau = tau_e;
                 }
-                const auto ia = m.hs.phase_currents();
+                const auto ia = currents();
                 m.seq.apply(te, ia);
                 m.seq.predecide(te, ia, di_max);
             }
-            m.hermite_intervals(tau, Ts, m.hp_switched_voltages(m.seq.levels()), m.steps_for(Ts - tau, h_max));
+            advance(tau, Ts, m.switched_voltages(m.seq.levels(), currents()), m.steps_for(Ts - tau, h_max));
         }
-        m.hermite_end();
-        const detail::HLedger& led = m.hs.ledger();
-        x.ein = led.ein;
-        x.cu = led.cu;
-        x.mech = led.mech;
-        x.ud = led.ud;
-        x.uq = led.uq;
+        if (!rk4) {
+            m.hermite_end();
+            const detail::HLedger& led = m.hs.ledger();
+            x.ein = led.ein;
+            x.cu = led.cu;
+            x.mech = led.mech;
+            x.ud = led.ud;
+            x.uq = led.uq;
+        }
     }
 
     m.t = t0 + Ts;
@@ -436,7 +437,8 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
     m.ledger.electrical_in += x.ein;
     m.ledger.copper_loss += x.cu;
     m.ledger.mech_out += x.mech;
-    if (m.cfg.energy_ledger || !outputs_enabled) m.ledger.magnetic = 1.5 * (m.model->energy(m.psi) - m.w_init);
+    if (m.cfg.energy_ledger || !outputs_enabled || m.cfg.integrator == PlantConfig::Integrator::Rk4)
+        m.ledger.magnetic = 1.5 * (m.model->energy(m.psi) - m.w_init);
 }
 
 double Plant::time() const { return impl_->t; }

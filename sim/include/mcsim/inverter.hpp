@@ -57,7 +57,7 @@ public:
     const std::array<int, 3>& levels() const { return level_; }
 
 private:
-    enum Kind : uint8_t { CmdRise, CmdFall, SetHigh, SetLow };
+    enum Kind : uint8_t { CmdRise, CmdFall, SetHigh, SetLow, Dropped };
     struct Event {
         double t;
         uint8_t phase;

@@ -37,7 +37,7 @@ struct PlantConfig {
     MechanicsConfig mech;
     double theta_m0 = 0.0;       // initial mechanical angle [rad]
     double omega_m0 = 0.0;       // initial mechanical speed [rad/s]
-    // RK4 step bound: h <= Ts/substeps. Each interval between switching instants gets
+    // Step bound: h <= Ts/substeps. Each interval between switching instants gets
     // ceil(length / (Ts/substeps)) steps (at least one), the averaged inverter `substeps` steps.
     // 2 keeps the i_dq error below 1e-6 A at 785 rad/s electrical (docs/plant.md).
     int substeps = 2;
@@ -46,6 +46,10 @@ struct PlantConfig {
     // them; the scenario runner reads none of them and switches them off (~20 % of the plant's
     // time). Periods with the outputs disabled always keep them.
     bool energy_ledger = true;
+    // Enabled periods: the two-point Hermite integrator (one model evaluation per step, default)
+    // or classical RK4 on the rotor-frame state (four per step; kept as an independent reference
+    // for the tests, always with the ledger). Disabled periods always use RK4.
+    enum class Integrator { Hermite, Rk4 } integrator = Integrator::Hermite;
 };
 
 // Energy ledger since construction [J]; all three-phase (1.5 factor applied).

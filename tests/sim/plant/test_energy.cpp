@@ -42,7 +42,7 @@ double run_and_residual(int substeps, bool print) {
 
 TEST(PlantEnergy, BalanceWithSwitchingInverterAndSaturation) {
     const double rel = run_and_residual(2, true);
-    EXPECT_LT(std::fabs(rel), 1e-3);  // the brief's bound; measured 2.4e-8 (RK4 truncation at 3200 rpm)
+    EXPECT_LT(std::fabs(rel), 1e-3);  // the brief's bound; measured 1.3e-7 (Hermite truncation at 3200 rpm)
     EXPECT_LT(std::fabs(rel), 1e-6);
 }
 
