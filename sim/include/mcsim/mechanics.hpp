@@ -1,6 +1,6 @@
 // Shaft mechanics for the plant: inertia with friction and load, dyno speed hold, locked rotor.
 // The user profiles (std::function) are sampled once per PWM period (start and end) and
-// interpolated linearly inside it, so the RK4 stages of the plant call no std::function.
+// interpolated linearly inside it, so the integrator's steps call no std::function.
 #pragma once
 #include "mcsim/plant.hpp"
 
