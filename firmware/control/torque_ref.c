@@ -46,6 +46,22 @@ static float tref_fw_id(const tref_ctx_t *c, float iq)
     return id;
 }
 
+/* Whether the point i lies outside the voltage ellipse (2.20) at omega: tref_fw_id(c, i.q) < i.d.
+ * Clearly inside, w^2 ((Ld id + psi)^2 + (Lq iq)^2) < 0.999 u_max^2, is decided with a few
+ * multiplies; the 0.1 % margin (5e-4 of psi_pm in flux) is far above the rounding of either form,
+ * so where the shortcut answers, the exact test (two divisions and a square root) would answer
+ * the same. Near the boundary, at standstill, for u_max = 0 and for NaN the exact test decides. */
+static bool tref_outside_ellipse(const tref_ctx_t *c, mc_dq_t i)
+{
+    const mc_lin_params_t *p = &c->s->cfg.mach;
+    const float fd = p->ld * i.d + p->psi_pm;
+    const float fq = p->lq * i.q;
+    if (c->omega * c->omega * (fd * fd + fq * fq) < 0.999f * c->u_max * c->u_max) {
+        return false;
+    }
+    return tref_fw_id(c, i.q) < i.d;
+}
+
 static mc_dq_t tref_point(const tref_ctx_t *c, tref_fn_t f, float x)
 {
     mc_dq_t i;
@@ -201,7 +217,7 @@ mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc)
     s->i_limited = s->mtpa_limited;
 
     /* 2. Field weakening (2.20), (2.26). */
-    if (tref_fw_id(&c, i.q) < i.d) {
+    if (tref_outside_ellipse(&c, i)) {
         float iq_m = i.q;
         s->fw_active = true;
         c.id_cap = i.d;

@@ -187,6 +187,35 @@ static void test_voltage_history_and_slew(void **st)
     assert_float_equal(r.pwm.active[1], r.pwm.shadow[1], 0.0f);
 }
 
+/* Reference moves shorter than a slew step pass unchanged, whether the squared-length shortcut
+ * (below 99.9 % of a step) or the exact length (from there up) decides; longer ones move one step. */
+static void test_slew_step_boundary(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    const float step = r.cfg.i_slew * r.cfg.ts;
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 2.0f);
+    run(&r, (int)r.cfg.offset_cal_samples + 10);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_true(mc_drive_telemetry(&r.d)->i_ref.q == 2.0f);
+    /* moves in steps: within the margin, between margin and step, just beyond, far beyond */
+    const float moves[] = {0.9995f, -0.4995f, 0.9999f, 1.0002f, -1.2f, -0.3f, 1.0005f};
+    float prev = 2.0f;
+    for (size_t k = 0; k < sizeof moves / sizeof moves[0]; ++k) {
+        const float target = prev + moves[k] * step;
+        command(&r, true, MC_MODE_CURRENT, 0.0f, target);
+        run(&r, 1);
+        const float got = mc_drive_telemetry(&r.d)->i_ref.q;
+        if (fabsf(target - prev) <= step) {
+            assert_true(got == target);   /* exactly the command */
+        } else {
+            assert_float_equal(got, prev + copysignf(step, moves[k]), 1e-6f);
+        }
+        prev = got;
+    }
+}
+
 /* A command becomes visible to the ISR only at the next period start, as one copy. */
 static void test_command_taken_at_period_start(void **st)
 {
@@ -209,6 +238,7 @@ int main(void)
         cmocka_unit_test(test_implausible_offset_faults),
         cmocka_unit_test(test_bad_config_never_runs),
         cmocka_unit_test(test_voltage_history_and_slew),
+        cmocka_unit_test(test_slew_step_boundary),
         cmocka_unit_test(test_command_taken_at_period_start),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -325,6 +325,60 @@ static void test_mtpa_cache_follows_inputs(void **state)
     assert_same_as_fresh(&s, &cfg, 20.0f, we, (float)VDC);
 }
 
+/* Field weakening starts exactly where the MTPA point leaves the ellipse by the exact test
+ * mc_fw_id_max(iq) < id (2.26), although most calls decide it with a multiply-only shortcut:
+ * speeds on both sides of the boundary down to one ulp, several torques and DC-link voltages. */
+static void test_fw_decision_matches_exact_test(void **state)
+{
+    (void)state;
+    const float torques[] = {0.0f, 1.0f, 12.5f, 30.0f, 50.0f};
+    const float vdcs[] = {300.0f, 250.0f, 0.0f};
+    for (int m = 0; m < 2; ++m) {
+        for (size_t a = 0; a < sizeof torques / sizeof torques[0]; ++a) {
+            for (size_t b = 0; b < sizeof vdcs / sizeof vdcs[0]; ++b) {
+                mc_tref_t s;
+                make(&s, m == 1, 0.95f);
+                const float t = torques[a];
+                const float vdc = vdcs[b];
+                const mc_dq_t i0 = mc_tref_step(&s, t, 0.0f, vdc);   /* the MTPA point */
+                const float u_max = 0.95f * vdc * 0.57735026918963f;
+                /* bisect the exact predicate's switching speed to the last ulp */
+                float lo = 0.0f;
+                float hi = 3000.0f;
+                for (int k = 0; k < 200; ++k) {
+                    const float mid = 0.5f * (lo + hi);
+                    if (mid <= lo || mid >= hi) {
+                        break;
+                    }
+                    if (mc_fw_id_max(&s.cfg.mach, i0.q, mid, u_max) < i0.d) {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                float w = lo;
+                for (int k = 0; k < 64; ++k) {
+                    w = nextafterf(w, 0.0f);
+                }
+                for (int k = 0; k < 128; ++k) {
+                    (void)mc_tref_step(&s, t, w, vdc);
+                    const bool exact = mc_fw_id_max(&s.cfg.mach, i0.q, w, u_max) < i0.d;
+                    if (s.fw_active != exact) {
+                        fail_msg("T %g vdc %g w %.9g: fw_active %d, exact test %d", (double)t,
+                                 (double)vdc, (double)w, s.fw_active, exact);
+                    }
+                    w = nextafterf(w, INFINITY);
+                }
+                for (double f = 0.5; f < 1.5; f += 0.001) {
+                    w = (float)(f * (double)lo);
+                    (void)mc_tref_step(&s, t, w, vdc);
+                    assert_true(s.fw_active == (mc_fw_id_max(&s.cfg.mach, i0.q, w, u_max) < i0.d));
+                }
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -336,6 +390,7 @@ int main(void)
         cmocka_unit_test(test_field_weakening_circle_limit),
         cmocka_unit_test(test_continuity_across_base_speed),
         cmocka_unit_test(test_mtpa_cache_follows_inputs),
+        cmocka_unit_test(test_fw_decision_matches_exact_test),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
