@@ -19,6 +19,10 @@ typedef struct {
     mc_pll_t pll;
     float rad_per_count;       /* electrical rad per (count * p) */
     bool narrow;               /* counts_per_rev * p fits 32 bits: 32-bit residue arithmetic */
+    uint32_t max_step;         /* largest count change tracked without a division: step * p < cpr */
+    bool tracking;             /* last_count / last_elec hold a computed pair                  */
+    uint32_t last_count;       /* counter of the previous step                                 */
+    uint32_t last_elec;        /* (last_count * p) mod cpr                                     */
     bool primed;
 } mc_encoder_t;
 
