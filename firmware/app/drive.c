@@ -287,6 +287,9 @@ void mc_drive_isr(mc_drive_t *d)
     /* 5. Park (2.5) into the controller's frame. While injecting, the current loop sees the
      *    currents with the injection frequency notched out, so it does not cancel it. */
     const mc_dq_t i_dq = mc_park(i_ab, mc_sincos(ang.theta));
+    /* The angle of step 8 is known already: its sin/cos is taken here, where it does not wait
+     * for the references and the current loop (an out-of-order core overlaps the two). */
+    const mc_sincos_t sc_u = mc_sincos(mc_wrap_pi(ang.theta + 1.5f * ang.omega * c->ts));
     mc_dq_t i_fb = i_dq;
     if (injecting(d)) {
         i_fb.d = mc_biquad_step(&d->notch_d, i_dq.d);
@@ -304,8 +307,7 @@ void mc_drive_isr(mc_drive_t *d)
     u_dq.d += d->tm.u_inj;
 
     /* 8. Inverse Park at the middle of the period the voltage will act in, (k+1, k+2): the
-     *    one-period update delay plus the half period of the average. */
-    const mc_sincos_t sc_u = mc_sincos(mc_wrap_pi(ang.theta + 1.5f * ang.omega * c->ts));
+     *    one-period update delay plus the half period of the average (sc_u, taken in step 5). */
     const mc_ab_t u_ab = mc_park_inv(u_dq, sc_u);
 
     /* 9. SVPWM (min-max injection), then dead-time compensation with the current of that

@@ -63,8 +63,10 @@ static void write_duties(mc_drive_t *d, mc_abc_t duty, float vdc)
 static void protect(mc_drive_t *d, mc_abc_t i, float vdc)
 {
     const mc_drive_cfg_t *c = &d->cfg;
-    const float imax = fmaxf(fabsf(i.a), fmaxf(fabsf(i.b), fabsf(i.c)));
-    if (imax > c->i_trip) {
+    /* any phase above the trip level; plain compares, since fmaxf is a library call on the M4
+     * (a NaN phase is ignored, as fmaxf would) */
+    const bool over = fabsf(i.a) > c->i_trip || fabsf(i.b) > c->i_trip || fabsf(i.c) > c->i_trip;
+    if (over) {
         trip(d, MC_FAULT_OVERCURRENT);
     } else if (vdc > c->vdc_max) {
         trip(d, MC_FAULT_OVERVOLTAGE);

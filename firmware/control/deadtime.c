@@ -7,6 +7,8 @@
 void mc_dtc_init(mc_dtc_t *s, const mc_dtc_cfg_t *cfg)
 {
     s->cfg = *cfg;
+    /* the one division, here instead of every period */
+    s->k = (cfg->t_pwm > 0.0f) ? cfg->t_dead / cfg->t_pwm : 0.0f;
 }
 
 static float dtc_sgn_smooth(float i, float band)
@@ -37,11 +39,10 @@ static float dtc_clamp01(float d)
 
 void mc_dtc_apply(const mc_dtc_t *s, mc_duty_t *duty, mc_abc_t i_abc)
 {
-    float k;
+    const float k = s->k;
     if (!s->cfg.enable || !(s->cfg.t_pwm > 0.0f)) {
         return;
     }
-    k = s->cfg.t_dead / s->cfg.t_pwm;
     duty->a = dtc_clamp01(duty->a + k * dtc_sgn_smooth(i_abc.a, s->cfg.i_band));
     duty->b = dtc_clamp01(duty->b + k * dtc_sgn_smooth(i_abc.b, s->cfg.i_band));
     duty->c = dtc_clamp01(duty->c + k * dtc_sgn_smooth(i_abc.c, s->cfg.i_band));

@@ -12,7 +12,10 @@ typedef struct {
     bool  enable;
 } mc_dtc_cfg_t;
 
-typedef struct { mc_dtc_cfg_t cfg; } mc_dtc_t;
+typedef struct {
+    mc_dtc_cfg_t cfg;
+    float k;        /* t_dead / t_pwm: the duty one dead time is worth (set by init) */
+} mc_dtc_t;
 
 void mc_dtc_init(mc_dtc_t *s, const mc_dtc_cfg_t *cfg);
 /* Adjusts duties in place (clamped to [0, 1]) from the phase currents expected during the
