@@ -13,21 +13,18 @@
 /* Beyond this the float grid of x is coarser than the reduction error anyway; fmodf keeps the
  * multiple k small enough for the exact split above. */
 #define BIG_ANGLE  100000.0f
-/* Largest float below MC_PI, and the upper end of the one-turn fast path (3 pi). */
-#define PI_INNER   3.14159250f
+/* Upper end of the one-turn path (3 pi). */
 #define THREE_PI   9.42477796076937972f
 
-float mc_wrap_pi(float x)
+float mc_wrap_pi_outside(float x)
 {
-    /* Fast paths for what the ISR hands in every period (PLL error, angle plus an increment, a
-     * sum of two wrapped angles): already inside, or at most one turn out. Two compares and one
-     * Cody-Waite step instead of the float->int->float round trip, which is a long dependency
-     * chain on any FPU. The one-turn step is the general formula below with k = +-1. Checked
-     * over every float in [-20, 20]: the same bits as the general path. (That is why the inner
-     * bound stops one ulp inside MC_PI: the general path sends +-3.1415925 to -MC_PI.) */
-    if (x > -PI_INNER && x < PI_INNER) {
-        return x;
-    }
+    /* Called by mc_wrap_pi (angle.h) for everything not already inside. Up to one turn out
+     * (an angle plus an increment, the sum of two wrapped angles): one Cody-Waite step instead
+     * of the float->int->float round trip, which is a long dependency chain on any FPU. That
+     * step is the general formula below with k = +-1. Checked over every float in [-20, 20]:
+     * the same bits as the general path alone. (That is why the inside test stops one ulp
+     * short of MC_PI: the general path sends +-3.1415925 to -MC_PI.) -MC_PI itself lies below
+     * -pi (float pi rounds up) and still wraps to just under +pi. */
     float r;
     if (x >= MC_PI && x < THREE_PI) {
         r = (x - TWO_PI_HI) - TWO_PI_LO;

@@ -32,12 +32,6 @@ void mc_lpf1_reset(mc_lpf1_t *s, float y0)
     s->y = y0;
 }
 
-float mc_lpf1_step(mc_lpf1_t *s, float x)
-{
-    s->y = s->b * (x + s->x1) + s->a * s->y;
-    s->x1 = x;
-    return s->y;
-}
 
 /* Common denominator of the three second-order sections:
  * s^2 + s w0/Q + w0^2 -> (1 + K/Q + K^2) + 2 (K^2 - 1) z^-1 + (1 - K/Q + K^2) z^-2 */

@@ -9,7 +9,13 @@ typedef struct { float a; float b; float x1; float y; } mc_lpf1_t;
 /* fc is limited to 0.45/ts; y0 is taken as the steady state (input and output). */
 void  mc_lpf1_init(mc_lpf1_t *s, float fc_hz, float ts, float y0);
 void  mc_lpf1_reset(mc_lpf1_t *s, float y0);
-float mc_lpf1_step(mc_lpf1_t *s, float x);
+/* Inline: two multiplies and an add, called every period by the PLLs. */
+static inline float mc_lpf1_step(mc_lpf1_t *s, float x)
+{
+    s->y = s->b * (x + s->x1) + s->a * s->y;
+    s->x1 = x;
+    return s->y;
+}
 
 typedef struct {
     float b0, b1, b2, a1, a2;   /* y = b0 x + b1 x1 + b2 x2 - a1 y1 - a2 y2 */
