@@ -154,6 +154,7 @@ void mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg)
     s->mtpa_valid = false;   /* new parameters: the cached MTPA point no longer holds */
     s->mtpa_torque = 0.0f;
     s->mtpa_i = (mc_dq_t){0.0f, 0.0f};
+    s->mtpa_lim = s->mtpa_i;
     s->mtpa_limited = false;
 }
 
@@ -181,20 +182,51 @@ static void tref_mtpa(mc_tref_t *s, const tref_ctx_t *c)
         s->mtpa_limited = true;
     }
     s->mtpa_i = i;
+    /* what the final step makes of it when no field weakening follows (rounding in the
+     * searches must not leave the circle) */
+    s->mtpa_lim = mc_limit_current_circle(i, i_max);
     s->mtpa_torque = c->torque;
     s->mtpa_valid = true;
 }
 
-mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc)
+/* Steps 2 and 3, for an MTPA point outside the voltage ellipse: move along the ellipse
+ * boundary, and onto the circle/ellipse intersection if the torque needs more than i_max. */
+static mc_dq_t tref_fw(mc_tref_t *s, tref_ctx_t *c, float torque)
 {
     const float i_max = s->cfg.i_max;
     const float t_tol = 1.0e-5f * (fabsf(torque) + 1.0f);
     const float i_tol = 1.0e-5f * (i_max * i_max + 1.0f);
-    tref_ctx_t c;
-    mc_dq_t i;
+    mc_dq_t i = s->mtpa_i;
+    const float iq_m = i.q;
     float x;
     bool beyond;
-    bool neg = (torque < 0.0f);
+
+    c->id_cap = i.d;
+    if (tref_fw_id(c, 0.0f) < -i_max) {
+        /* above the top speed the circle and ellipse do not meet: keep all current on d */
+        i.d = -i_max;
+        i.q = 0.0f;
+        s->i_limited = true;
+    } else {
+        x = tref_solve(c, TREF_FW_TORQUE, 0.0f, iq_m, t_tol, &beyond);
+        s->i_limited = s->i_limited || beyond;
+        i = tref_point(c, TREF_FW_TORQUE, x);
+        if (i.d * i.d + i.q * i.q > i_max * i_max) {
+            /* 3. circle/ellipse intersection (2.26) */
+            x = tref_solve(c, TREF_FW_CIRCLE, 0.0f, x, i_tol, &beyond);
+            i = tref_point(c, TREF_FW_CIRCLE, x);
+            s->i_limited = true;
+        }
+    }
+    /* rounding in the searches must not leave the circle */
+    return mc_limit_current_circle(i, i_max);
+}
+
+mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc)
+{
+    tref_ctx_t c;
+    mc_dq_t i;
+    const bool neg = (torque < 0.0f);
 
     c.s = s;
     c.id_cap = 0.0f;
@@ -204,7 +236,6 @@ mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc)
     }
     c.omega = fabsf(omega_e);
     c.u_max = (vdc > 0.0f) ? s->cfg.u_margin * vdc * MC_1_SQRT3 : 0.0f;
-    s->fw_active = false;
 
     /* 1. MTPA point inside the circle (2.21), (2.24). It depends on |T| and the parameters only,
      *    and |T| repeats between speed-loop updates (held for sc_decimation periods) or stays put
@@ -213,34 +244,12 @@ mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc)
     if (!s->mtpa_valid || s->mtpa_torque != c.torque) {
         tref_mtpa(s, &c);
     }
-    i = s->mtpa_i;
     s->i_limited = s->mtpa_limited;
 
-    /* 2. Field weakening (2.20), (2.26). */
-    if (tref_outside_ellipse(&c, i)) {
-        float iq_m = i.q;
-        s->fw_active = true;
-        c.id_cap = i.d;
-        if (tref_fw_id(&c, 0.0f) < -i_max) {
-            /* above the top speed the circle and ellipse do not meet: keep all current on d */
-            i.d = -i_max;
-            i.q = 0.0f;
-            s->i_limited = true;
-        } else {
-            x = tref_solve(&c, TREF_FW_TORQUE, 0.0f, iq_m, t_tol, &beyond);
-            s->i_limited = s->i_limited || beyond;
-            i = tref_point(&c, TREF_FW_TORQUE, x);
-            if (i.d * i.d + i.q * i.q > i_max * i_max) {
-                /* 3. circle/ellipse intersection (2.26) */
-                x = tref_solve(&c, TREF_FW_CIRCLE, 0.0f, x, i_tol, &beyond);
-                i = tref_point(&c, TREF_FW_CIRCLE, x);
-                s->i_limited = true;
-            }
-        }
-    }
-
-    /* rounding in the searches must not leave the circle */
-    i = mc_limit_current_circle(i, i_max);
+    /* 2. Field weakening (2.20), (2.26), if the MTPA point violates the ellipse; otherwise the
+     *    MTPA point after the final circle limit, which was kept with it. */
+    s->fw_active = tref_outside_ellipse(&c, s->mtpa_i);
+    i = s->fw_active ? tref_fw(s, &c, torque) : s->mtpa_lim;
     if (neg) {
         i.q = -i.q;
     }

@@ -23,6 +23,8 @@ typedef struct {
     bool    mtpa_valid;
     float   mtpa_torque;        /* |T| it was solved for [N m]                              */
     mc_dq_t mtpa_i;             /* MTPA point, iq >= 0 [A]                                  */
+    mc_dq_t mtpa_lim;           /* the same after the final circle limit (the result without
+                                   field weakening, before the sign of T) [A]              */
     bool    mtpa_limited;       /* |T| beyond the current circle                            */
 } mc_tref_t;
 
