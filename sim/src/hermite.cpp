@@ -10,19 +10,30 @@ namespace mcsim::detail {
 
 void HermiteStepper::eval(double px, double py, HPoint* o) const {
     const double c = o->c, s = o->s;
-    Vec2 idq;
-    Mat2 g;
-    model_.current_jacobian(Vec2(c * px + s * py, -s * px + c * py), &idq, &g);
+    const double pd = c * px + s * py, pq = -s * px + c * py;
+    double id, iq, gdd, gdq, gqq;
+    if (fast_) {
+        (*fast_)(pd, pq, &id, &iq, &gdd, &gdq, &gqq);
+    } else {
+        Vec2 i;
+        Mat2 g;
+        model_.current_jacobian(Vec2(pd, pq), &i, &g);
+        id = i.x();
+        iq = i.y();
+        gdd = g(0, 0);
+        gdq = g(0, 1);
+        gqq = g(1, 1);
+    }
     o->px = px;
     o->py = py;
-    o->ix = c * idq.x() - s * idq.y();
-    o->iy = s * idq.x() + c * idq.y();
+    o->ix = c * id - s * iq;
+    o->iy = s * id + c * iq;
     // R G R^T for the symmetric G, through the double angle.
     const double c2 = c * c - s * s, s2 = 2.0 * c * s;
-    const double sum = 0.5 * (g(0, 0) + g(1, 1)), dif = 0.5 * (g(0, 0) - g(1, 1)), b = g(0, 1);
-    o->gxx = sum + dif * c2 - b * s2;
-    o->gyy = sum - dif * c2 + b * s2;
-    o->gxy = dif * s2 + b * c2;
+    const double sum = 0.5 * (gdd + gqq), dif = 0.5 * (gdd - gqq);
+    o->gxx = sum + dif * c2 - gdq * s2;
+    o->gyy = sum - dif * c2 + gdq * s2;
+    o->gxy = dif * s2 + gdq * c2;
     o->te = 1.5 * p_ * (px * o->iy - py * o->ix);
 }
 

@@ -13,6 +13,7 @@
 
 #include "mcsim/machine.hpp"
 #include "mcsim/mechanics.hpp"
+#include "analytic_eval.hpp"
 
 namespace mcsim::detail {
 
@@ -33,7 +34,7 @@ struct HLedger {
 class HermiteStepper {
 public:
     HermiteStepper(const FluxModel& model, const Mechanics& mech, int pole_pairs, double rs)
-        : model_(model), mech_(mech), p_(pole_pairs), rs_(rs) {}
+        : model_(model), fast_(model.analytic_eval()), mech_(mech), p_(pole_pairs), rs_(rs) {}
 
     // Starts at the rotor-frame state (psi, i = current(psi), g = di_dpsi(psi)) with c, s the
     // cos, sin of p theta_m. ledger = false skips the energy and u_dq integrals.
@@ -52,6 +53,7 @@ private:
     void eval(double px, double py, HPoint* o) const;  // i, G, T_e at (psi_ab, o->c, o->s)
 
     const FluxModel& model_;
+    const AnalyticEval* fast_;  // inlined evaluation when the model offers it
     const Mechanics& mech_;
     double p_, rs_;
     bool ledger_ = true;

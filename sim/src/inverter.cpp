@@ -73,7 +73,7 @@ void PwmSequencer::sort_pending() {
 }
 
 void PwmSequencer::predecide(double t, const std::array<double, 3>& i_abc, double di_max) {
-    if (t_dead_ <= 0.0) return;  // without dead time every commanded edge changes the voltage
+    if (t_dead_ <= 0.0 || undecided_ == 0) return;  // no dead time: every edge changes the voltage
     // One pass to find each phase's pending events (at most a rise, a fall and a delayed turn-on
     // per phase), then the decisions phase by phase: rise first, the fall depends on it.
     int rise[3] = {-1, -1, -1}, fall[3] = {-1, -1, -1}, high[3] = {-1, -1, -1};
@@ -97,11 +97,13 @@ void PwmSequencer::predecide(double t, const std::array<double, 3>& i_abc, doubl
                 moved = true;
             }
             e.kind = SetHigh;
+            --undecided_;
             high[x] = rise[x];
         }
         if (fall[x] < 0) continue;
         Event& e = ev_[fall[x]];
         if (margin - di_max * (e.t - t) <= 0.0) continue;
+        --undecided_;
         if (i < 0.0) {
             e.t = std::min(e.t + t_dead_, t_end_);
             e.kind = SetLow;
@@ -127,6 +129,7 @@ void PwmSequencer::predecide(double t, const std::array<double, 3>& i_abc, doubl
 void PwmSequencer::begin(double t0, double Ts, const std::array<double, 3>& duty,
                          const InverterConfig& cfg) {
     n_ = next_ = 0;
+    undecided_ = 0;
     t_end_ = t0 + Ts;
     t_dead_ = cfg.t_dead > 0.0 ? cfg.t_dead : 0.0;
     i_band_ = cfg.i_zero_band;
@@ -142,6 +145,7 @@ void PwmSequencer::begin(double t0, double Ts, const std::array<double, 3>& duty
         if (d <= 0.0) continue;
         insert({t0 + 0.5 * (1.0 - d) * Ts, static_cast<uint8_t>(k), CmdRise});
         insert({t0 + 0.5 * (1.0 + d) * Ts, static_cast<uint8_t>(k), CmdFall});
+        undecided_ += 2;
     }
 }
 
@@ -159,12 +163,14 @@ void PwmSequencer::apply(double t, const std::array<double, 3>& i_abc) {
         const double i = i_abc[x];
         switch (e.kind) {
             case CmdRise:
+                --undecided_;
                 // Low side off now, high side on after t_dead. In the gap the diodes decide:
                 // i < 0 flows through the upper diode, so the phase is already high.
                 if (i > i_band_ && t_dead_ > 0.0) insert({t + t_dead_, e.phase, SetHigh});
                 else level_[x] = +1;
                 break;
             case CmdFall:
+                --undecided_;
                 // High side off now, low side on after t_dead; i > 0 takes the lower diode at once.
                 if (i < -i_band_ && t_dead_ > 0.0) {
                     insert({std::min(t + t_dead_, t_end_), e.phase, SetLow});

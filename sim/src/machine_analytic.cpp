@@ -6,6 +6,8 @@
 // Both currents are the gradient of one scalar (the energy below) so the Jacobian is symmetric.
 #include "mcsim/machine.hpp"
 
+#include "analytic_eval.hpp"
+
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -45,6 +47,22 @@ public:
         int_exp_ = as_int(p.S, is_) && as_int(p.T, it_) && as_int(p.U, iu_) && as_int(p.V, iv_);
         cd_ = p.a_dq / (p.V + 2);
         cq_ = p.a_dq / (p.U + 2);
+        ev_.a_d0 = p.a_d0;
+        ev_.a_dd = p.a_dd;
+        ev_.a_q0 = p.a_q0;
+        ev_.a_qq = p.a_qq;
+        ev_.a_dq = p.a_dq;
+        ev_.i_f = p.i_f;
+        ev_.cd = cd_;
+        ev_.cq = cq_;
+        ev_.s1 = p.S + 1;
+        ev_.t1 = p.T + 1;
+        ev_.u1 = p.U + 1;
+        ev_.v1 = p.V + 1;
+        ev_.s = is_;
+        ev_.t = it_;
+        ev_.u = iu_;
+        ev_.v = iv_;
         psi0_ = Vec2(solve_psi_d0(), 0.0);
         w0_ = raw_energy(psi0_);
         l0_ = di_dpsi(psi0_).inverse();
@@ -87,16 +105,12 @@ public:
             FluxModel::current_jacobian(psi, i, g);
             return;
         }
-        // current() and di_dpsi() with the powers shared; same expressions term by term.
-        const double d = psi.x(), q = psi.y();
-        const double ad = std::abs(d), aq = std::abs(q);
-        const double du = ipow(ad, iu_), qv = ipow(aq, iv_);
-        const double ds = p_.a_dd * ipow(ad, is_), qt = p_.a_qq * ipow(aq, it_);
-        const double xd = cd_ * du * qv * aq * aq, xq = cq_ * du * ad * ad * qv;
-        *i = Vec2((p_.a_d0 + ds + xd) * d - p_.i_f, (p_.a_q0 + qt + xq) * q);
-        const double jdq = p_.a_dq * du * d * qv * q;
-        *g << p_.a_d0 + (p_.S + 1) * ds + (p_.U + 1) * xd, jdq, jdq, p_.a_q0 + (p_.T + 1) * qt + (p_.V + 1) * xq;
+        double id, iq, gdd, gdq, gqq;
+        ev_(psi.x(), psi.y(), &id, &iq, &gdd, &gdq, &gqq);
+        *i = Vec2(id, iq);
+        *g << gdd, gdq, gdq, gqq;
     }
+    const detail::AnalyticEval* analytic_eval() const override { return int_exp_ ? &ev_ : nullptr; }
 
     // W(psi) - W(psi0), with W the closed-form antiderivative (raw_energy); dW/dpsi = i exactly.
     double energy(const Vec2& psi) const override { return raw_energy(psi) - w0_; }
@@ -131,21 +145,10 @@ private:
         return x;
     }
 
-    static double ipow(double a, int n) {
-        switch (n) {  // the fitted exponents: 0..3 (a predictable branch, no loop)
-            case 0: return 1.0;
-            case 1: return a;
-            case 2: return a * a;
-            case 3: return a * a * a;
-            default: {
-                double r = 1.0;
-                for (; n > 0; --n) r *= a;
-                return r;
-            }
-        }
-    }
+    static double ipow(double a, int n) { return detail::AnalyticEval::ipow(a, n); }
 
     SaturationParams p_;
+    detail::AnalyticEval ev_;
     bool int_exp_ = false;
     int is_ = 0, it_ = 0, iu_ = 0, iv_ = 0;
     double cd_ = 0, cq_ = 0;

@@ -405,17 +405,24 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
             const double di_max = inv.t_dead > 0.0 ? m.current_rate_bound() : 0.0;
             m.seq.predecide(t0, currents(), di_max);
             double tau = 0.0, te;
+            const bool drop = inv.v_device != 0.0;
+            const std::array<double, 3> none{{0.0, 0.0, 0.0}};  // what the decided edges need
             while (m.seq.next_time(&te)) {
                 const double tau_e = te - t0;
                 if (tau_e > tau) {
-                    advance(tau, tau_e, m.switched_voltages(m.seq.levels(), currents()), m.steps_for(tau_e - tau, h_max));
+                    advance(tau, tau_e, m.switched_voltages(m.seq.levels(), drop ? currents() : none),
+                            m.steps_for(tau_e - tau, h_max));
                     tau = tau_e;
+                }
+                if (m.seq.all_decided()) {
+                    m.seq.apply(te, none);
+                    continue;
                 }
                 const auto ia = currents();
                 m.seq.apply(te, ia);
                 m.seq.predecide(te, ia, di_max);
             }
-            advance(tau, Ts, m.switched_voltages(m.seq.levels(), currents()), m.steps_for(Ts - tau, h_max));
+            advance(tau, Ts, m.switched_voltages(m.seq.levels(), drop ? currents() : none), m.steps_for(Ts - tau, h_max));
         }
         if (!rk4) {
             m.hermite_end();

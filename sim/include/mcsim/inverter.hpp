@@ -53,6 +53,8 @@ public:
     // that only starts a dead time (no voltage change at t_k) then no longer splits the
     // integration; the outcome is the same as deciding at t_k.
     void predecide(double t, const std::array<double, 3>& i_abc, double di_max);
+    // No commanded edge is left to decide: apply() and predecide() then need no currents.
+    bool all_decided() const { return undecided_ == 0; }
     // +1 high side (or upper diode) conducting, -1 low side (or lower diode).
     const std::array<int, 3>& levels() const { return level_; }
 
@@ -69,6 +71,7 @@ private:
 
     Event ev_[12];
     int n_ = 0, next_ = 0;
+    int undecided_ = 0;  // pending CmdRise/CmdFall events
     double t_end_ = 0, t_dead_ = 0, i_band_ = 0;
     std::array<int, 3> level_{{-1, -1, -1}};
 };

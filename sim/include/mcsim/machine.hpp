@@ -7,6 +7,9 @@
 #include <string>
 
 namespace mcsim {
+namespace detail {
+struct AnalyticEval;
+}
 
 using Vec2 = Eigen::Vector2d;
 using Mat2 = Eigen::Matrix2d;
@@ -49,6 +52,9 @@ public:
         *i = current(psi);
         *g = di_dpsi(psi);
     }
+    // The analytic model with integer exponents exposes its evaluator so the plant can inline it
+    // (sim/src/analytic_eval.hpp); nullptr for every other model.
+    virtual const detail::AnalyticEval* analytic_eval() const { return nullptr; }
     virtual Vec2 flux(const Vec2& i) const;                      // psi_dq(i_dq) by Newton [Wb]
     // Differential inductance matrix L = (di/dpsi)^-1 at current i [H].
     Mat2 l_diff(const Vec2& i) const { return di_dpsi(flux(i)).inverse(); }
