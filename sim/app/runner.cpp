@@ -401,9 +401,10 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         cmd.theta_init = static_cast<float>(wrap_pi(theta + theta_init_err));
         mc_drive_command(drive.get(), &cmd);
 
-        // The ISR / plant split is timed on every 16th period: a clock read costs about a tenth
-        // of a simulated period, so timing all of them would slow down what it measures.
-        const bool time_it = (k & 15) == 0;
+        // The ISR / plant split is timed on every 17th period: a clock read costs about a tenth
+        // of a simulated period, so timing all of them would slow down what it measures; 17 is
+        // prime to the firmware's slow-loop dividers, so the sample sees their share.
+        const bool time_it = k % 17 == 0;
         timed += time_it;
         std::chrono::steady_clock::time_point i0;
         if (time_it) i0 = std::chrono::steady_clock::now();
