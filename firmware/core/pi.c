@@ -38,12 +38,17 @@ float mc_pi_step_lim(mc_pi_t *s, float err, float ff, float lo, float hi)
         integ = (integ > room) ? integ : room;
         integ = (integ < s->integ) ? integ : s->integ;
     }
-    /* Clamp: the integrator alone never exceeds what the output may reach (covers a limit
-     * that shrinks while the integrator is charged). */
-    if (integ > hi) {
-        integ = hi;
-    } else if (integ < lo) {
-        integ = lo;
+    /* Clamp against a limit that shrank while the integrator was charged: the integrator gives
+     * up its share of the excess over the limit, counted with the feed-forward (the output is
+     * ff + p + integ, so a clamp to [lo, hi] alone would let it hold up to |ff| of excess and
+     * delay the recovery by that much), but the feed-forward never pushes it across zero: what
+     * it holds below zero is its own estimate of the disturbance, not windup. */
+    if (integ > 0.0f && ff + integ > hi) {
+        const float room = hi - ff;
+        integ = (room > 0.0f) ? room : 0.0f;
+    } else if (integ < 0.0f && ff + integ < lo) {
+        const float room = lo - ff;
+        integ = (room < 0.0f) ? room : 0.0f;
     }
     s->integ = integ;
     u = ff + p + integ;

@@ -84,12 +84,54 @@ static void test_limits_per_call_and_clamp(void **st)
     assert_near(u, 0.0, 0.0);
 }
 
+/* With a feed-forward: a limit that shrinks while the integrator is charged leaves no excess
+ * behind (ff + I lands on the limit), so the output leaves the limit on the first step of a
+ * reversed error; and the feed-forward alone never drives the integrator across zero. */
+static void test_shrinking_limit_with_feedforward(void **st)
+{
+    (void)st;
+    mc_pi_t pi;
+    mc_pi_init(&pi, &CFG);
+    mc_pi_reset(&pi, 3.9f);
+    float u = mc_pi_step_lim(&pi, 0.0f, 6.0f, -8.0f, 8.0f);  /* ff + I = 9.9 > 8 */
+    assert_near(u, 8.0, 0.0);
+    assert_near(pi.integ, 2.0, 1e-6);
+    /* err = -0.1: P = -0.2, I = 2 - 0.01: out of the limit at once (7.79) */
+    u = mc_pi_step_lim(&pi, -0.1f, 6.0f, -8.0f, 8.0f);
+    assert_near(u, 7.79, 1e-5);
+    assert_false(pi.saturated);
+    /* a feed-forward beyond the limit: the output sits on the limit, the integrator keeps its
+     * sign (it is only emptied, down to 0) */
+    mc_pi_reset(&pi, 1.5f);
+    u = mc_pi_step_lim(&pi, 0.0f, 12.0f, -10.0f, 10.0f);
+    assert_near(u, 10.0, 0.0);
+    assert_near(pi.integ, 0.0, 0.0);
+    mc_pi_reset(&pi, -1.5f);
+    u = mc_pi_step_lim(&pi, 0.0f, 12.0f, -10.0f, 10.0f);
+    assert_near(u, 10.0, 0.0);
+    assert_near(pi.integ, -1.5, 0.0);
+    /* negative side, mirrored */
+    mc_pi_reset(&pi, -3.9f);
+    u = mc_pi_step_lim(&pi, 0.0f, -6.0f, -8.0f, 8.0f);
+    assert_near(u, -8.0, 0.0);
+    assert_near(pi.integ, -2.0, 1e-6);
+    /* a large negative feed-forward: the integrator may exceed hi itself so that the output
+     * can still reach the upper limit (the old clamp to [lo, hi] stopped it at hi) */
+    mc_pi_reset(&pi, 0.0f);
+    for (int k = 0; k < 4000; ++k) {
+        u = mc_pi_step_lim(&pi, 0.5f, -5.0f, -10.0f, 10.0f);
+    }
+    assert_near(u, 10.0, 1e-5);
+    assert_true(pi.integ > 10.0f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_step_response_by_hand),
         cmocka_unit_test(test_windup_recovery),
         cmocka_unit_test(test_limits_per_call_and_clamp),
+        cmocka_unit_test(test_shrinking_limit_with_feedforward),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
