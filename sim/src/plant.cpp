@@ -226,6 +226,61 @@ struct Plant::Impl {
         for (int k = 0; k < n; ++k) hs.interval(tau0 + k * h, k + 1 == n ? tau1 : tau0 + (k + 1) * h, u.x(), u.y());
     }
 
+    // Outputs enabled: the period's voltage intervals (switching edges with dead time, or the
+    // averaged voltages) integrated by Hermite (or RK4 on request) into x's ledger fields.
+    void enabled_period(St& x, double t0, double Ts, const std::array<double, 3>& duty) {
+        const InverterConfig& inv = cfg.inverter;
+        // Hermite by default; classical RK4 on request (the independent reference of the tests).
+        const bool rk4 = cfg.integrator == PlantConfig::Integrator::Rk4;
+        if (rk4) {
+            g_dq = model->di_dpsi(psi);
+            g_valid = false;
+        } else {
+            hermite_begin();
+        }
+        auto currents = [&] { return rk4 ? phase_currents() : hs.phase_currents(); };
+        auto advance = [&](double a, double b, const std::array<double, 3>& v, int n) {
+            if (rk4) interval(x, a, b, v, n);
+            else hermite_intervals(a, b, v, n);
+        };
+        if (inv.mode == InverterConfig::Mode::Averaged) {
+            advance(0.0, Ts, averaged_phase_voltages(duty, currents(), inv, Ts), cfg.substeps);
+        } else {
+            const double h_max = Ts / cfg.substeps;
+            seq.begin(t0, Ts, duty, inv);
+            const double di_max = inv.t_dead > 0.0 ? current_rate_bound() : 0.0;
+            seq.predecide(t0, currents(), di_max);
+            double tau = 0.0, te;
+            const bool drop = inv.v_device != 0.0;
+            const std::array<double, 3> none{{0.0, 0.0, 0.0}};  // what the decided edges need
+            while (seq.next_time(&te)) {
+                const double tau_e = te - t0;
+                if (tau_e > tau) {
+                    advance(tau, tau_e, switched_voltages(seq.levels(), drop ? currents() : none),
+                            steps_for(tau_e - tau, h_max));
+                    tau = tau_e;
+                }
+                if (seq.all_decided()) {
+                    seq.apply(te, none);
+                    continue;
+                }
+                const auto ia = currents();
+                seq.apply(te, ia);
+                seq.predecide(te, ia, di_max);
+            }
+            advance(tau, Ts, switched_voltages(seq.levels(), drop ? currents() : none), steps_for(Ts - tau, h_max));
+        }
+        if (!rk4) {
+            hermite_end();
+            const detail::HLedger& led = hs.ledger();
+            x.ein = led.ein;
+            x.cu = led.cu;
+            x.mech = led.mech;
+            x.ud = led.ud;
+            x.uq = led.uq;
+        }
+    }
+
     void go_floating(St& x) {
         // Snap the residual current (below the zero band) to exactly 0: the energy it held goes
         // back to the DC link through the diodes, booked as (negative) electrical input.
@@ -378,61 +433,12 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
     }
     if (outputs_enabled) m.latched[0] = m.latched[1] = m.latched[2] = false;
 
-    const InverterConfig& inv = m.cfg.inverter;
     m.cs_end_valid = false;
     if (!outputs_enabled) {
         m.g_valid = false;
         m.disabled_period(x, Ts);
     } else {
-        // Hermite by default; classical RK4 on request (the independent reference of the tests).
-        const bool rk4 = m.cfg.integrator == PlantConfig::Integrator::Rk4;
-        if (rk4) {
-            m.g_dq = m.model->di_dpsi(m.psi);
-            m.g_valid = false;
-        } else {
-            m.hermite_begin();
-        }
-        auto currents = [&] { return rk4 ? m.phase_currents() : m.hs.phase_currents(); };
-        auto advance = [&](double a, double b, const std::array<double, 3>& v, int n) {
-            if (rk4) m.interval(x, a, b, v, n);
-            else m.hermite_intervals(a, b, v, n);
-        };
-        if (inv.mode == InverterConfig::Mode::Averaged) {
-            advance(0.0, Ts, averaged_phase_voltages(duty, currents(), inv, Ts), m.cfg.substeps);
-        } else {
-            const double h_max = Ts / m.cfg.substeps;
-            m.seq.begin(t0, Ts, duty, inv);
-            const double di_max = inv.t_dead > 0.0 ? m.current_rate_bound() : 0.0;
-            m.seq.predecide(t0, currents(), di_max);
-            double tau = 0.0, te;
-            const bool drop = inv.v_device != 0.0;
-            const std::array<double, 3> none{{0.0, 0.0, 0.0}};  // what the decided edges need
-            while (m.seq.next_time(&te)) {
-                const double tau_e = te - t0;
-                if (tau_e > tau) {
-                    advance(tau, tau_e, m.switched_voltages(m.seq.levels(), drop ? currents() : none),
-                            m.steps_for(tau_e - tau, h_max));
-                    tau = tau_e;
-                }
-                if (m.seq.all_decided()) {
-                    m.seq.apply(te, none);
-                    continue;
-                }
-                const auto ia = currents();
-                m.seq.apply(te, ia);
-                m.seq.predecide(te, ia, di_max);
-            }
-            advance(tau, Ts, m.switched_voltages(m.seq.levels(), drop ? currents() : none), m.steps_for(Ts - tau, h_max));
-        }
-        if (!rk4) {
-            m.hermite_end();
-            const detail::HLedger& led = m.hs.ledger();
-            x.ein = led.ein;
-            x.cu = led.cu;
-            x.mech = led.mech;
-            x.ud = led.ud;
-            x.uq = led.uq;
-        }
+        m.enabled_period(x, t0, Ts, duty);
     }
 
     m.t = t0 + Ts;
