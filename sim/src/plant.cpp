@@ -191,11 +191,9 @@ struct Plant::Impl {
 
     // Enabled periods (hermite.hpp): start from the rotor-frame state, end by re-evaluating the
     // model at the final flux so that i = current(psi) holds exactly between periods.
-    void hermite_begin() {
-        double c, s;
-        sincos_at(th, &c, &s);
+    void hermite_begin() {  // th is the period's base angle here: its cos, sin are c0, s0
         if (!g_valid) model->current_jacobian(psi, &i, &g_dq);
-        hs.begin(psi, i, g_dq, th, w, c, s, cfg.energy_ledger);
+        hs.begin(psi, i, g_dq, th, w, c0, s0, cfg.energy_ledger);
     }
 
     void hermite_end() {
