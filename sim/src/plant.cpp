@@ -180,13 +180,16 @@ struct Plant::Impl {
 
     // Bound on |di_x/dt| over this period, for PwmSequencer::predecide. From (4.1) in the
     // stationary frame: di_ab/dt = R(theta) (G (u - Rs i - w_e J psi) + w_e J i), G = di/dpsi,
-    // |u| <= 2/3 vdc; x2 margin for the change of G (saturation) and of the state in the period.
+    // |u_ab| <= 2/3 (vdc + 2 v_device) (phase voltages within the rails and one device drop
+    // beyond them), |di_x/dt| <= |di_ab/dt|, |G|_2 <= |G|_1; x2 margin for the change of G
+    // (saturation) and of the state in the period.
     double current_rate_bound() const {
         const Mat2& g = g_dq;  // exact at the period start (hermite_begin)
         const double gn = std::max(std::fabs(g(0, 0)) + std::fabs(g(0, 1)), std::fabs(g(1, 0)) + std::fabs(g(1, 1)));
         const double we = std::fabs(p * w);
         const double in = i.norm();
-        return 2.0 * (gn * (cfg.inverter.vdc + rs * in + we * psi.norm()) + we * in);
+        const double u_max = (2.0 / 3.0) * (cfg.inverter.vdc + 2.0 * std::fabs(cfg.inverter.v_device));
+        return 2.0 * (gn * (u_max + rs * in + we * psi.norm()) + we * in);
     }
 
     // Enabled periods (hermite.hpp): start from the rotor-frame state, end by re-evaluating the
@@ -247,7 +250,8 @@ struct Plant::Impl {
             const double h_max = Ts / cfg.substeps;
             seq.begin(t0, Ts, duty, inv);
             const double di_max = inv.t_dead > 0.0 ? current_rate_bound() : 0.0;
-            seq.predecide(t0, currents(), di_max);
+            const bool pre = cfg.predecide_edges;
+            if (pre) seq.predecide(t0, currents(), di_max);
             double tau = 0.0, te;
             const bool drop = inv.v_device != 0.0;
             const std::array<double, 3> none{{0.0, 0.0, 0.0}};  // what the decided edges need
@@ -264,7 +268,7 @@ struct Plant::Impl {
                 }
                 const auto ia = currents();
                 seq.apply(te, ia);
-                seq.predecide(te, ia, di_max);
+                if (pre) seq.predecide(te, ia, di_max);
             }
             advance(tau, Ts, switched_voltages(seq.levels(), drop ? currents() : none), steps_for(Ts - tau, h_max));
         }

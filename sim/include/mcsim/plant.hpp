@@ -50,6 +50,10 @@ struct PlantConfig {
     // or classical RK4 on the rotor-frame state (four per step; kept as an independent reference
     // for the tests, always with the ledger). Disabled periods always use RK4.
     enum class Integrator { Hermite, Rk4 } integrator = Integrator::Hermite;
+    // Decide dead-time edges ahead when the current cannot reach the zero band before them
+    // (fewer integration splits, same outcome); false decides every edge at its instant (the
+    // tests' reference for that claim).
+    bool predecide_edges = true;
 };
 
 // Energy ledger since construction [J]; all three-phase (1.5 factor applied).
