@@ -67,11 +67,7 @@ std::vector<Vec2> make_voltages(int n, double Ts) {
     return u;
 }
 
-Traj run(InverterConfig::Mode mode, int substeps, const std::vector<Vec2>& u, double Ts,
-         PlantConfig::Integrator integ = PlantConfig::Integrator::Hermite, bool ledger = true) {
-    PlantConfig c = high_speed_config(mode, substeps);
-    c.integrator = integ;
-    c.energy_ledger = ledger;
+Traj run_config(const PlantConfig& c, const std::vector<Vec2>& u, double Ts) {
     Plant p(c, make_analytic_model(c.machine.sat));
     Traj t;
     for (const auto& v : u) {
@@ -79,6 +75,14 @@ Traj run(InverterConfig::Mode mode, int substeps, const std::vector<Vec2>& u, do
         t.i.push_back(p.i_dq());
     }
     return t;
+}
+
+Traj run(InverterConfig::Mode mode, int substeps, const std::vector<Vec2>& u, double Ts,
+         PlantConfig::Integrator integ = PlantConfig::Integrator::Hermite, bool ledger = true) {
+    PlantConfig c = high_speed_config(mode, substeps);
+    c.integrator = integ;
+    c.energy_ledger = ledger;
+    return run_config(c, u, Ts);
 }
 
 double max_diff(const Traj& a, const Traj& b) {
@@ -148,13 +152,7 @@ TEST(PlantDynamics, PredecidedEdgesMatchEdgeByEdgeDecisions) {
         // No device drop: it is held over each interval at the current of the interval start, so
         // extra splits would change it (1.6e-4 A here with 0.7 V; docs/plant.md).
         c.inverter.v_device = 0.0;
-        Plant p(c, make_analytic_model(c.machine.sat));
-        Traj t;
-        for (const auto& v : u) {
-            p.step_period(Ts, duties_for(v, 600.0), true);
-            t.i.push_back(p.i_dq());
-        }
-        return t;
+        return run_config(c, u, Ts);
     };
     const double d = max_diff(run_pre(true), run_pre(false));
     std::printf("predecided vs edge-by-edge dead-time decisions: max |i_dq diff| %.2e A\n", d);
