@@ -4,83 +4,38 @@ import contextlib
 import io
 import json
 import math
-import stat
-import sys
 import tomllib
 
 import pytest
 
+from fakes import SUN_PRESET_TOML, write_fake_mcsim
 from mctools import cli
 from mctools.fit_adq import (COMMENT_MARK, TARGETS, compensated_a_q0, candidate_model, golden_section,
                              preset_comment, rewrite_preset_text, rounded_candidate, small_signal)
 from mctools.machine import SaturationModel
 
 # The preset as machines.md gives it (inline so the test does not depend on presets/).
-PRESET = """\
-# a preset for the test
-name = "sun2016-ipm-5kw"
-pole_pairs = 5                 # [-]
-rs_ohm = 0.400
-psi_pm_wb = 0.34305
-ld_h = 10.5e-3
-lq_h = 12.9e-3
-inertia_kgm2 = 0.013
-friction_nms = 1.3e-3
-i_rated_peak_a = 13.29
-torque_rated_nm = 29.7
-vdc_nominal_v = 300.0
-f_sample_hz = 10000.0
-
-# a_dq = 1.0 in a comment must not be touched
-[saturation]
-S = 2.0
-T = 2.0
-U = 1.0
-V = 0.0
-a_d0 = 86.58
-a_dd = 24.52
-a_q0 = 58.12
-a_qq = 774.0
-a_dq = 1441.3
-i_f = 30.69
-"""
+PRESET = "# a preset for the test\n" + SUN_PRESET_TOML.replace(
+    "\n[saturation]\n", "\n# a_dq = 1.0 in a comment must not be touched\n[saturation]\n")
 
 # Stands in for mcsim: the four figures grow linearly with the candidate preset's a_dq (a
 # synthetic monotone response) and equal the thesis' magnitudes at a_dq = TRUE_ADQ. The slopes
 # come in through the environment so one test can make the figures inconsistent.
-FAKE_MCSIM = r'''#!{python}
-import json, os, pathlib, sys, tomllib
-a = sys.argv[1:]
-if not a or a[0] != "run":
-    sys.exit(2)
-scenario = pathlib.Path(a[1]).stem
-sets, out, i = {{}}, None, 2
-while i < len(a):
-    if a[i] == "--set":
-        k, v = a[i + 1].split("=", 1)
-        sets[k] = v
-        i += 2
-    elif a[i] == "--out":
-        out = pathlib.Path(a[i + 1])
-        i += 2
-    elif a[i] == "--quiet":
-        i += 1
-    else:
-        sys.exit(2)
+FAKE_BODY = r'''
 assert json.loads(sets["estimator.model"]) == "const"
 preset = pathlib.Path(json.loads(sets["machine.preset"]))  # a TOML string with its quotes
 sat = tomllib.loads(preset.read_text())["saturation"]
 x = sat["a_dq"] / float(os.environ.get("FAKE_TRUE_ADQ", "500"))
 k = [float(s) for s in os.environ.get("FAKE_SLOPES", "5,10,8.5,1.5").split(",")]
-w = {{"fig6_13": {{"standstill": k[0] * x}},
-     "fig6_14": {{"standstill": k[1] * x, "plus_50rpm": k[2] * x}},
-     "fig6_15": {{"plus_100rpm": k[3] * x}}}}[scenario]
+w = {"fig6_13": {"standstill": k[0] * x},
+     "fig6_14": {"standstill": k[1] * x, "plus_50rpm": k[2] * x},
+     "fig6_15": {"plus_100rpm": k[3] * x}}[scenario]
 out.mkdir(parents=True, exist_ok=True)
 (out / "metrics.json").write_text(json.dumps(
-    {{"windows": {{n: {{"angle_err_mean_deg": v}} for n, v in w.items()}}}}))
+    {"windows": {n: {"angle_err_mean_deg": v} for n, v in w.items()}}))
 with open(out.parent / "calls.txt", "a") as f:
-    f.write(json.dumps({{"scenario": scenario, "a_dq": sat["a_dq"], "a_q0": sat["a_q0"],
-                        "a_qq": sat["a_qq"]}}) + "\n")
+    f.write(json.dumps({"scenario": scenario, "a_dq": sat["a_dq"], "a_q0": sat["a_q0"],
+                        "a_qq": sat["a_qq"]}) + "\n")
 '''
 
 
@@ -91,8 +46,7 @@ def base_model():
 @pytest.fixture
 def setup(tmp_path):
     fake = tmp_path / "fake_mcsim.py"
-    fake.write_text(FAKE_MCSIM.format(python=sys.executable))
-    fake.chmod(fake.stat().st_mode | stat.S_IXUSR)
+    write_fake_mcsim(fake, FAKE_BODY)
     scen = tmp_path / "scen"
     scen.mkdir()
     for s in ("fig6_13", "fig6_14", "fig6_15"):

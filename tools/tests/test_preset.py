@@ -4,43 +4,18 @@ from pathlib import Path
 import pytest
 
 from mctools import cli
+from fakes import SUN_PRESET_TOML
 from mctools.preset import PresetError, derived_figures, find_preset, load_preset
 
 REPO_PRESETS = Path(__file__).resolve().parents[2] / "presets"
 
-SUN_TOML = """\
-name = "sun2016-ipm-5kw"
-pole_pairs = 5
-rs_ohm = 0.400
-psi_pm_wb = 0.34305
-ld_h = 10.5e-3
-lq_h = 12.9e-3
-inertia_kgm2 = 0.013
-friction_nms = 1.3e-3
-i_rated_peak_a = 13.29
-torque_rated_nm = 29.7
-vdc_nominal_v = 300.0
-f_sample_hz = 10000.0
-
-[saturation]
-S = 2.0
-T = 2.0
-U = 1.0
-V = 0.0
-a_d0 = 86.58
-a_dd = 24.52
-a_q0 = 58.12
-a_qq = 774.0
-a_dq = 1441.3
-i_f = 30.69
-"""
 
 
 @pytest.fixture
 def preset_dir(tmp_path):
     d = tmp_path / "presets"
     d.mkdir()
-    (d / "sun-test.toml").write_text(SUN_TOML)
+    (d / "sun-test.toml").write_text(SUN_PRESET_TOML)
     return d
 
 
@@ -86,7 +61,7 @@ def test_malformed_preset_exit_2(tmp_path, capsys):
 
 
 def test_preset_without_saturation_uses_linear_model(tmp_path):
-    text = SUN_TOML.split("[saturation]")[0]
+    text = SUN_PRESET_TOML.split("[saturation]")[0]
     (tmp_path / "lin.toml").write_text(text)
     figs = derived_figures(load_preset(str(tmp_path / "lin.toml")))
     assert figs["ld_model_h"] == pytest.approx(10.5e-3, rel=1e-9)

@@ -3,39 +3,20 @@
 import contextlib
 import io
 import json
-import stat
 import sys
 import textwrap
 
 import pytest
 
+from fakes import write_fake_mcsim
 from mctools import cli
 from mctools.report import fmt_number, fmt_value, parse_bound, run_dir_names
 
 DPI = "30"  # the plots only have to exist
 
-FAKE_MCSIM = r'''#!{python}
+FAKE_BODY = r'''
 # Stands in for mcsim: metrics depend on the model and on estimator.rs_scale; the scenario
 # "broken" fails like a simulator crash.
-import json, pathlib, sys, time
-a = sys.argv[1:]
-if not a or a[0] != "run":
-    sys.exit(2)
-scenario = pathlib.Path(a[1]).stem
-sets, out, i = {{}}, None, 2
-while i < len(a):
-    if a[i] == "--set":
-        k, v = a[i + 1].split("=", 1)
-        sets[k] = v
-        i += 2
-    elif a[i] == "--out":
-        out = pathlib.Path(a[i + 1])
-        i += 2
-    elif a[i] == "--quiet":
-        i += 1
-    else:
-        print("bad arg", a[i], file=sys.stderr)
-        sys.exit(2)
 out.mkdir(parents=True, exist_ok=True)
 (out / "argv.json").write_text(json.dumps(a))
 if scenario == "broken":
@@ -46,17 +27,17 @@ scale = float(sets.get("estimator.rs_scale", "1"))
 # Finish out of submission order when run in parallel.
 time.sleep(0.15 if scenario == "alpha" and model == "const" else 0.0)
 err = (1.234 if model == "fluxmap" else 7.891) * scale
-metrics = {{
+metrics = {
     "angle_err_steady_max_deg": err,
     "angle_err_max_deg": 3 * err,
     "settling_time_s": 0.0456 if model == "fluxmap" else None,
     "newton_iter_mean": 2.5,
     "speed_final_rpm": 1523.4,
     "fault_count": 0,
-    "windows": {{"standstill": {{"angle_err_mean_deg": -err / 2}}}},
-}}
+    "windows": {"standstill": {"angle_err_mean_deg": -err / 2}},
+}
 (out / "metrics.json").write_text(json.dumps(metrics))
-rows = ["t_s,angle_err_deg"] + [f"{{k * 1e-3}},{{err * (k % 3 - 1)}}" for k in range(8)]
+rows = ["t_s,angle_err_deg"] + [f"{k * 1e-3},{err * (k % 3 - 1)}" for k in range(8)]
 (out / "trace.csv").write_text("\n".join(rows) + "\n")
 '''
 
@@ -111,8 +92,7 @@ thesis = "n/a"
 
 def make_setup(root, expected=EXPECTED):
     fake = root / "fake_mcsim.py"
-    fake.write_text(FAKE_MCSIM.format(python=sys.executable))
-    fake.chmod(fake.stat().st_mode | stat.S_IXUSR)
+    write_fake_mcsim(fake, FAKE_BODY)
     scen = root / "scen"
     scen.mkdir(exist_ok=True)
     for name in ("alpha", "beta", "broken"):

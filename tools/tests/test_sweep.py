@@ -4,34 +4,17 @@ import contextlib
 import io
 import json
 import math
-import stat
 import sys
 
 import pytest
 
+from fakes import write_fake_mcsim
 from mctools import cli
 from mctools.sweep import angle_list, distribution, step1_peak_a, trial_angles
 
-FAKE_MCSIM = r'''#!{python}
+FAKE_BODY = r'''
 # Stands in for mcsim: the startup metrics are simple functions of the --set values.
-import json, math, pathlib, sys, tomllib
-a = sys.argv[1:]
-if not a or a[0] != "run":
-    sys.exit(2)
-scenario = pathlib.Path(a[1]).stem
-sets, out, i = {{}}, None, 2
-while i < len(a):
-    if a[i] == "--set":
-        k, v = a[i + 1].split("=", 1)
-        sets[k] = tomllib.loads("x = " + v)["x"]  # TOML, as mcsim reads it
-        i += 2
-    elif a[i] == "--out":
-        out = pathlib.Path(a[i + 1])
-        i += 2
-    elif a[i] == "--quiet":
-        i += 1
-    else:
-        sys.exit(2)
+sets = {k: tomllib.loads("x = " + v)["x"] for k, v in sets.items()}  # TOML, as mcsim reads it
 out.mkdir(parents=True, exist_ok=True)
 (out / "argv.json").write_text(json.dumps(a))
 th = sets.get("mechanics.theta0_deg", 0.0)
@@ -50,7 +33,7 @@ if method == "generalized" and noise > 0.1 and seed % 10 == 0:
     pol = False
 if method == "dvi" and noise > 0.2 and seed % 4 == 0:
     pol = False
-metrics = {{
+metrics = {
     "current_peak_a": 99.0, "current_limit_a": 20.0,
     "step12_time_s": 0.0106, "step1_err_deg": e1,
     "step12_err_deg": e1 if pol else e1 + 180.0, "polarity_correct": pol,
@@ -59,7 +42,7 @@ metrics = {{
     "init_pos_time_s": None if th == 200.0 else 0.02 + th / 10000.0,
     "reverse_angle_max_deg": 0.0, "final_state": "RUN" if th != 200.0 else "INIT_POS",
     "faults": [],
-}}
+}
 (out / "metrics.json").write_text(json.dumps(metrics))
 if sets.get("output.trace", True):
     rows = ["t_s,state,ia_a,ib_a,ic_a"]
@@ -73,7 +56,7 @@ if sets.get("output.trace", True):
             ia = 2.0 * (j if j <= m else (2 * m - j if j <= 3 * m else j - 4 * m))
         if j == 4 * m + 10:
             ia = 50.0
-        rows.append(f"{{r * 1e-4:.6f}},{{st}},{{ia:.5f}},{{-ia / 2:.5f}},{{-ia / 2:.5f}}")
+        rows.append(f"{r * 1e-4:.6f},{st},{ia:.5f},{-ia / 2:.5f},{-ia / 2:.5f}")
     (out / "trace.csv").write_text("\n".join(rows) + "\n")
 '''
 
@@ -82,8 +65,7 @@ if sets.get("output.trace", True):
 def setup(tmp_path_factory):
     root = tmp_path_factory.mktemp("sweep")
     fake = root / "fake_mcsim.py"
-    fake.write_text(FAKE_MCSIM.format(python=sys.executable))
-    fake.chmod(fake.stat().st_mode | stat.S_IXUSR)
+    write_fake_mcsim(fake, FAKE_BODY)
     for name in ("good", "badpol"):
         (root / f"{name}.toml").write_text(f'[scenario]\nname = "{name}"\n')
     (root / "nopreset.toml").write_text('[scenario]\nname = "x"\n[machine]\n'
