@@ -210,11 +210,7 @@ void mc_initpos_cfg_default(mc_initpos_cfg_t *cfg)
     cfg->rs = 0.0f;
     cfg->ld = 0.0f;
     cfg->lq = 0.0f;
-    cfg->model.kind = MC_FLUX_CONST;
-    cfg->model.ld = 0.0f;
-    cfg->model.lq = 0.0f;
-    cfg->model.psi_pm = 0.0f;
-    cfg->model.map = NULL;
+    cfg->model = (mc_flux_model_t){.kind = MC_FLUX_CONST, .map = NULL};  /* to be filled in */
     cfg->cost = MC_IP_COST_LINEAR;
     cfg->m = 5;
     cfg->n_dir = 1;

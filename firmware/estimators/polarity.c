@@ -36,11 +36,7 @@ void mc_polarity_cfg_default(mc_polarity_cfg_t *cfg)
 {
     cfg->ts = 0.0f;
     cfg->rs = 0.0f;
-    cfg->model.kind = MC_FLUX_CONST;
-    cfg->model.ld = 0.0f;
-    cfg->model.lq = 0.0f;
-    cfg->model.psi_pm = 0.0f;
-    cfg->model.map = NULL;
+    cfg->model = (mc_flux_model_t){.kind = MC_FLUX_CONST, .map = NULL};  /* to be filled in */
     cfg->v_pol = 200.0f;
     cfg->n = 4;
     cfg->l_at_end = false;

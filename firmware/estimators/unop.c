@@ -295,11 +295,7 @@ void mc_unop_cfg_default(mc_unop_cfg_t *cfg)
 {
     cfg->ts = 0.0f;
     cfg->rs = 0.0f;
-    cfg->model.kind = MC_FLUX_CONST;
-    cfg->model.ld = 0.0f;
-    cfg->model.lq = 0.0f;
-    cfg->model.psi_pm = 0.0f;
-    cfg->model.map = NULL;
+    cfg->model = (mc_flux_model_t){.kind = MC_FLUX_CONST, .map = NULL};  /* to be filled in */
     cfg->iter_max = 4;
     cfg->step_tol = 1e-6f;
     cfg->k1 = 0.0f;
