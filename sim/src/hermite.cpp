@@ -8,6 +8,18 @@
 
 namespace mcsim::detail {
 
+namespace {
+// o->g = R G R^T for the symmetric rotor-frame G, through the double angle of (o->c, o->s).
+void set_jacobian(double gdd, double gdq, double gqq, HPoint* o) {
+    const double c = o->c, s = o->s;
+    const double c2 = c * c - s * s, s2 = 2.0 * c * s;
+    const double sum = 0.5 * (gdd + gqq), dif = 0.5 * (gdd - gqq);
+    o->gxx = sum + dif * c2 - gdq * s2;
+    o->gyy = sum - dif * c2 + gdq * s2;
+    o->gxy = dif * s2 + gdq * c2;
+}
+}  // namespace
+
 void HermiteStepper::eval(double px, double py, HPoint* o) const {
     const double c = o->c, s = o->s;
     const double pd = c * px + s * py, pq = -s * px + c * py;
@@ -28,12 +40,7 @@ void HermiteStepper::eval(double px, double py, HPoint* o) const {
     o->py = py;
     o->ix = c * id - s * iq;
     o->iy = s * id + c * iq;
-    // R G R^T for the symmetric G, through the double angle.
-    const double c2 = c * c - s * s, s2 = 2.0 * c * s;
-    const double sum = 0.5 * (gdd + gqq), dif = 0.5 * (gdd - gqq);
-    o->gxx = sum + dif * c2 - gdq * s2;
-    o->gyy = sum - dif * c2 + gdq * s2;
-    o->gxy = dif * s2 + gdq * c2;
+    set_jacobian(gdd, gdq, gqq, o);
     o->te = 1.5 * p_ * (px * o->iy - py * o->ix);
 }
 
@@ -45,11 +52,7 @@ void HermiteStepper::begin(const Vec2& psi_dq, const Vec2& i_dq, const Mat2& g_d
     a_.py = s * psi_dq.x() + c * psi_dq.y();
     a_.ix = c * i_dq.x() - s * i_dq.y();
     a_.iy = s * i_dq.x() + c * i_dq.y();
-    const double c2 = c * c - s * s, s2 = 2.0 * c * s;
-    const double sum = 0.5 * (g_dq(0, 0) + g_dq(1, 1)), dif = 0.5 * (g_dq(0, 0) - g_dq(1, 1)), b = g_dq(0, 1);
-    a_.gxx = sum + dif * c2 - b * s2;
-    a_.gyy = sum - dif * c2 + b * s2;
-    a_.gxy = dif * s2 + b * c2;
+    set_jacobian(g_dq(0, 0), g_dq(0, 1), g_dq(1, 1), &a_);
     a_.th = theta_m;
     a_.w = omega_m;
     a_.te = 1.5 * p_ * (a_.px * a_.iy - a_.py * a_.ix);
