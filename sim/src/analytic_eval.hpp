@@ -38,6 +38,22 @@ struct AnalyticEval {
         *gqq = a_q0 + t1 * qt + v1 * xq;
         *gdq = a_dq * du * d * qv * q;
     }
+
+    // Third derivatives of the energy (d/dpsi of the Jacobian above; a symmetric tensor, so four
+    // numbers): k[0] = d gdd/dd, k[1] = d gdd/dq = d gdq/dd, k[2] = d gdq/dq = d gqq/dd,
+    // k[3] = d gqq/dq. d|x|^n/dx = n |x|^(n-1) sgn(x), written without a division by x.
+    void third(double d, double q, double k[4]) const {
+        const double ad = std::fabs(d), aq = std::fabs(q);
+        const double sd = d < 0.0 ? -1.0 : 1.0, sq = q < 0.0 ? -1.0 : 1.0;
+        const double du = ipow(ad, u), qv = ipow(aq, v);
+        // n |x|^(n-1) sgn(x) for the exponents in play (0 when n = 0)
+        auto dpow = [](double a, double sg, int n) { return n == 0 ? 0.0 : n * ipow(a, n - 1) * sg; };
+        const double ddu = dpow(ad, sd, u), dqv = dpow(aq, sq, v);
+        k[0] = s1 * a_dd * dpow(ad, sd, s) + u1 * cd * ddu * qv * aq * aq;
+        k[1] = a_dq * (ddu * d + du) * qv * q;
+        k[2] = a_dq * du * d * (dqv * q + qv);
+        k[3] = t1 * a_qq * dpow(aq, sq, t) + v1 * cq * du * ad * ad * dqv;
+    }
 };
 
 }  // namespace mcsim::detail

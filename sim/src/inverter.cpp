@@ -130,6 +130,7 @@ void PwmSequencer::begin(double t0, double Ts, const std::array<double, 3>& duty
                          const InverterConfig& cfg) {
     n_ = next_ = 0;
     undecided_ = 0;
+    n_dec_ = 0;
     t_end_ = t0 + Ts;
     t_dead_ = cfg.t_dead > 0.0 ? cfg.t_dead : 0.0;
     i_band_ = cfg.i_zero_band;
@@ -164,6 +165,7 @@ void PwmSequencer::apply(double t, const std::array<double, 3>& i_abc) {
         switch (e.kind) {
             case CmdRise:
                 --undecided_;
+                dec_[n_dec_++] = {t, i, i_band_, x};
                 // Low side off now, high side on after t_dead. In the gap the diodes decide:
                 // i < 0 flows through the upper diode, so the phase is already high.
                 if (i > i_band_ && t_dead_ > 0.0) insert({t + t_dead_, e.phase, SetHigh});
@@ -171,6 +173,7 @@ void PwmSequencer::apply(double t, const std::array<double, 3>& i_abc) {
                 break;
             case CmdFall:
                 --undecided_;
+                dec_[n_dec_++] = {t, i, -i_band_, x};
                 // High side off now, low side on after t_dead; i > 0 takes the lower diode at once.
                 if (i < -i_band_ && t_dead_ > 0.0) {
                     insert({std::min(t + t_dead_, t_end_), e.phase, SetLow});

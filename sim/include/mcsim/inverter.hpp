@@ -57,6 +57,16 @@ public:
     bool all_decided() const { return undecided_ == 0; }
     // +1 high side (or upper diode) conducting, -1 low side (or lower diode).
     const std::array<int, 3>& levels() const { return level_; }
+    // The commanded edges apply() decided since begin() (predecide()'s are not listed): when,
+    // which phase, the current it was given and the threshold that current was compared with
+    // (+i_zero_band for a rise, -i_zero_band for a fall). The plant's period-level integrator
+    // decides with predicted currents and checks the decisions afterwards.
+    struct Decision {
+        double t, i, threshold;
+        int phase;
+    };
+    int decision_count() const { return n_dec_; }
+    const Decision& decision(int k) const { return dec_[k]; }
 
 private:
     enum Kind : uint8_t { CmdRise, CmdFall, SetHigh, SetLow, Dropped };
@@ -72,6 +82,8 @@ private:
     Event ev_[12];
     int n_ = 0, next_ = 0;
     int undecided_ = 0;  // pending CmdRise/CmdFall events
+    Decision dec_[6];
+    int n_dec_ = 0;
     double t_end_ = 0, t_dead_ = 0, i_band_ = 0;
     std::array<int, 3> level_{{-1, -1, -1}};
 };

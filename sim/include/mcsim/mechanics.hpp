@@ -43,6 +43,19 @@ public:
         }
         return (te_dot - cfg_.friction * alpha - slope_) * inv_j_;
     }
+    // d(d omega/dt)/d T_e at (tau, T_e, omega): how a small extra torque (the switching ripple's,
+    // for the plant's period-level steps) moves the shaft. 1/J while it turns freely, 0 while it
+    // is held (locked, dyno, stiction of a reactive load).
+    double ripple_gain(double tau, double te, double omega) const {
+        if (mode_ != Inertia) return 0.0;
+        if (cfg_.reactive_load) {
+            const double drive = te - cfg_.friction * omega;
+            const double tl = load0_ + slope_ * tau;
+            const double atl = tl < 0.0 ? -tl : tl;
+            if ((omega < kRest && omega > -kRest) && (drive <= atl && drive >= -atl)) return 0.0;
+        }
+        return inv_j_;
+    }
     // Speed at the end of the period when imposed (Dyno), to remove the round-off of the ramp.
     bool speed_imposed() const { return mode_ != Inertia; }
     double omega_end() const { return omega_end_; }

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "mcsim/machine.hpp"
+#include "analytic_eval.hpp"
 
 using namespace mcsim;
 
@@ -76,6 +77,36 @@ TEST(AnalyticModel, ReciprocityAndJacobianMatchFiniteDifferences) {
         }
         std::printf("[%s] max relative |J_fd - J| / |J| = %.2e\n", c.name, worst);
         EXPECT_LT(worst, 1e-7);
+    }
+}
+
+// The third derivatives the plant's ripple integrator uses (d/dpsi of the Jacobian) against
+// central differences of the analytic Jacobian, for the integer-exponent presets (the only
+// models that offer the inlined evaluator).
+TEST(AnalyticModel, ThirdDerivativesMatchFiniteDifferences) {
+    for (const Case& c : kCases) {
+        const auto m = make_analytic_model(c.p);
+        const detail::AnalyticEval* ev = m->analytic_eval();
+        if (c.p.S != std::floor(c.p.S)) {
+            EXPECT_EQ(ev, nullptr) << c.name;
+            continue;
+        }
+        SCOPED_TRACE(c.name);
+        ASSERT_NE(ev, nullptr);
+        double worst = 0;
+        for (const Vec2& psi : sample_flux(*m, c.i_max, 200, 2)) {
+            double k[4];
+            ev->third(psi.x(), psi.y(), k);
+            const double h = 1e-6 * std::max(psi.norm(), 1e-3);
+            const Mat2 dd = (m->di_dpsi(psi + Vec2(h, 0)) - m->di_dpsi(psi - Vec2(h, 0))) / (2 * h);
+            const Mat2 dq = (m->di_dpsi(psi + Vec2(0, h)) - m->di_dpsi(psi - Vec2(0, h))) / (2 * h);
+            // symmetric tensor: d gdq/dd = d gdd/dq and d gqq/dd = d gdq/dq
+            const double fd[4] = {dd(0, 0), 0.5 * (dd(0, 1) + dq(0, 0)), 0.5 * (dq(0, 1) + dd(1, 1)), dq(1, 1)};
+            const double scale = std::fabs(k[0]) + std::fabs(k[1]) + std::fabs(k[2]) + std::fabs(k[3]);
+            for (int n = 0; n < 4; ++n) worst = std::max(worst, std::fabs(fd[n] - k[n]) / scale);
+        }
+        std::printf("[%s] max relative third-derivative error vs finite differences = %.2e\n", c.name, worst);
+        EXPECT_LT(worst, 1e-6);
     }
 }
 

@@ -35,62 +35,6 @@ TEST(PlantDynamics, LinearModelMatchesAnalyticRlStep) {
     EXPECT_NEAR(p.u_dq_avg_last().x(), U, 1e-9);
 }
 
-namespace {
-struct Traj {
-    std::vector<Vec2> i;
-};
-
-PlantConfig high_speed_config(InverterConfig::Mode mode, int substeps) {
-    PlantConfig c = base_config();
-    c.inverter.mode = mode;
-    c.inverter.vdc = 600.0;  // back-EMF at 1500 rpm is 270 V peak: beyond a 300 V link
-    c.inverter.t_dead = 0.0;
-    c.mech.mode = MechanicsConfig::Mode::Dyno;
-    const double w = 1500.0 * 2.0 * kPi / 60.0;
-    c.mech.dyno_speed = [w](double) { return w; };
-    c.omega_m0 = w;
-    c.substeps = substeps;
-    return c;
-}
-
-// Voltage sequence recorded from one run, replayed into the others so that all integrators see
-// the same input.
-std::vector<Vec2> make_voltages(int n, double Ts) {
-    PlantConfig c = high_speed_config(InverterConfig::Mode::Averaged, 4);
-    Plant p(c, make_analytic_model(c.machine.sat));
-    std::vector<Vec2> u;
-    for (int k = 0; k < n; ++k) {
-        const auto d = feedforward_duties(p, Vec2(-3.0, 8.0), Ts);
-        u.push_back(clarke_phase_voltages({(d[0] - 0.5) * 600.0, (d[1] - 0.5) * 600.0, (d[2] - 0.5) * 600.0}));
-        p.step_period(Ts, d, true);
-    }
-    return u;
-}
-
-Traj run_config(const PlantConfig& c, const std::vector<Vec2>& u, double Ts) {
-    Plant p(c, make_analytic_model(c.machine.sat));
-    Traj t;
-    for (const auto& v : u) {
-        p.step_period(Ts, duties_for(v, 600.0), true);
-        t.i.push_back(p.i_dq());
-    }
-    return t;
-}
-
-Traj run(InverterConfig::Mode mode, int substeps, const std::vector<Vec2>& u, double Ts,
-         PlantConfig::Integrator integ = PlantConfig::Integrator::Hermite, bool ledger = true) {
-    PlantConfig c = high_speed_config(mode, substeps);
-    c.integrator = integ;
-    c.energy_ledger = ledger;
-    return run_config(c, u, Ts);
-}
-
-double max_diff(const Traj& a, const Traj& b) {
-    double m = 0;
-    for (size_t k = 0; k < a.i.size(); ++k) m = std::max(m, (a.i[k] - b.i[k]).norm());
-    return m;
-}
-}  // namespace
 
 // (2) 1500 rpm x 5 pole pairs (785 rad/s electrical), dyno, constant-amplitude synchronous
 // voltage, analytic saturation model: the default integrator (Hermite, substeps 2) against a 100x
@@ -165,21 +109,7 @@ TEST(PlantDynamics, PredecidedEdgesMatchEdgeByEdgeDecisions) {
 TEST(PlantDynamics, IntegrationErrorInertiaMode) {
     const double Ts = 1e-4;
     auto run_inertia = [&](PlantConfig::Integrator integ, int substeps, std::vector<double>* w) {
-        PlantConfig c = base_config();
-        c.inverter.mode = InverterConfig::Mode::Switching;
-        c.inverter.t_dead = 0.0;
-        c.mech.load_torque = [](double t) { return 5.0 + 50.0 * t; };
-        c.omega_m0 = 50.0;
-        c.integrator = integ;
-        c.substeps = substeps;
-        Plant p(c, make_analytic_model(c.machine.sat));
-        Traj t;
-        for (int k = 0; k < 1000; ++k) {
-            p.step_period(Ts, feedforward_duties(p, Vec2(-2.0, 12.0), Ts), true);
-            t.i.push_back(p.i_dq());
-            w->push_back(p.omega_m());
-        }
-        return t;
+        return inertia_run(integ, substeps, Ts, w);
     };
     std::vector<double> w_ref, w_h;
     const Traj ref = run_inertia(PlantConfig::Integrator::Rk4, 200, &w_ref);
