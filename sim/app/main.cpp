@@ -1,6 +1,6 @@
 // mcsim: scenario runner CLI.
 //   mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]
-//   mcsim bench [--seconds S] [--repeat N]
+//   mcsim bench [--seconds S] [--repeat N] [--integrator hermite|ripple|rk4]
 //   mcsim keys                      (the scenario key table, markdown)
 //   mcsim check SCENARIO.toml [--set key=value]...   (validate only)
 // Exit status: 0 done, 2 bad input (scenario, key, value, file), 1 failure while running.
@@ -45,7 +45,7 @@ double ns_per_call(F f)
 const char* kUsage =
     "usage: mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
-    "       mcsim bench [--seconds S] [--repeat N]\n"
+    "       mcsim bench [--seconds S] [--repeat N] [--integrator hermite|ripple|rk4]\n"
     "       mcsim keys\n";
 
 // The standard closed-loop benchmark: encoder FOC speed step 0 -> 600 rpm with 76 % rated load,
@@ -108,12 +108,15 @@ int cmd_bench(int argc, char** argv)
 {
     double seconds = 2.0;
     int repeat = 3;
+    std::string integrator = "hermite";
     for (int k = 2; k < argc; ++k) {
         const std::string a = argv[k];
         if (a == "--seconds" && k + 1 < argc) {
             seconds = std::atof(argv[++k]);
         } else if (a == "--repeat" && k + 1 < argc) {
             repeat = std::atoi(argv[++k]);
+        } else if (a == "--integrator" && k + 1 < argc) {
+            integrator = argv[++k];  // validated with the scenario's other keys
         } else {
             std::fprintf(stderr, "mcsim bench: unexpected argument '%s'\n%s", a.c_str(), kUsage);
             return 2;
@@ -128,7 +131,8 @@ int cmd_bench(int argc, char** argv)
         return 2;
     }
     const mcsim::Scenario sc = mcsim::Scenario::from_string(
-        kBenchScenario, "(built-in bench)", {"scenario.duration_s=" + std::to_string(seconds)});
+        kBenchScenario, "(built-in bench)",
+        {"scenario.duration_s=" + std::to_string(seconds), "inverter.integrator=\"" + integrator + "\""});
     mcsim::RunOptions opt;  // no files, no progress: measure the loop only
     // A shared machine's load comes and goes: the same run is repeated and the median reported
     // (the spread says how noisy the machine was meanwhile).
@@ -145,8 +149,12 @@ int cmd_bench(int argc, char** argv)
                 r.realtime_factor, runs.front().realtime_factor, runs.back().realtime_factor);
     const double per_period_ns = r.periods > 0 ? r.wall_time_s * 1e9 / r.periods : 0.0;
     std::printf("  per period: %.0f ns = firmware ISR (host build) %.0f ns + plant step (switching inverter, "
-                "Hermite) %.0f ns + sensors, runner and metrics %.0f ns\n",
-                per_period_ns, r.isr_ns_mean, r.plant_ns_mean, per_period_ns - r.isr_ns_mean - r.plant_ns_mean);
+                "%s) %.0f ns + sensors, runner and metrics %.0f ns\n",
+                per_period_ns, r.isr_ns_mean, sc.s("inverter.integrator").c_str(), r.plant_ns_mean,
+                per_period_ns - r.isr_ns_mean - r.plant_ns_mean);
+    if (r.ripple_periods > 0)
+        std::printf("  ripple integrator: %lld of %lld periods redone edge by edge (uncertain dead-time decisions)\n",
+                    r.ripple_fallbacks, r.ripple_periods);
     float (*volatile sin_fn)(float) = sinf;  // two real calls, as an ISR would make
     float (*volatile cos_fn)(float) = cosf;
     const double t_fast = ns_per_call([](float x) { const mc_sincos_t r = mc_sincos(x); return r.s + r.c; });

@@ -185,6 +185,10 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     pc.mech.dyno_speed = [dyno](double t) { return dyno.at(t) / kRpm; };
     pc.theta_m0 = sc.f("mechanics.theta0_deg") * kPi / 180.0 / p;
     pc.energy_ledger = false;  // no metric or trace column reads the energy ledger
+    const std::string& integ = sc.s("inverter.integrator");
+    pc.integrator = integ == "ripple" ? PlantConfig::Integrator::Ripple
+                                      : (integ == "rk4" ? PlantConfig::Integrator::Rk4 : PlantConfig::Integrator::Hermite);
+    if (pc.integrator == PlantConfig::Integrator::Ripple) pc.substeps = 1;  // one step per period (docs/plant.md)
     pc.omega_m0 = mech == "dyno" ? dyno.at(0.0) / kRpm : (mech == "locked" ? 0.0 : sc.f("mechanics.speed0_rpm") / kRpm);
     Plant plant(pc, make_plant_model(sc, mp));
 
@@ -471,6 +475,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     out.isr_ns_mean = timed > 0 ? isr_ns / timed : 0;
     out.plant_ns_mean = timed > 0 ? plant_ns / timed : 0;
     out.periods = periods;
+    out.ripple_periods = plant.ripple_stats().periods;
+    out.ripple_fallbacks = plant.ripple_stats().fallbacks;
     const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
     out.metrics_json = metrics.json(fault_names(tm.faults), state_name(tm.state),
                                     {{"scenario", "\"" + sc.s("scenario.name") + "\""},
