@@ -229,8 +229,8 @@ struct Plant::Impl {
         for (int k = 0; k < n; ++k) hs.interval(tau0 + k * h, k + 1 == n ? tau1 : tau0 + (k + 1) * h, u.x(), u.y());
     }
 
-    // The Ripple path (ripple.hpp) for one switching period; false: not taken or handed back
-    // (hs must then be restarted).
+    // The Ripple path (ripple.hpp) for one switching period; false: not taken, or handed back
+    // (then hs is restarted for the edge-by-edge path).
     bool try_ripple(double t0, double Ts, const std::array<double, 3>& duty) {
         const InverterConfig& inv = cfg.inverter;
         if (cfg.integrator != PlantConfig::Integrator::Ripple || inv.mode != InverterConfig::Mode::Switching ||
@@ -240,6 +240,7 @@ struct Plant::Impl {
         ++ripple_stats.periods;
         if (!detail::ripple_period(hs, seq, inv, rs, p, t0, Ts, duty, cfg.substeps, cfg.ripple_margin, &o)) {
             ++ripple_stats.fallbacks;
+            hermite_begin();
             return false;
         }
         if (cfg.energy_ledger) {
@@ -264,7 +265,6 @@ struct Plant::Impl {
                 finish_hermite(x);
                 return;
             }
-            if (cfg.integrator == PlantConfig::Integrator::Ripple) hermite_begin();
         }
         auto currents = [&] { return rk4 ? phase_currents() : hs.phase_currents(); };
         auto advance = [&](double a, double b, const std::array<double, 3>& v, int n) {

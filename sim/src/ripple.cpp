@@ -68,11 +68,6 @@ RippleMoments moments(const Intervals& iv, double A, double B, double* umx, doub
     return m;
 }
 
-double phase_of(double ix, double iy, int x) {
-    constexpr double h = 0.86602540378443864676;  // sqrt(3)/2
-    return x == 0 ? ix : (x == 1 ? -0.5 * ix + h * iy : -0.5 * ix - h * iy);
-}
-
 }  // namespace
 
 bool ripple_period(HermiteStepper& hs, PwmSequencer& seq, const InverterConfig& inv, double rs, double p,
@@ -137,7 +132,7 @@ bool ripple_period(HermiteStepper& hs, PwmSequencer& seq, const InverterConfig& 
             double wx, wy, ix, iy;
             iv.w_at(tau, &wx, &wy);
             e.current_at(tau - A, wx - wax - umx * (tau - A), wy - way - umy * (tau - A), &ix, &iy);
-            const double post = phase_of(ix, iy, d.phase) - d.threshold, pred = d.i - d.threshold;
+            const double post = inverse_clarke(Vec2(ix, iy))[d.phase] - d.threshold, pred = d.i - d.threshold;
             if (post * pred <= 0.0 || std::fabs(post) < margin) return false;
         }
     }
