@@ -20,6 +20,19 @@ static float ref_theta(const mc_encoder_t *s, uint32_t count)
     return mc_wrap_pi((float)(uint32_t)r * s->rad_per_count + s->cfg.offset_rad);
 }
 
+static void step_and_check(mc_encoder_t *s, uint32_t count)
+{
+    const mc_angle_in_t in = {.qep_count = count};
+    mc_angle_out_t out;
+    mc_encoder_step(s, &in, &out);
+    const float want = ref_theta(s, count);
+    if (out.theta != want) {
+        fail_msg("pp %d cpr %u count %u (last %u): theta %.9g, want %.9g", s->cfg.pole_pairs,
+                 (unsigned)s->cfg.counts_per_rev, (unsigned)count, (unsigned)s->last_count,
+                 (double)out.theta, (double)want);
+    }
+}
+
 static void check_counts(mc_encoder_t *s)
 {
     uint64_t st = 12345u;
@@ -33,14 +46,7 @@ static void check_counts(mc_encoder_t *s)
             st = st * 6364136223846793005ULL + 1442695040888963407ULL;
             count = (uint32_t)(st >> 32);
         }
-        const mc_angle_in_t in = {.qep_count = count};
-        mc_angle_out_t out;
-        mc_encoder_step(s, &in, &out);
-        const float want = ref_theta(s, count);
-        if (out.theta != want) {
-            fail_msg("pp %d cpr %u count %u: theta %.9g, want %.9g", s->cfg.pole_pairs,
-                     (unsigned)s->cfg.counts_per_rev, (unsigned)count, (double)out.theta, (double)want);
-        }
+        step_and_check(s, count);
     }
 }
 
@@ -63,19 +69,6 @@ static void test_angle_is_the_residue(void **state)
     make(&s, 1, 4u);
     assert_true(s.narrow);
     check_counts(&s);
-}
-
-static void step_and_check(mc_encoder_t *s, uint32_t count)
-{
-    const mc_angle_in_t in = {.qep_count = count};
-    mc_angle_out_t out;
-    mc_encoder_step(s, &in, &out);
-    const float want = ref_theta(s, count);
-    if (out.theta != want) {
-        fail_msg("pp %d cpr %u count %u (last %u): theta %.9g, want %.9g", s->cfg.pole_pairs,
-                 (unsigned)s->cfg.counts_per_rev, (unsigned)count, (unsigned)s->last_count,
-                 (double)out.theta, (double)want);
-    }
 }
 
 /* The residue is tracked from the last count without a division when the counter moved less
