@@ -1,6 +1,6 @@
 // mcsim: scenario runner CLI.
 //   mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]
-//   mcsim bench [--seconds S] [--repeat N] [--integrator hermite|ripple|rk4]
+//   mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|ripple|rk4]
 //   mcsim keys                      (the scenario key table, markdown)
 //   mcsim check SCENARIO.toml [--set key=value]...   (validate only)
 // Exit status: 0 done, 2 bad input (scenario, key, value, file), 1 failure while running.
@@ -45,7 +45,7 @@ double ns_per_call(F f)
 const char* kUsage =
     "usage: mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
-    "       mcsim bench [--seconds S] [--repeat N] [--integrator hermite|ripple|rk4]\n"
+    "       mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|ripple|rk4]\n"
     "       mcsim keys\n";
 
 // The standard closed-loop benchmark: encoder FOC speed step 0 -> 600 rpm with 76 % rated load,
@@ -108,7 +108,7 @@ int cmd_bench(int argc, char** argv)
 {
     double seconds = 2.0;
     int repeat = 3;
-    std::string integrator = "hermite";
+    std::string integrator = "taylor";  // the scenario default
     for (int k = 2; k < argc; ++k) {
         const std::string a = argv[k];
         if (a == "--seconds" && k + 1 < argc) {

@@ -186,8 +186,10 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     pc.theta_m0 = sc.f("mechanics.theta0_deg") * kPi / 180.0 / p;
     pc.energy_ledger = false;  // no metric or trace column reads the energy ledger
     const std::string& integ = sc.s("inverter.integrator");
-    pc.integrator = integ == "ripple" ? PlantConfig::Integrator::Ripple
-                                      : (integ == "rk4" ? PlantConfig::Integrator::Rk4 : PlantConfig::Integrator::Hermite);
+    pc.integrator = integ == "taylor"   ? PlantConfig::Integrator::Taylor
+                    : integ == "ripple" ? PlantConfig::Integrator::Ripple
+                    : integ == "rk4"    ? PlantConfig::Integrator::Rk4
+                                        : PlantConfig::Integrator::Hermite;
     if (pc.integrator == PlantConfig::Integrator::Ripple) pc.substeps = 1;  // one step per period (docs/plant.md)
     pc.omega_m0 = mech == "dyno" ? dyno.at(0.0) / kRpm : (mech == "locked" ? 0.0 : sc.f("mechanics.speed0_rpm") / kRpm);
     Plant plant(pc, make_plant_model(sc, mp));

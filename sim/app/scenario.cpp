@@ -34,8 +34,8 @@ const std::vector<KeySpec>& scenario_schema()
     {"inverter.vdc_v", KeyType::Float, "", nullptr, 1, 2000, "V", "", "DC-link voltage (default: the preset's nominal)."},
     {"inverter.dead_time_s", KeyType::Float, "0.5e-6", "0.0", 0, 10e-6, "s", "", "Dead time per commutation."},
     {"inverter.device_drop_v", KeyType::Float, "0.0", nullptr, 0, 10, "V", "", "Device on-state drop."},
-    {"inverter.integrator", KeyType::Enum, "\"hermite\"", nullptr, 0, 0, "", "hermite|ripple|rk4",
-     "Plant integration (docs/plant.md): Hermite per switching interval; ripple: one step per period plus the ripple's moments (faster, less exact); classical RK4 (reference)."},
+    {"inverter.integrator", KeyType::Enum, "\"taylor\"", nullptr, 0, 0, "", "taylor|hermite|ripple|rk4",
+     "Plant integration (docs/plant.md): taylor: the period in one pass with the current map expanded to second order about mid-period, exact at the period end (tables go edge by edge with Hermite); hermite: one model evaluation per switching interval (the most exact); ripple: one step per period plus the ripple's moments; classical RK4 (reference)."},
 
     {"sensors.adc_bits", KeyType::Int, "12", "16", 8, 16, "bit", "", "Current/voltage ADC resolution."},
     {"sensors.i_full_scale_a", KeyType::Float, "25.0", nullptr, 0.1, 5000, "A", "", "Current ADC span is -fs..+fs."},

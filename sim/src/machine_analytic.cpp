@@ -111,6 +111,12 @@ public:
         *g << gdd, gdq, gdq, gqq;
     }
     const detail::AnalyticEval* analytic_eval() const override { return int_exp_ ? &ev_ : nullptr; }
+    bool current_taylor(const Vec2& psi, Vec2* i, Mat2* g, double k[4]) const override {
+        if (!int_exp_) return false;
+        current_jacobian(psi, i, g);
+        ev_.third(psi.x(), psi.y(), k);
+        return true;
+    }
 
     // W(psi) - W(psi0), with W the closed-form antiderivative (raw_energy); dW/dpsi = i exactly.
     double energy(const Vec2& psi) const override { return raw_energy(psi) - w0_; }

@@ -19,6 +19,12 @@ public:
         return j;
     }
     Vec2 flux(const Vec2& i) const override { return {ld_ * i.x() + psi_pm_, lq_ * i.y()}; }
+    bool current_taylor(const Vec2& psi, Vec2* i, Mat2* g, double k[4]) const override {
+        *i = current(psi);
+        *g = di_dpsi(psi);
+        k[0] = k[1] = k[2] = k[3] = 0.0;  // constant inductances: the expansion is exact
+        return true;
+    }
     // Quadratic form around psi0 = (psi_pm, 0), where i = 0.
     double energy(const Vec2& psi) const override {
         const double dd = psi.x() - psi_pm_;

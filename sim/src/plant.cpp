@@ -14,6 +14,7 @@
 #include "rotation.hpp"
 #include "hermite.hpp"
 #include "ripple.hpp"
+#include "taylor.hpp"
 
 namespace mcsim {
 
@@ -74,6 +75,9 @@ struct Plant::Impl {
     Mat2 g_dq = Mat2::Identity();
     bool g_valid = false;
     double c_end = 1, s_end = 0;  // cos, sin of p th after an enabled period
+    // The Taylor path: its stepper and whether the model offers the expansion.
+    detail::TaylorStepper ts;
+    bool taylor_ok = false;
     bool cs_end_valid = false;
     unsigned cs_carried = 0;
 
@@ -83,7 +87,13 @@ struct Plant::Impl {
     Vec2 u_ab = Vec2::Zero();
 
     Impl(const PlantConfig& c, std::unique_ptr<FluxModel> m)
-        : cfg(c), model(std::move(m)), mech(c.mech), hs(*model, mech, c.machine.pole_pairs, c.machine.rs) {}
+        : cfg(c), model(std::move(m)), mech(c.mech), hs(*model, mech, c.machine.pole_pairs, c.machine.rs),
+          ts(mech, c.machine.pole_pairs, c.machine.rs) {
+        Vec2 i0;
+        Mat2 g0;
+        double k[4];
+        taylor_ok = model->current_taylor(model->flux(Vec2::Zero()), &i0, &g0, k);
+    }
 
     void sincos_at(double theta_m, double* c, double* s) const {
         rotate_angle(c0, s0, p * (theta_m - th_base), c, s);
@@ -250,10 +260,75 @@ struct Plant::Impl {
         return true;
     }
 
+    // Outputs enabled, Taylor path (taylor.hpp): the period's voltage intervals recorded in one
+    // pass (a commanded edge decided with the current predicted for its instant; only a voltage
+    // change ends an interval), then integrated at once. The model is evaluated twice: the
+    // expansion at mid-period and the exact current at the end.
+    void taylor_period(double t0, double Ts, const std::array<double, 3>& duty) {
+        const InverterConfig& inv = cfg.inverter;
+        const double half = 0.5 * inv.vdc;
+        {
+            std::array<double, 3> v;
+            for (int k = 0; k < 3; ++k) v[k] = (std::min(1.0, std::max(0.0, duty[k])) - 0.5) * inv.vdc;
+            detail::TaylorAnchor a;
+            a.psi = ts.begin(psi, i, th, w, c0, s0, clarke_phase_voltages(v), Ts);
+            Mat2 g;
+            model->current_taylor(a.psi, &a.i, &g, a.k);
+            a.gdd = g(0, 0);
+            a.gdq = g(0, 1);
+            a.gqq = g(1, 1);
+            ts.expand_about(a);
+        }
+        auto u_of = [half](const std::array<int, 3>& lv) {
+            return clarke_phase_voltages({lv[0] * half, lv[1] * half, lv[2] * half});
+        };
+        if (inv.mode == InverterConfig::Mode::Averaged) {
+            // (no device drop on this path: the averaged dead time needs the start currents only)
+            ts.add_interval(Ts, clarke_phase_voltages(averaged_phase_voltages(duty, ts.predict_phase_currents(0.0, Vec2::Zero()), inv, Ts)));
+        } else {
+            seq.begin(t0, Ts, duty, inv);
+            double te, tau = 0.0;
+            std::array<int, 3> lv = seq.levels();
+            Vec2 u = u_of(lv);
+            const std::array<double, 3> none{{0.0, 0.0, 0.0}};
+            while (seq.next_time(&te)) {
+                const double tau_e = te - t0;
+                seq.apply(te, seq.next_needs_currents() ? ts.predict_phase_currents(tau_e, u) : none);
+                const std::array<int, 3>& nl = seq.levels();
+                if (nl[0] != lv[0] || nl[1] != lv[1] || nl[2] != lv[2]) {
+                    if (tau_e > tau) {
+                        ts.add_interval(tau_e, u);
+                        tau = tau_e;
+                    }
+                    lv = seq.levels();
+                    u = u_of(lv);
+                }
+            }
+            ts.add_interval(Ts, u);
+        }
+        ts.integrate(Ts);
+        const detail::TaylorStepper::End e = ts.finish(Ts);
+        psi = e.psi_dq;
+        th = e.theta_m;
+        w = e.omega_m;
+        i = model->current(psi);
+        g_valid = false;  // the Hermite path keeps its own Jacobian
+        c_end = e.c;
+        s_end = e.s;
+        cs_end_valid = true;
+    }
+
     // Outputs enabled: the period's voltage intervals (switching edges with dead time, or the
     // averaged voltages) integrated by Hermite (or RK4 on request) into x's ledger fields.
     void enabled_period(St& x, double t0, double Ts, const std::array<double, 3>& duty) {
         const InverterConfig& inv = cfg.inverter;
+        // Taylor: no energy ledger and no device drop on that path (docs/plant.md); otherwise
+        // (and for tables) the period goes edge by edge.
+        if (cfg.integrator == PlantConfig::Integrator::Taylor && taylor_ok && !cfg.energy_ledger &&
+            inv.v_device == 0.0) {
+            taylor_period(t0, Ts, duty);
+            return;
+        }
         // Hermite by default; classical RK4 on request (the independent reference of the tests).
         const bool rk4 = cfg.integrator == PlantConfig::Integrator::Rk4;
         if (rk4) {

@@ -55,6 +55,12 @@ public:
     void predecide(double t, const std::array<double, 3>& i_abc, double di_max);
     // No commanded edge is left to decide: apply() and predecide() then need no currents.
     bool all_decided() const { return undecided_ == 0; }
+    // The events due at next_time() include a commanded edge (apply() reads the currents).
+    bool next_needs_currents() const {
+        for (int k = next_; k < n_ && ev_[k].t <= ev_[next_].t; ++k)
+            if (ev_[k].kind == CmdRise || ev_[k].kind == CmdFall) return true;
+        return false;
+    }
     // +1 high side (or upper diode) conducting, -1 low side (or lower diode).
     const std::array<int, 3>& levels() const { return level_; }
     // The commanded edges apply() decided since begin() (predecide()'s are not listed): when,

@@ -55,6 +55,15 @@ public:
     // The analytic model with integer exponents exposes its evaluator so the plant can inline it
     // (sim/src/analytic_eval.hpp); nullptr for every other model.
     virtual const detail::AnalyticEval* analytic_eval() const { return nullptr; }
+    // Current, Jacobian and the Jacobian's derivative at psi: the energy's third derivatives, a
+    // symmetric tensor of four numbers, k[0] = d g_dd/d psi_d, k[1] = d g_dd/d psi_q = d g_dq/d psi_d,
+    // k[2] = d g_dq/d psi_q = d g_qq/d psi_d, k[3] = d g_qq/d psi_q [1/(H Wb)]. The plant's period-level
+    // integrator expands i(psi) to second order with them (docs/plant.md "Taylor"). false: the model
+    // has no closed form for them (tables, non-integer exponents); nothing is written then.
+    virtual bool current_taylor(const Vec2& psi, Vec2* i, Mat2* g, double k[4]) const {
+        (void)psi, (void)i, (void)g, (void)k;
+        return false;
+    }
     virtual Vec2 flux(const Vec2& i) const;                      // psi_dq(i_dq) by Newton [Wb]
     // Differential inductance matrix L = (di/dpsi)^-1 at current i [H].
     Mat2 l_diff(const Vec2& i) const { return di_dpsi(flux(i)).inverse(); }

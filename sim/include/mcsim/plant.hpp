@@ -53,7 +53,13 @@ struct PlantConfig {
     // the ripple's moments (one model evaluation per step; sim/src/ripple.hpp), falling back to
     // Hermite edge by edge for a period whose dead-time decisions are not certain, with a device
     // drop, or with a model that has no analytic third derivatives.
-    enum class Integrator { Hermite, Rk4, Ripple } integrator = Integrator::Hermite;
+    // Taylor: the whole switching period at once: the exact voltage integral, the current map
+    // expanded to second order about mid-period, Simpson on the mean-voltage path plus the PWM
+    // ripple's moments, one exact model evaluation at the period end (sim/src/taylor.hpp); the
+    // scenario runner's default. It keeps no energy ledger and takes no device drop: with either,
+    // or with a model without FluxModel::current_taylor (tables), the period goes edge by edge
+    // with Hermite instead.
+    enum class Integrator { Hermite, Rk4, Ripple, Taylor } integrator = Integrator::Hermite;
     // Ripple: a dead-time decision closer than this to its threshold (predicted or reconstructed
     // current) sends the period to the edge-by-edge path [A].
     double ripple_margin = 5e-3;

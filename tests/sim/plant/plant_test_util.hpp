@@ -135,7 +135,8 @@ inline double max_diff(const Traj& a, const Traj& b) {
 
 // Inertia mode (the mechanics integrated with the electrical state): 0.1 s of acceleration from
 // 50 rad/s under a ramping load, open-loop synchronous current source; currents and speeds.
-inline Traj inertia_run(PlantConfig::Integrator integ, int substeps, double Ts, std::vector<double>* w) {
+inline Traj inertia_run(PlantConfig::Integrator integ, int substeps, double Ts, std::vector<double>* w,
+                        bool ledger = true) {
     PlantConfig c = base_config();
     c.inverter.mode = InverterConfig::Mode::Switching;
     c.inverter.t_dead = 0.0;
@@ -143,6 +144,7 @@ inline Traj inertia_run(PlantConfig::Integrator integ, int substeps, double Ts, 
     c.omega_m0 = 50.0;
     c.integrator = integ;
     c.substeps = substeps;
+    c.energy_ledger = ledger;
     Plant p(c, make_analytic_model(c.machine.sat));
     Traj t;
     for (int k = 0; k < 1000; ++k) {
