@@ -267,11 +267,11 @@ struct Plant::Impl {
     void taylor_period(double t0, double Ts, const std::array<double, 3>& duty) {
         const InverterConfig& inv = cfg.inverter;
         const double half = 0.5 * inv.vdc;
+        const std::array<double, 3> none{{0.0, 0.0, 0.0}};
         {
-            std::array<double, 3> v;
-            for (int k = 0; k < 3; ++k) v[k] = (std::min(1.0, std::max(0.0, duty[k])) - 0.5) * inv.vdc;
+            // The duties' mean voltage (zero currents: no dead-time term; no device drop here).
             detail::TaylorAnchor a;
-            a.psi = ts.begin(psi, i, th, w, c0, s0, clarke_phase_voltages(v), Ts);
+            a.psi = ts.begin(psi, i, th, w, c0, s0, clarke_phase_voltages(averaged_phase_voltages(duty, none, inv, Ts)), Ts);
             Mat2 g;
             model->current_taylor(a.psi, &a.i, &g, a.k);
             a.gdd = g(0, 0);
@@ -283,14 +283,13 @@ struct Plant::Impl {
             return clarke_phase_voltages({lv[0] * half, lv[1] * half, lv[2] * half});
         };
         if (inv.mode == InverterConfig::Mode::Averaged) {
-            // (no device drop on this path: the averaged dead time needs the start currents only)
-            ts.add_interval(Ts, clarke_phase_voltages(averaged_phase_voltages(duty, ts.predict_phase_currents(0.0, Vec2::Zero()), inv, Ts)));
+            const auto i_start = ts.predict_phase_currents(0.0, Vec2::Zero());
+            ts.add_interval(Ts, clarke_phase_voltages(averaged_phase_voltages(duty, i_start, inv, Ts)));
         } else {
             seq.begin(t0, Ts, duty, inv);
             double te, tau = 0.0;
             std::array<int, 3> lv = seq.levels();
             Vec2 u = u_of(lv);
-            const std::array<double, 3> none{{0.0, 0.0, 0.0}};
             while (seq.next_time(&te)) {
                 const double tau_e = te - t0;
                 seq.apply(te, seq.next_needs_currents() ? ts.predict_phase_currents(tau_e, u) : none);

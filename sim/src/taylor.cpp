@@ -11,12 +11,21 @@ namespace {
 inline double cross(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
 }  // namespace
 
-// i = R(delta) [i0 + (G + 1/2 H[dx]) dx],  dx = R(-delta) psi - x0  (H[dx] dx = H[dx, dx]).
-void TaylorStepper::current_at(double px, double py, double c, double s, double* ix, double* iy) const {
+// The expansion in the rotor frame at a frame-0 flux and (cos, sin) of delta:
+// i_r = i0 + (G + 1/2 H[dx]) dx,  dx = R(-delta) psi - x0  (H[dx] dx = H[dx, dx]), and H[dx].
+void TaylorStepper::rotor_current(double px, double py, double c, double s, double* ird, double* irq,
+                                  double h[3]) const {
     const double xd = c * px + s * py - x0d_, xq = -s * px + c * py - x0q_;
-    const double hdd = k_[0] * xd + k_[1] * xq, hdq = k_[1] * xd + k_[2] * xq, hqq = k_[2] * xd + k_[3] * xq;
-    const double ird = i0d_ + (gdd_ + 0.5 * hdd) * xd + (gdq_ + 0.5 * hdq) * xq;
-    const double irq = i0q_ + (gdq_ + 0.5 * hdq) * xd + (gqq_ + 0.5 * hqq) * xq;
+    h[0] = k_[0] * xd + k_[1] * xq;
+    h[1] = k_[1] * xd + k_[2] * xq;
+    h[2] = k_[2] * xd + k_[3] * xq;
+    *ird = i0d_ + (gdd_ + 0.5 * h[0]) * xd + (gdq_ + 0.5 * h[1]) * xq;
+    *irq = i0q_ + (gdq_ + 0.5 * h[1]) * xd + (gqq_ + 0.5 * h[2]) * xq;
+}
+
+void TaylorStepper::current_at(double px, double py, double c, double s, double* ix, double* iy) const {
+    double ird, irq, h[3];
+    rotor_current(px, py, c, s, &ird, &irq, h);
     *ix = c * ird - s * irq;
     *iy = s * ird + c * irq;
 }
@@ -24,15 +33,13 @@ void TaylorStepper::current_at(double px, double py, double c, double s, double*
 // The current, A = R G(x) R^T (G(x) = G + H[dx], symmetric: through the double angle) and
 // D = J i - A J psi at a frame-0 flux and (cos, sin) of delta.
 void TaylorStepper::expand(double px, double py, double c, double s, Pt* o) const {
-    const double xd = c * px + s * py - x0d_, xq = -s * px + c * py - x0q_;
-    const double hdd = k_[0] * xd + k_[1] * xq, hdq = k_[1] * xd + k_[2] * xq, hqq = k_[2] * xd + k_[3] * xq;
-    const double ird = i0d_ + (gdd_ + 0.5 * hdd) * xd + (gdq_ + 0.5 * hdq) * xq;
-    const double irq = i0q_ + (gdq_ + 0.5 * hdq) * xd + (gqq_ + 0.5 * hqq) * xq;
+    double ird, irq, h[3];
+    rotor_current(px, py, c, s, &ird, &irq, h);
     o->px = px;
     o->py = py;
     o->ix = c * ird - s * irq;
     o->iy = s * ird + c * irq;
-    const double g_dd = gdd_ + hdd, g_dq = gdq_ + hdq, g_qq = gqq_ + hqq;
+    const double g_dd = gdd_ + h[0], g_dq = gdq_ + h[1], g_qq = gqq_ + h[2];
     const double c2 = c * c - s * s, s2 = 2.0 * c * s;
     const double sum = 0.5 * (g_dd + g_qq), dif = 0.5 * (g_dd - g_qq);
     o->axx = sum + dif * c2 - g_dq * s2;

@@ -77,6 +77,7 @@ private:
         double axx, axy, ayy;
         double tx, ty;
     };
+    void rotor_current(double px, double py, double c, double s, double* ird, double* irq, double h[3]) const;
     void current_at(double px, double py, double c, double s, double* ix, double* iy) const;
     void expand(double px, double py, double c, double s, Pt* o) const;
     // delta at tau given E(tau) (the shaft model at the top of this file).
