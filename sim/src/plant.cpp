@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "mcsim/centred_pwm.hpp"
 #include "mcsim/inverter.hpp"
 #include "mcsim/mechanics.hpp"
 #include "rotation.hpp"
@@ -53,6 +54,7 @@ struct Plant::Impl {
     std::unique_ptr<FluxModel> model;
     Mechanics mech;
     PwmSequencer seq;
+    CentredPwm cpwm;  // the Taylor path's sequencer (same edges as seq)
 
     // state
     double t = 0;
@@ -77,6 +79,7 @@ struct Plant::Impl {
     double c_end = 1, s_end = 0;  // cos, sin of p th after an enabled period
     // The Taylor path: its stepper and whether the model offers the expansion.
     detail::TaylorStepper ts;
+    Mat2 g_tay = Mat2::Identity();  // di/dpsi at its expansion point (this period's)
     bool taylor_ok = false;
     bool cs_end_valid = false;
     unsigned cs_carried = 0;
@@ -204,6 +207,16 @@ struct Plant::Impl {
         return 2.0 * (gn * (u_max + rs * in + we * psi.norm()) + we * in);
     }
 
+    // The same bound for the Taylor path, with G at the expansion point (mid-period) and no
+    // device drop (that path has none).
+    double taylor_rate_bound() const {
+        const double gn = std::max(std::fabs(g_tay(0, 0)) + std::fabs(g_tay(0, 1)),
+                                   std::fabs(g_tay(1, 0)) + std::fabs(g_tay(1, 1)));
+        const double we = std::fabs(p * w);
+        const double in = i.norm();
+        return 2.0 * (gn * ((2.0 / 3.0) * cfg.inverter.vdc + rs * in + we * psi.norm()) + we * in);
+    }
+
     // Enabled periods (hermite.hpp): start from the rotor-frame state, end by re-evaluating the
     // model at the final flux so that i = current(psi) holds exactly between periods.
     void hermite_begin() {  // th is the period's base angle here: its cos, sin are c0, s0
@@ -272,11 +285,10 @@ struct Plant::Impl {
             // The duties' mean voltage (zero currents: no dead-time term; no device drop here).
             detail::TaylorAnchor a;
             a.psi = ts.begin(psi, i, th, w, c0, s0, clarke_phase_voltages(averaged_phase_voltages(duty, none, inv, Ts)), Ts);
-            Mat2 g;
-            model->current_taylor(a.psi, &a.i, &g, a.k);
-            a.gdd = g(0, 0);
-            a.gdq = g(0, 1);
-            a.gqq = g(1, 1);
+            model->current_taylor(a.psi, &a.i, &g_tay, a.k);
+            a.gdd = g_tay(0, 0);
+            a.gdq = g_tay(0, 1);
+            a.gqq = g_tay(1, 1);
             ts.expand_about(a);
         }
         auto u_of = [half](const std::array<int, 3>& lv) {
@@ -286,23 +298,24 @@ struct Plant::Impl {
             const auto i_start = ts.predict_phase_currents(0.0, Vec2::Zero());
             ts.add_interval(Ts, clarke_phase_voltages(averaged_phase_voltages(duty, i_start, inv, Ts)));
         } else {
-            seq.begin(t0, Ts, duty, inv);
-            double te, tau = 0.0;
-            std::array<int, 3> lv = seq.levels();
-            Vec2 u = u_of(lv);
-            while (seq.next_time(&te)) {
-                const double tau_e = te - t0;
-                seq.apply(te, seq.next_needs_currents() ? ts.predict_phase_currents(tau_e, u) : none);
-                const std::array<int, 3>& nl = seq.levels();
-                if (nl[0] != lv[0] || nl[1] != lv[1] || nl[2] != lv[2]) {
-                    if (tau_e > tau) {
-                        ts.add_interval(tau_e, u);
-                        tau = tau_e;
-                    }
-                    lv = seq.levels();
-                    u = u_of(lv);
-                }
-            }
+            cpwm.begin(t0, Ts, duty, inv);
+            Vec2 u = u_of(cpwm.levels());
+            // A dead-time decision only asks whether the phase current is above +i_zero_band (a
+            // turn-on) or below -i_zero_band (a turn-off). Where the start current is farther
+            // from the band than the current can move by then (current_rate_bound, plus 1 mA for
+            // the prediction's own error, ~1e-6 A), its sign answers: same decision, no prediction.
+            const std::array<double, 3> i0 = inverse_clarke(Vec2(c0 * i.x() - s0 * i.y(), s0 * i.x() + c0 * i.y()));
+            const double rate = inv.t_dead > 0.0 ? taylor_rate_bound() : 0.0;
+            auto currents = [&](double tau, unsigned mask) {
+                const double reach = inv.i_zero_band + 1e-3 + rate * tau;
+                for (int x = 0; x < 3; ++x)
+                    if ((mask >> x & 1u) && !(std::fabs(i0[x]) > reach)) return ts.predict_phase_currents(tau, u);
+                return i0;
+            };
+            cpwm.walk(currents, [&](double tau, const std::array<int, 3>& lv) {
+                ts.add_interval(tau, u);  // u held from the last change to tau
+                u = u_of(lv);
+            });
             ts.add_interval(Ts, u);
         }
         ts.integrate(Ts);

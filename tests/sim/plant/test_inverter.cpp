@@ -1,9 +1,13 @@
-// Inverter: dead-time voltage error (4), switching vs averaged trajectories (5), sequencing.
+// Inverter: dead-time voltage error (4), switching vs averaged trajectories (5), sequencing, and
+// the Taylor path's CentredPwm against the general PwmSequencer.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 
+#include <vector>
+
+#include "mcsim/centred_pwm.hpp"
 #include "plant_test_util.hpp"
 
 using namespace mcsim;
@@ -149,4 +153,90 @@ TEST(PlantInverter, PredecideMatchesEdgeDecisions) {
             EXPECT_NEAR(a[k] - d[k] * Ts, (i[k] > 0 ? -1.0 : 1.0) * cfg.t_dead, 1e-15);
         }
     }
+}
+
+// CentredPwm (the Taylor path's sequencer) must change the levels at exactly the instants and to
+// exactly the levels PwmSequencer does, asking for currents at the same instants, for any duties
+// (0, 1, ties, pulses shorter than the dead time), dead times (none, short, longer than some
+// pulses, reaching past the period end) and currents that cross the zero band inside the period.
+TEST(PlantInverter, CentredPwmMatchesPwmSequencer) {
+    uint64_t st = 987654321;
+    auto rnd = [&st] {
+        st = st * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(st >> 11) * (1.0 / 9007199254740992.0);
+    };
+    const double Ts = 1e-4;
+    struct Change {
+        double tau;
+        std::array<int, 3> lv;
+        bool operator==(const Change& o) const { return tau == o.tau && lv == o.lv; }
+    };
+    int swallowed = 0, delayed_past_end = 0, band_hits = 0, changes = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        InverterConfig cfg;
+        const double dead[] = {0.0, 0.5e-6, 2e-6, 20e-6};
+        cfg.t_dead = dead[trial % 4];
+        const double t0 = (trial % 3) * 0.1234567 + trial * Ts;
+        std::array<double, 3> d, a, b;
+        for (int k = 0; k < 3; ++k) {
+            const double r = rnd();
+            d[k] = r < 0.1 ? rnd() * 0.05 : (r > 0.9 ? 1.0 - rnd() * 0.05 : rnd());
+            if (r < 0.03) d[k] = 0.0;
+            if (r > 0.97) d[k] = 1.0;
+            a[k] = (rnd() - 0.5) * 6.0;
+            b[k] = (rnd() - 0.5) * 2e5;  // [A/s]: up to 10 A over the period, so signs change
+        }
+        if (trial % 5 == 0) d[1] = d[0];  // coincident edges
+        if (trial % 11 == 0) d[2] = -0.2;  // out of range: clamped
+        if (trial % 13 == 0) d[0] = 1.3;
+        auto cur = [&](double tau) {
+            std::array<double, 3> i;
+            for (int k = 0; k < 3; ++k) i[k] = a[k] + b[k] * tau;
+            if (trial % 7 == 0) i[trial % 3] = 0.5 * cfg.i_zero_band;  // inside the band
+            return i;
+        };
+        // The general sequencer, driven as the Taylor path drove it before CentredPwm.
+        std::vector<Change> ref, got;
+        std::vector<double> ref_q, got_q;
+        PwmSequencer s;
+        s.begin(t0, Ts, d, cfg);
+        auto lv = s.levels();
+        double te;
+        while (s.next_time(&te)) {
+            const double tau = te - t0;
+            const bool need = s.next_needs_currents();
+            if (need && cfg.t_dead > 0.0) ref_q.push_back(tau);
+            s.apply(te, need ? cur(tau) : std::array<double, 3>{0.0, 0.0, 0.0});
+            if (s.levels() != lv) ref.push_back({tau, lv = s.levels()});
+        }
+        CentredPwm c;
+        c.begin(t0, Ts, d, cfg);
+        PwmSequencer s0;
+        s0.begin(t0, Ts, d, cfg);
+        ASSERT_EQ(c.levels(), s0.levels()) << "trial " << trial;  // at the period start
+        c.walk(
+            [&](double tau, unsigned mask) {
+                got_q.push_back(tau);
+                EXPECT_NE(mask, 0u);
+                return cur(tau);
+            },
+            [&](double tau, const std::array<int, 3>& l) { got.push_back({tau, l}); });
+        ASSERT_EQ(ref.size(), got.size()) << "trial " << trial;
+        for (size_t k = 0; k < ref.size(); ++k) ASSERT_TRUE(ref[k] == got[k]) << "trial " << trial << " change " << k;
+        ASSERT_EQ(ref_q, got_q) << "trial " << trial;
+        EXPECT_EQ(s.levels(), c.levels()) << "trial " << trial;
+        changes += static_cast<int>(got.size());
+        // what the trials covered
+        for (int k = 0; k < 3; ++k) {
+            const double dk = d[k] < 0.0 ? 0.0 : (d[k] > 1.0 ? 1.0 : d[k]);
+            if (dk > 0.0 && dk < 1.0 && cfg.t_dead > dk * Ts) ++swallowed;
+            if (dk > 0.0 && dk < 1.0 && 0.5 * (1.0 + dk) * Ts + cfg.t_dead > Ts) ++delayed_past_end;
+        }
+        if (trial % 7 == 0 && cfg.t_dead > 0.0) ++band_hits;
+    }
+    std::printf("CentredPwm == PwmSequencer: 20000 periods, %d level changes; pulses shorter than t_dead %d, "
+                "turn-offs reaching past the period end %d, zero-band currents %d\n",
+                changes, swallowed, delayed_past_end, band_hits);
+    EXPECT_GT(swallowed, 100);
+    EXPECT_GT(delayed_past_end, 100);
 }
