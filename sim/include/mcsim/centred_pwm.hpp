@@ -63,6 +63,7 @@ public:
         // Ts/2 + t_dead, a delayed turn-off at least that late.
         Edge late[6];
         bool live[6] = {true, true, true, true, true, true};  // a turn-on not cancelled by its turn-off
+        int pending[3] = {-1, -1, -1};  // each phase's delayed turn-on in late[]
         int nd = 0, kd = 0, kc = 0;
         const int nc = 2 * n_;
         for (;;) {
@@ -73,8 +74,8 @@ public:
             const int b0 = level_[0], b1 = level_[1], b2 = level_[2];
             if (tc == te) {
                 std::array<double, 3> ia{{0.0, 0.0, 0.0}};
-                int kend = kc;
-                unsigned mask = 0;
+                int kend = kc + 1;
+                unsigned mask = 1u << cmd_[kc].x;
                 for (; kend < nc && cmd_[kend].t <= te; ++kend) mask |= 1u << cmd_[kend].x;
                 if (t_dead_ > 0.0) ia = currents(te - t0_, mask);
                 // A turn-on before a turn-off of the same phase (PwmSequencer's order).
@@ -82,14 +83,17 @@ public:
                     const int x = cmd_[kc].x;
                     if (cmd_[kc].lv > 0) {
                         // i > 0 keeps the lower diode conducting through the dead time.
-                        if (t_dead_ > 0.0 && ia[x] > band_) late[nd++] = {te + t_dead_, x, +1};
-                        else level_[x] = +1;
+                        if (t_dead_ > 0.0 && ia[x] > band_) {
+                            pending[x] = nd;
+                            late[nd++] = {te + t_dead_, x, +1};
+                        } else {
+                            level_[x] = +1;
+                        }
                     } else if (t_dead_ > 0.0 && ia[x] < -band_) {
                         late[nd++] = {te + t_dead_, x, -1};  // if at or after t0 + Ts: not in this period
                     } else {
                         // Turned off at once: a turn-on still in its dead time never happens.
-                        for (int k = kd; k < nd; ++k)
-                            if (late[k].x == x && late[k].lv > 0) live[k] = false;
+                        if (pending[x] >= kd) live[pending[x]] = false;
                         level_[x] = -1;
                     }
                 }
