@@ -193,28 +193,19 @@ struct Plant::Impl {
         return v;
     }
 
-    // Bound on |di_x/dt| over this period, for PwmSequencer::predecide. From (4.1) in the
-    // stationary frame: di_ab/dt = R(theta) (G (u - Rs i - w_e J psi) + w_e J i), G = di/dpsi,
+    // Bound on |di_x/dt| over this period, for the dead-time decisions taken ahead of their edge
+    // (PwmSequencer::predecide; the Taylor path's start-current shortcut). From (4.1) in the
+    // stationary frame: di_ab/dt = R(theta) (G (u - Rs i - w_e J psi) + w_e J i), G = di/dpsi (g:
+    // exact at the period start on the Hermite path, at mid-period on the Taylor path),
     // |u_ab| <= 2/3 (vdc + 2 v_device) (phase voltages within the rails and one device drop
     // beyond them), |di_x/dt| <= |di_ab/dt|, |G|_2 <= |G|_1; x2 margin for the change of G
     // (saturation) and of the state in the period.
-    double current_rate_bound() const {
-        const Mat2& g = g_dq;  // exact at the period start (hermite_begin)
+    double current_rate_bound(const Mat2& g) const {
         const double gn = std::max(std::fabs(g(0, 0)) + std::fabs(g(0, 1)), std::fabs(g(1, 0)) + std::fabs(g(1, 1)));
         const double we = std::fabs(p * w);
         const double in = i.norm();
         const double u_max = (2.0 / 3.0) * (cfg.inverter.vdc + 2.0 * std::fabs(cfg.inverter.v_device));
         return 2.0 * (gn * (u_max + rs * in + we * psi.norm()) + we * in);
-    }
-
-    // The same bound for the Taylor path, with G at the expansion point (mid-period) and no
-    // device drop (that path has none).
-    double taylor_rate_bound() const {
-        const double gn = std::max(std::fabs(g_tay(0, 0)) + std::fabs(g_tay(0, 1)),
-                                   std::fabs(g_tay(1, 0)) + std::fabs(g_tay(1, 1)));
-        const double we = std::fabs(p * w);
-        const double in = i.norm();
-        return 2.0 * (gn * ((2.0 / 3.0) * cfg.inverter.vdc + rs * in + we * psi.norm()) + we * in);
     }
 
     // Enabled periods (hermite.hpp): start from the rotor-frame state, end by re-evaluating the
@@ -305,7 +296,7 @@ struct Plant::Impl {
             // from the band than the current can move by then (current_rate_bound, plus 1 mA for
             // the prediction's own error, ~1e-6 A), its sign answers: same decision, no prediction.
             const std::array<double, 3> i0 = inverse_clarke(Vec2(c0 * i.x() - s0 * i.y(), s0 * i.x() + c0 * i.y()));
-            const double rate = inv.t_dead > 0.0 ? taylor_rate_bound() : 0.0;
+            const double rate = inv.t_dead > 0.0 ? current_rate_bound(g_tay) : 0.0;
             auto currents = [&](double tau, unsigned mask) {
                 const double reach = inv.i_zero_band + 1e-3 + rate * tau;
                 for (int x = 0; x < 3; ++x)
@@ -363,7 +354,7 @@ struct Plant::Impl {
         } else {
             const double h_max = Ts / cfg.substeps;
             seq.begin(t0, Ts, duty, inv);
-            const double di_max = inv.t_dead > 0.0 ? current_rate_bound() : 0.0;
+            const double di_max = inv.t_dead > 0.0 ? current_rate_bound(g_dq) : 0.0;
             const bool pre = cfg.predecide_edges;
             if (pre) seq.predecide(t0, currents(), di_max);
             double tau = 0.0, te;

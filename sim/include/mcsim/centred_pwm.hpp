@@ -7,7 +7,7 @@
 // Why a second one: in a centred pattern every commanded turn-on falls in the first half and
 // every turn-off in the second, so the commanded edges are one sorted list of at most six, and
 // the dead-time delayed level changes come out in time order by themselves (a commanded edge
-// plus the same t_dead, or the period end). Two short queues merged in place replace the event
+// plus the same t_dead). Two short queues merged in place replace the event
 // array with its insertions and the per-event calls, which cost the Taylor path a fifth of its
 // time.
 #pragma once
