@@ -15,7 +15,7 @@ ctest --preset host -j "$(nproc)" || status=1
 echo "== pytest (tools)"
 .venv/bin/python -m pytest -q tools/tests || status=1
 
-echo "== cross build: firmware core + control for arm-cm4f"
+echo "== cross build: the firmware (core, control, estimators, drive) for arm-cm4f"
 rm -rf build/arm-cm4f
 if cmake --preset arm-cm4f >/dev/null && cmake --build --preset arm-cm4f; then
   echo "arm-cm4f: built with no warnings"

@@ -1,15 +1,21 @@
-/* Private interface between the drive's files (drive.c: ISR pipeline; startup.c: sequencing,
- * protection, offset calibration and the initial-position steps). Not part of the public API. */
+/* Private interface between the drive's files (drive.c: ISR pipeline; drive_config.c: the
+ * configuration; startup.c: sequencing, protection, offset calibration and the initial-position
+ * steps). Not part of the public API. */
 #ifndef MC_DRIVE_INTERNAL_H
 #define MC_DRIVE_INTERNAL_H
 #include "mc/drive.h"
 
+/* Every block configured from a built configuration (copies only). */
+void mc_drive_apply(mc_drive_t *d, const mc_drive_built_t *b);
+/* The blocks' running state back to their start, from the configurations they hold. */
 void mc_drive_init_blocks(mc_drive_t *d);
 /* Rising enable edge: every block and history reset, offsets to be measured again. */
 void mc_drive_startup_reset(mc_drive_t *d);
 /* Protection and the startup states for this period. Returns true when the control pipeline
  * runs this period (RUN, Step III); otherwise it has already written the PWM. */
 bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc, mc_ab_t i_ab, float vdc);
+/* Outputs off, duties at 50 %, the reason latched (FAULT until disable + enable). */
+void mc_drive_trip(mc_drive_t *d, uint32_t reason);
 /* Step III convergence test, after the pipeline ran; hands over to RUN. */
 void mc_drive_step3_check(mc_drive_t *d, float omega_hat);
 

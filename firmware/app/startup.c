@@ -13,7 +13,7 @@ static void outputs_off(mc_drive_t *d)
     hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
 }
 
-static void trip(mc_drive_t *d, uint32_t reason)
+void mc_drive_trip(mc_drive_t *d, uint32_t reason)
 {
     outputs_off(d);
     mc_seq_fault(&d->seq, reason);
@@ -22,13 +22,12 @@ static void trip(mc_drive_t *d, uint32_t reason)
 /* Reset of everything the estimator pipeline keeps between periods, with the estimate at theta. */
 static void pipeline_reset(mc_drive_t *d, float theta)
 {
-    mc_unop_reset(&d->unop, theta, 0.0f);
-    mc_pll_reset(&d->pll, theta, 0.0f);
+    d->src->reset(&d->src_state, theta, 0.0f);
     mc_inj_reset(&d->inj);
     mc_cc_reset(&d->cc);
     mc_biquad_reset(&d->notch_d, 0.0f);
     mc_biquad_reset(&d->notch_q, 0.0f);
-    mc_lpf1_init(&d->step3_speed, 50.0f, d->cfg.ts, 0.0f);
+    mc_lpf1_init(&d->step3_speed, 50.0f, d->blk.ts, 0.0f);
     d->step3_count = 0u;
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
 }
@@ -60,18 +59,22 @@ static void write_duties(mc_drive_t *d, mc_abc_t duty, float vdc)
     d->tm.duty[2] = duty.c;
 }
 
-static void protect(mc_drive_t *d, mc_abc_t i, float vdc)
+static void protect(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i, float vdc)
 {
-    const mc_drive_cfg_t *c = &d->cfg;
-    /* any phase above the trip level; plain compares, since fmaxf is a library call on the M4
-     * (a NaN phase is ignored, as fmaxf would) */
-    const bool over = fabsf(i.a) > c->i_trip || fabsf(i.b) > c->i_trip || fabsf(i.c) > c->i_trip;
+    const mc_drive_blk_t *c = &d->blk;
+    /* any phase above the trip level, or a sample at an ADC rail: a clipped channel says only
+     * that the current is beyond the span, which the configuration keeps above the trip level */
+    bool rail = false;
+    for (int k = 0; k < 3; ++k) {
+        rail = rail || raw->i[k] == 0u || (int32_t)raw->i[k] >= c->adc_max;
+    }
+    const bool over = rail || fabsf(i.a) > c->i_trip || fabsf(i.b) > c->i_trip || fabsf(i.c) > c->i_trip;
     if (over) {
-        trip(d, MC_FAULT_OVERCURRENT);
+        mc_drive_trip(d, MC_FAULT_OVERCURRENT);
     } else if (vdc > c->vdc_max) {
-        trip(d, MC_FAULT_OVERVOLTAGE);
+        mc_drive_trip(d, MC_FAULT_OVERVOLTAGE);
     } else if (vdc < c->vdc_min) {
-        trip(d, MC_FAULT_UNDERVOLTAGE);
+        mc_drive_trip(d, MC_FAULT_UNDERVOLTAGE);
     }
 }
 
@@ -81,22 +84,22 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     for (int k = 0; k < 3; ++k) {
         d->cal_sum[k] += (float)raw->i[k];
     }
-    if (++d->cal_count < d->cfg.offset_cal_samples) {
+    if (++d->cal_count < d->blk.cal_samples) {
         return;
     }
     for (int k = 0; k < 3; ++k) {
         const float off = d->cal_sum[k] / (float)d->cal_count;
-        if (fabsf(off - d->cfg.adc_offset_nominal) > d->cfg.adc_offset_tol) {
-            trip(d, MC_FAULT_OFFSET_CAL);
+        if (!(fabsf(off - d->blk.offset_nominal) <= d->blk.offset_tol)) {
+            mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
             return;
         }
         d->offset[k] = off;
     }
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
-    const bool started = d->cfg.ip1_pulse3 ? mc_pulse3_start(&d->pulse3, &d->cfg.pulse3)
-                                           : mc_initpos_start(&d->ip1, &d->cfg.ip1);
+    const bool started = d->blk.ip1_pulse3 ? mc_pulse3_start(&d->pulse3, &d->blk.pulse3)
+                                           : mc_initpos_start(&d->ip1, &d->blk.ip1);
     if (d->seq.state == MC_STATE_INIT_POS && !started) {
-        trip(d, MC_FAULT_CONFIG);
+        mc_drive_trip(d, MC_FAULT_CONFIG);
         return;
     }
     hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
@@ -109,14 +112,14 @@ static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     mc_abc_t duty = {0.0f, 0.0f, 0.0f};
     mc_ip_status_t st;
     if (d->seq.step == MC_INIT_STEP1) {
-        st = d->cfg.ip1_pulse3 ? mc_pulse3_step(&d->pulse3, i_ab, vdc, &duty)
+        st = d->blk.ip1_pulse3 ? mc_pulse3_step(&d->pulse3, i_ab, vdc, &duty)
                                : mc_initpos_step(&d->ip1, i_ab, vdc, &duty);
         write_duties(d, duty, vdc);
         if (st == MC_IP_DONE) {
-            const float theta1 = d->cfg.ip1_pulse3 ? d->pulse3.theta : d->ip1.theta1;
+            const float theta1 = d->blk.ip1_pulse3 ? d->pulse3.theta : d->ip1.theta1;
             d->tm.theta1 = theta1;
-            const bool ok = d->cfg.ip2_dvi ? mc_dvi_start(&d->dvi, &d->cfg.dvi, theta1)
-                                           : mc_polarity_start(&d->ip2, &d->cfg.ip2, theta1);
+            const bool ok = d->blk.ip2_dvi ? mc_dvi_start(&d->dvi, &d->blk.dvi, theta1)
+                                           : mc_polarity_start(&d->ip2, &d->blk.ip2, theta1);
             if (!ok) {
                 return MC_IP_FAILED;
             }
@@ -125,18 +128,18 @@ static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
         }
         return st;
     }
-    if (d->cfg.ip2_dvi) {
+    if (d->blk.ip2_dvi) {
         st = mc_dvi_step(&d->dvi, i_ab, vdc, &duty);
     } else {
         st = mc_polarity_step(&d->ip2, i_ab, vdc, &duty);
     }
     write_duties(d, duty, vdc);
     if (st == MC_IP_DONE) {
-        const float theta2 = d->cfg.ip2_dvi ? d->dvi.theta2 : d->ip2.theta2;
+        const float theta2 = d->blk.ip2_dvi ? d->dvi.theta2 : d->ip2.theta2;
         d->tm.theta2 = theta2;
-        d->tm.pol_flip = d->cfg.ip2_dvi ? d->dvi.flip : d->ip2.flip;
-        d->tm.c1 = d->cfg.ip2_dvi ? d->dvi.peak_pos : d->ip2.c1;
-        d->tm.c2 = d->cfg.ip2_dvi ? d->dvi.peak_neg : d->ip2.c2;
+        d->tm.pol_flip = d->blk.ip2_dvi ? d->dvi.flip : d->ip2.flip;
+        d->tm.c1 = d->blk.ip2_dvi ? d->dvi.peak_pos : d->ip2.c1;
+        d->tm.c2 = d->blk.ip2_dvi ? d->dvi.peak_neg : d->ip2.c2;
         /* Step III continues from theta2 with the running-state estimator itself (no method
          * switch later): only its state is set here. */
         pipeline_reset(d, theta2);
@@ -149,7 +152,7 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
 {
     const mc_state_t s0 = d->seq.state;
     if (s0 == MC_STATE_INIT_POS || s0 == MC_STATE_RUN) {
-        protect(d, i_abc, vdc);
+        protect(d, raw, i_abc, vdc);
     }
     switch (d->seq.state) {
     case MC_STATE_OFFSET_CAL:
@@ -158,7 +161,7 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
     case MC_STATE_INIT_POS:
         if (d->seq.step == MC_INIT_STEP1 || d->seq.step == MC_INIT_STEP2) {
             if (pulse_steps(d, i_ab, vdc) == MC_IP_FAILED) {
-                trip(d, MC_FAULT_INIT_POS);
+                mc_drive_trip(d, MC_FAULT_INIT_POS);
             }
         }
         break;
@@ -190,8 +193,8 @@ void mc_drive_step3_check(mc_drive_t *d, float omega_hat)
      * at rest in Step III) stays below the tolerance for step3_hold, and Step III lasted at
      * least twice that (the estimate starts at rest too). */
     const float w = mc_lpf1_step(&d->step3_speed, fabsf(omega_hat));
-    d->step3_count = w < d->cfg.step3_speed_tol ? d->step3_count + 1u : 0u;
-    const uint32_t hold = (uint32_t)(d->cfg.step3_hold / d->cfg.ts + 0.5f);
+    d->step3_count = w < d->blk.step3_speed_tol ? d->step3_count + 1u : 0u;
+    const uint32_t hold = d->blk.step3_hold;
     if (d->step3_count >= hold && d->seq.ticks >= 2u * hold) {
         mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
         d->tm.state = d->seq.state;

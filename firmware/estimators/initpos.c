@@ -13,6 +13,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "mc/angle.h"
 #include "mc/sincos.h"
@@ -51,13 +52,22 @@ void mc_ip_direct(unsigned pattern, float vdc, mc_duty_t *out)
     out->saturated = false;
 }
 
-void mc_ip_prog_init(mc_ip_prog_t *p, float rs, float i_rest, float i_trip, int gap_max)
+/* segment kinds (mc_ip_seg_t.kind): low 3 bits = pattern V(abc) or vector-table index */
+#define KIND_DIRECT 0x00u
+#define KIND_VECTOR 0x10u
+#define KIND_GAP    0x20u
+#define KIND_TYPE   0xf0u
+#define KIND_ARG    0x07u
+_Static_assert(MC_IP_VEC_MAX <= 8, "vector index must fit KIND_ARG");
+
+void mc_ip_run_init(mc_ip_run_t *p, float rs, float i_rest, float i_trip, int gap_max)
 {
     p->rs = rs;
     p->i_rest = i_rest;
     p->i_trip = i_trip;
     p->gap_max = gap_max;
     p->n_seg = 0;
+    p->n_vec = 0;
     p->n = 0;
     p->cur = 0;
     p->pos = 0;
@@ -72,58 +82,51 @@ void mc_ip_prog_init(mc_ip_prog_t *p, float rs, float i_rest, float i_trip, int 
     p->n_rec = 0;
     p->i_peak = 0.0f;
     p->decay_timeout = false;
-    p->overflow = false;
 }
 
-static mc_ip_seg_t *new_seg(mc_ip_prog_t *p, int len, int tag)
+static bool new_seg(mc_ip_run_t *p, int len, int tag, unsigned kind)
 {
-    if (p->n_seg >= MC_IP_SEG_MAX || len < 1) {
-        return NULL;
+    if (p->n_seg >= MC_IP_SEG_MAX || len < 1 || len > INT16_MAX || tag > MC_IP_TAG_MAX) {
+        return false;
     }
     mc_ip_seg_t *s = &p->seg[p->n_seg++];
-    s->u.alpha = 0.0f;
-    s->u.beta = 0.0f;
-    s->pattern = 0u;
-    s->direct = true;
-    s->gap = false;
     s->len = (int16_t)len;
-    s->tag = (int16_t)tag;
-    return s;
+    s->tag = (int8_t)((tag < 0) ? -1 : tag);
+    s->kind = (uint8_t)kind;
+    return true;
 }
 
-bool mc_ip_prog_direct(mc_ip_prog_t *p, unsigned pattern, int len, int tag)
+bool mc_ip_run_direct(mc_ip_run_t *p, unsigned pattern, int len, int tag)
 {
-    mc_ip_seg_t *s = new_seg(p, len, tag);
-    if (s != NULL) {
-        s->pattern = (uint8_t)(pattern & 7u);
-    }
-    return s != NULL;
+    return new_seg(p, len, tag, KIND_DIRECT | (pattern & 7u));
 }
 
-bool mc_ip_prog_vector(mc_ip_prog_t *p, mc_ab_t u, int len, int tag)
+bool mc_ip_run_vector(mc_ip_run_t *p, mc_ab_t u, int len, int tag)
 {
-    mc_ip_seg_t *s = new_seg(p, len, tag);
-    if (s != NULL) {
-        s->direct = false;
-        s->u = u;
+    /* the same vector (bit for bit) shares one table entry */
+    int v = 0;
+    while (v < p->n_vec && memcmp(&p->vec[v], &u, sizeof u) != 0) {
+        ++v;
     }
-    return s != NULL;
+    if (v >= MC_IP_VEC_MAX || !new_seg(p, len, tag, KIND_VECTOR | (unsigned)v)) {
+        return false;
+    }
+    if (v == p->n_vec) {
+        p->vec[p->n_vec++] = u;
+    }
+    return true;
 }
 
-bool mc_ip_prog_gap(mc_ip_prog_t *p, int len_min)
+bool mc_ip_run_gap(mc_ip_run_t *p, int len_min)
 {
-    mc_ip_seg_t *s = new_seg(p, len_min, -1);
-    if (s != NULL) {
-        s->gap = true;
-    }
-    return s != NULL;
+    return new_seg(p, len_min, -1, KIND_GAP);
 }
 
 /* Has the segment being issued run its course, judged at call n with sample i(n)? */
-static bool seg_finished(mc_ip_prog_t *p, mc_ab_t i)
+static bool seg_finished(mc_ip_run_t *p, mc_ab_t i)
 {
     const mc_ip_seg_t *s = &p->seg[p->cur];
-    if (!s->gap) {
+    if ((s->kind & KIND_TYPE) != KIND_GAP) {
         return p->pos >= s->len;
     }
     /* only after two gap periods has a whole zero-vector interval ended at this sample */
@@ -141,9 +144,11 @@ static bool seg_finished(mc_ip_prog_t *p, mc_ab_t i)
     return false;
 }
 
-mc_ip_status_t mc_ip_prog_step(mc_ip_prog_t *p, mc_ab_t i, float vdc, mc_abc_t *duty)
+mc_ip_status_t mc_ip_run_step(mc_ip_run_t *p, mc_ab_t i, float vdc, mc_abc_t *duty,
+                              mc_ip_rec_t *rec, int *tag_out)
 {
     zero_duty(duty);
+    *tag_out = -1;
     float i2 = norm2(i);
     if (!(vdc > 0.0f) || !finite_ab(i) || (p->i_trip > 0.0f && i2 > p->i_trip * p->i_trip)) {
         return MC_IP_FAILED;
@@ -154,16 +159,12 @@ mc_ip_status_t mc_ip_prog_step(mc_ip_prog_t *p, mc_ab_t i, float vdc, mc_abc_t *
     /* close [n-1, n] */
     if (p->n >= 1 && p->tag_line[0] >= 0) {
         p->open--;
-        if (p->n_rec < MC_IP_REC_MAX) {
-            mc_ip_rec_t *r = &p->rec[p->n_rec++];
-            r->i0 = p->i_prev;
-            r->i1 = i;
-            r->ubar.alpha = p->u_line[0].alpha - 0.5f * p->rs * (p->i_prev.alpha + i.alpha);
-            r->ubar.beta = p->u_line[0].beta - 0.5f * p->rs * (p->i_prev.beta + i.beta);
-            r->tag = p->tag_line[0];
-        } else {
-            p->overflow = true;
-        }
+        p->n_rec++;
+        rec->i0 = p->i_prev;
+        rec->i1 = i;
+        rec->ubar.alpha = p->u_line[0].alpha - 0.5f * p->rs * (p->i_prev.alpha + i.alpha);
+        rec->ubar.beta = p->u_line[0].beta - 0.5f * p->rs * (p->i_prev.beta + i.beta);
+        *tag_out = p->tag_line[0];
     }
     p->u_line[0] = p->u_line[1];
     p->tag_line[0] = p->tag_line[1];
@@ -174,15 +175,16 @@ mc_ip_status_t mc_ip_prog_step(mc_ip_prog_t *p, mc_ab_t i, float vdc, mc_abc_t *
         p->pos = 0;
     }
     mc_duty_t d;
-    int16_t tag = -1;
+    int8_t tag = -1;
     if (p->cur < p->n_seg) {
         const mc_ip_seg_t *s = &p->seg[p->cur];
-        if (s->gap) {
+        unsigned type = s->kind & KIND_TYPE, arg = s->kind & KIND_ARG;
+        if (type == KIND_GAP) {
             mc_ip_direct(0u, vdc, &d);
-        } else if (s->direct) {
-            mc_ip_direct(s->pattern, vdc, &d);
+        } else if (type == KIND_DIRECT) {
+            mc_ip_direct(arg, vdc, &d);
         } else {
-            mc_svpwm(s->u, vdc, &d);
+            mc_svpwm(p->vec[arg], vdc, &d);
         }
         tag = s->tag;
         p->pos++;
@@ -200,6 +202,43 @@ mc_ip_status_t mc_ip_prog_step(mc_ip_prog_t *p, mc_ab_t i, float vdc, mc_abc_t *
     p->i_prev = i;
     p->n++;
     return (p->cur >= p->n_seg && p->open <= 0) ? MC_IP_DONE : MC_IP_RUNNING;
+}
+
+void mc_ip_prog_init(mc_ip_prog_t *p, float rs, float i_rest, float i_trip, int gap_max)
+{
+    mc_ip_run_init(&p->run, rs, i_rest, i_trip, gap_max);
+    p->n_rec = 0;
+    p->overflow = false;
+}
+
+bool mc_ip_prog_direct(mc_ip_prog_t *p, unsigned pattern, int len, int tag)
+{
+    return mc_ip_run_direct(&p->run, pattern, len, tag);
+}
+
+bool mc_ip_prog_vector(mc_ip_prog_t *p, mc_ab_t u, int len, int tag)
+{
+    return mc_ip_run_vector(&p->run, u, len, tag);
+}
+
+bool mc_ip_prog_gap(mc_ip_prog_t *p, int len_min)
+{
+    return mc_ip_run_gap(&p->run, len_min);
+}
+
+mc_ip_status_t mc_ip_prog_step(mc_ip_prog_t *p, mc_ab_t i, float vdc, mc_abc_t *duty)
+{
+    int tag;
+    mc_ip_rec_t r;
+    mc_ip_status_t st = mc_ip_run_step(&p->run, i, vdc, duty, &r, &tag);
+    if (tag >= 0) {
+        if (p->n_rec < MC_IP_REC_MAX) {
+            p->rec[p->n_rec++] = r;
+        } else {
+            p->overflow = true;
+        }
+    }
+    return st;
 }
 
 /* ---------------- Step I ---------------- */

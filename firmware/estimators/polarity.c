@@ -53,20 +53,19 @@ bool mc_polarity_start(mc_polarity_t *s, const mc_polarity_cfg_t *cfg, float the
     s->c1 = s->c2 = 0.0f;
     s->flip = false;
     s->n_valid = 0;
-    s->used = 0;
     s->v_real = 0.0f;
     s->calls = 0;
     s->dir = mc_sincos(theta1);
-    mc_ip_prog_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, 1);
+    mc_ip_run_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, 1);
     if (!(cfg->ts > 0.0f) || !(cfg->v_pol > 0.0f) || cfg->n < 1 || cfg->n > MC_POL_N_MAX ||
         4 * cfg->n > MC_IP_REC_MAX) {
         return false;
     }
     mc_ab_t up = vec(cfg->v_pol, s->dir), un = vec(-cfg->v_pol, s->dir);
     /* Fig 5.7: +n, -2n, +n; zero net volt-seconds, so the current ends where it started */
-    bool ok = mc_ip_prog_vector(&s->prog, up, cfg->n, 0) &&
-              mc_ip_prog_vector(&s->prog, un, 2 * cfg->n, 1) &&
-              mc_ip_prog_vector(&s->prog, up, cfg->n, 2);
+    bool ok = mc_ip_run_vector(&s->prog, up, cfg->n, 0) &&
+              mc_ip_run_vector(&s->prog, un, 2 * cfg->n, 1) &&
+              mc_ip_run_vector(&s->prog, up, cfg->n, 2);
     if (ok) {
         s->state = ST_RUN;
     }
@@ -108,19 +107,21 @@ mc_ip_status_t mc_polarity_step(mc_polarity_t *s, mc_ab_t i_ab, float vdc, mc_ab
         return (s->state == ST_DONE) ? MC_IP_DONE : MC_IP_FAILED;
     }
     s->calls++;
-    mc_ip_status_t st = mc_ip_prog_step(&s->prog, i_ab, vdc, duty);
+    mc_ip_rec_t r;
+    int tag;
+    mc_ip_status_t st = mc_ip_run_step(&s->prog, i_ab, vdc, duty, &r, &tag);
     if (s->prog.n == 1) {
         mc_ab_t u = s->prog.u_line[1];
         s->v_real = sqrtf(u.alpha * u.alpha + u.beta * u.beta);
     }
-    if (st == MC_IP_FAILED || s->prog.overflow) {
+    if (st == MC_IP_FAILED) {
         s->state = ST_FAILED;
         zero_duty(duty);
         return MC_IP_FAILED;
     }
-    /* one record arrives per call: two model evaluations of work per call */
-    for (; s->used < s->prog.n_rec && s->used < MC_IP_REC_MAX; ++s->used) {
-        fold(s, &s->prog.rec[s->used]);
+    /* at most one interval closes per call: two model evaluations of work per call */
+    if (tag >= 0) {
+        fold(s, &r);
     }
     if (st != MC_IP_DONE) {
         return MC_IP_RUNNING;
@@ -158,18 +159,18 @@ bool mc_dvi_start(mc_dvi_t *s, const mc_dvi_cfg_t *cfg, float theta1)
     s->flip = false;
     s->calls = 0;
     s->dir = mc_sincos(theta1);
-    mc_ip_prog_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, cfg->gap_max);
+    mc_ip_run_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, cfg->gap_max);
     if (!(cfg->v > 0.0f) || cfg->n < 1 || cfg->n > MC_POL_N_MAX) {
         return false;
     }
     mc_ab_t up = vec(cfg->v, s->dir), un = vec(-cfg->v, s->dir);
     /* the opposite pulse of equal volt-seconds brings the current back to (nearly) zero far
      * faster than the zero vector (tau = L / Rs, tens of ms); the gap waits for the rest */
-    bool ok = mc_ip_prog_vector(&s->prog, up, cfg->n, 0) &&
-              mc_ip_prog_vector(&s->prog, un, cfg->n, -1) &&
-              mc_ip_prog_gap(&s->prog, cfg->gap_min) &&
-              mc_ip_prog_vector(&s->prog, un, cfg->n, 1) &&
-              mc_ip_prog_vector(&s->prog, up, cfg->n, -1);
+    bool ok = mc_ip_run_vector(&s->prog, up, cfg->n, 0) &&
+              mc_ip_run_vector(&s->prog, un, cfg->n, -1) &&
+              mc_ip_run_gap(&s->prog, cfg->gap_min) &&
+              mc_ip_run_vector(&s->prog, un, cfg->n, 1) &&
+              mc_ip_run_vector(&s->prog, up, cfg->n, -1);
     if (ok) {
         s->state = ST_RUN;
     }
@@ -183,23 +184,25 @@ mc_ip_status_t mc_dvi_step(mc_dvi_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty)
         return (s->state == ST_DONE) ? MC_IP_DONE : MC_IP_FAILED;
     }
     s->calls++;
-    mc_ip_status_t st = mc_ip_prog_step(&s->prog, i_ab, vdc, duty);
-    if (st == MC_IP_FAILED || s->prog.overflow) {
+    mc_ip_rec_t r;
+    int tag;
+    mc_ip_status_t st = mc_ip_run_step(&s->prog, i_ab, vdc, duty, &r, &tag);
+    if (st == MC_IP_FAILED) {
         s->state = ST_FAILED;
         zero_duty(duty);
         return MC_IP_FAILED;
     }
-    if (st != MC_IP_DONE) {
-        return MC_IP_RUNNING;
-    }
-    for (int k = 0; k < s->prog.n_rec && k < MC_IP_REC_MAX; ++k) {
-        const mc_ip_rec_t *r = &s->prog.rec[k];
-        float a = absf(proj(r->i1, s->dir));
-        if (r->tag == 0 && a > s->peak_pos) {
+    /* peak |i_delta| of each pulse, over its intervals as they close */
+    if (tag == 0 || tag == 1) {
+        float a = absf(proj(r.i1, s->dir));
+        if (tag == 0 && a > s->peak_pos) {
             s->peak_pos = a;
-        } else if (r->tag == 1 && a > s->peak_neg) {
+        } else if (tag == 1 && a > s->peak_neg) {
             s->peak_neg = a;
         }
+    }
+    if (st != MC_IP_DONE) {
+        return MC_IP_RUNNING;
     }
     s->flip = s->peak_neg > s->peak_pos;
     s->theta2 = mc_wrap_pi(s->theta1 + (s->flip ? MC_PI : 0.0f));

@@ -37,17 +37,19 @@ bool mc_pulse3_start(mc_pulse3_t *s, const mc_pulse3_cfg_t *cfg)
     for (int k = 0; k < 3; ++k) {
         s->ipk[k] = 0.0f;
         s->di[k] = 0.0f;
+        s->i_start[k] = 0.0f;
+        s->seen[k] = false;
     }
-    mc_ip_prog_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, cfg->gap_max);
+    mc_ip_run_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, cfg->gap_max);
     if (cfg->n < 1 || cfg->n > MC_IP_M_MAX) {
         return false;
     }
     bool ok = true;
     for (int k = 0; k < 3; ++k) {
-        ok = ok && mc_ip_prog_direct(&s->prog, v[k], cfg->n, k);
-        ok = ok && mc_ip_prog_direct(&s->prog, 7u & ~v[k], cfg->n, -1);
+        ok = ok && mc_ip_run_direct(&s->prog, v[k], cfg->n, k);
+        ok = ok && mc_ip_run_direct(&s->prog, 7u & ~v[k], cfg->n, -1);
         if (k < 2) {
-            ok = ok && mc_ip_prog_gap(&s->prog, cfg->gap_min);
+            ok = ok && mc_ip_run_gap(&s->prog, cfg->gap_min);
         }
     }
     if (ok) {
@@ -97,6 +99,23 @@ bool mc_pulse3_angle(const float ipk[3], float *theta, float *theta_atan, int *s
     return true;
 }
 
+/* (3.19) peak rise of pulse t on one of its intervals; the intervals arrive in time order.
+ * Measured from the pulse's first sample: the gap leaves up to i_rest, which would otherwise
+ * enter (3.19) as a false fluctuation. */
+static void track_peak(mc_pulse3_t *s, const mc_ip_rec_t *r, int t)
+{
+    mc_abc_t p0 = mc_clarke_inv(r->i0), p1 = mc_clarke_inv(r->i1);
+    float v0 = (t == 0) ? p0.a : ((t == 1) ? p0.b : p0.c);
+    float v1 = (t == 0) ? p1.a : ((t == 1) ? p1.b : p1.c);
+    if (!s->seen[t]) {
+        s->i_start[t] = v0;
+        s->seen[t] = true;
+    }
+    if (v1 - s->i_start[t] > s->ipk[t]) {
+        s->ipk[t] = v1 - s->i_start[t];
+    }
+}
+
 mc_ip_status_t mc_pulse3_step(mc_pulse3_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty)
 {
     duty->a = duty->b = duty->c = 0.0f;
@@ -104,35 +123,19 @@ mc_ip_status_t mc_pulse3_step(mc_pulse3_t *s, mc_ab_t i_ab, float vdc, mc_abc_t 
         return (s->state == ST_DONE) ? MC_IP_DONE : MC_IP_FAILED;
     }
     s->calls++;
-    mc_ip_status_t st = mc_ip_prog_step(&s->prog, i_ab, vdc, duty);
-    if (st == MC_IP_FAILED || s->prog.overflow) {
+    mc_ip_rec_t r;
+    int tag;
+    mc_ip_status_t st = mc_ip_run_step(&s->prog, i_ab, vdc, duty, &r, &tag);
+    if (st == MC_IP_FAILED) {
         s->state = ST_FAILED;
         duty->a = duty->b = duty->c = 0.0f;
         return MC_IP_FAILED;
     }
+    if (tag >= 0 && tag <= 2) {
+        track_peak(s, &r, tag);
+    }
     if (st != MC_IP_DONE) {
         return MC_IP_RUNNING;
-    }
-    /* peak rise from the pulse's first sample: the gap leaves up to i_rest, which would
-     * otherwise enter (3.19) as a false fluctuation */
-    float start[3] = {0.0f, 0.0f, 0.0f};
-    bool seen[3] = {false, false, false};
-    for (int k = 0; k < s->prog.n_rec && k < MC_IP_REC_MAX; ++k) {
-        const mc_ip_rec_t *r = &s->prog.rec[k];
-        if (r->tag < 0 || r->tag > 2) {
-            continue;
-        }
-        int t = r->tag;
-        mc_abc_t p0 = mc_clarke_inv(r->i0), p1 = mc_clarke_inv(r->i1);
-        float v0 = (t == 0) ? p0.a : ((t == 1) ? p0.b : p0.c);
-        float v1 = (t == 0) ? p1.a : ((t == 1) ? p1.b : p1.c);
-        if (!seen[t]) {
-            start[t] = v0;
-            seen[t] = true;
-        }
-        if (v1 - start[t] > s->ipk[t]) {
-            s->ipk[t] = v1 - start[t];
-        }
     }
     float i0 = (s->ipk[0] + s->ipk[1] + s->ipk[2]) * (1.0f / 3.0f);
     for (int k = 0; k < 3; ++k) {

@@ -1,6 +1,6 @@
 // mcsim: scenario runner CLI.
 //   mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]
-//   mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|ripple|rk4]
+//   mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]
 //   mcsim keys                      (the scenario key table, markdown)
 //   mcsim check SCENARIO.toml [--set key=value]...   (validate only)
 // Exit status: 0 done, 2 bad input (scenario, key, value, file), 1 failure while running.
@@ -45,7 +45,7 @@ double ns_per_call(F f)
 const char* kUsage =
     "usage: mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
-    "       mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|ripple|rk4]\n"
+    "       mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]\n"
     "       mcsim keys\n";
 
 // The standard closed-loop benchmark: encoder FOC speed step 0 -> 600 rpm with 76 % rated load,
@@ -144,7 +144,7 @@ int cmd_bench(int argc, char** argv)
     const mcsim::RunSummary& r = runs[runs.size() / 2];
     std::printf("mcsim bench: %s\n", sc.s("scenario.name").c_str());
     std::printf("  simulated %.3f s (%ld periods at %.0f Hz) in %.3f s wall on one core (median of %d runs)\n",
-                r.sim_time_s, r.periods, 1.0 / sc.f("control.ts_s"), r.wall_time_s, repeat);
+                r.sim_time_s, r.periods, r.periods / r.sim_time_s, r.wall_time_s, repeat);
     std::printf("  real-time factor: %.0fx (simulated seconds per wall second; runs: %.0fx .. %.0fx)\n",
                 r.realtime_factor, runs.front().realtime_factor, runs.back().realtime_factor);
     const double per_period_ns = r.periods > 0 ? r.wall_time_s * 1e9 / r.periods : 0.0;
@@ -152,9 +152,6 @@ int cmd_bench(int argc, char** argv)
                 "%s) %.0f ns + sensors, runner and metrics %.0f ns\n",
                 per_period_ns, r.isr_ns_mean, sc.s("inverter.integrator").c_str(), r.plant_ns_mean,
                 per_period_ns - r.isr_ns_mean - r.plant_ns_mean);
-    if (r.ripple_periods > 0)
-        std::printf("  ripple integrator: %lld of %lld periods redone edge by edge (uncertain dead-time decisions)\n",
-                    r.ripple_fallbacks, r.ripple_periods);
     float (*volatile sin_fn)(float) = sinf;  // two real calls, as an ISR would make
     float (*volatile cos_fn)(float) = cosf;
     const double t_fast = ns_per_call([](float x) { const mc_sincos_t r = mc_sincos(x); return r.s + r.c; });

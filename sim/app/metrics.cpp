@@ -19,6 +19,68 @@ std::string json_number(double v)
     return os.str();
 }
 
+std::string json_string(const std::string& s)
+{
+    static const char* const kHex = "0123456789abcdef";
+    std::string o;
+    o.reserve(s.size() + 2);
+    o += '"';
+    const size_t n = s.size();
+    for (size_t k = 0; k < n;) {
+        const unsigned char c = static_cast<unsigned char>(s[k]);
+        if (c < 0x80) {
+            switch (c) {
+            case '"': o += "\\\""; break;
+            case '\\': o += "\\\\"; break;
+            case '\b': o += "\\b"; break;
+            case '\f': o += "\\f"; break;
+            case '\n': o += "\\n"; break;
+            case '\r': o += "\\r"; break;
+            case '\t': o += "\\t"; break;
+            default:
+                if (c < 0x20 || c == 0x7f) {
+                    o += "\\u00";
+                    o += kHex[c >> 4];
+                    o += kHex[c & 15];
+                } else {
+                    o += static_cast<char>(c);
+                }
+            }
+            ++k;
+            continue;
+        }
+        // Multi-byte UTF-8: copy a well-formed sequence (no overlongs, no surrogates, <= U+10FFFF),
+        // replace each byte of anything else by U+FFFD.
+        int len = 0;
+        unsigned lo = 0x80, hi = 0xBF;
+        if (c >= 0xC2 && c <= 0xDF) len = 2;
+        else if (c >= 0xE0 && c <= 0xEF) {
+            len = 3;
+            if (c == 0xE0) lo = 0xA0;
+            if (c == 0xED) hi = 0x9F;
+        } else if (c >= 0xF0 && c <= 0xF4) {
+            len = 4;
+            if (c == 0xF0) lo = 0x90;
+            if (c == 0xF4) hi = 0x8F;
+        }
+        bool ok = len > 0 && k + size_t(len) <= n;
+        for (int j = 1; ok && j < len; ++j) {
+            const unsigned char d = static_cast<unsigned char>(s[k + j]);
+            const unsigned a = j == 1 ? lo : 0x80, b = j == 1 ? hi : 0xBF;
+            ok = d >= a && d <= b;
+        }
+        if (ok) {
+            o.append(s, k, size_t(len));
+            k += size_t(len);
+        } else {
+            o += "\\ufffd";
+            ++k;
+        }
+    }
+    o += '"';
+    return o;
+}
+
 Metrics::Metrics(const Scenario& sc)
     : start_(sc.f("metrics.start_s")),
       settle_from_(sc.f("metrics.settle_from_s")),
@@ -169,15 +231,15 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
     os << "  \"reverse_angle_max_deg\": " << json_number(std::isfinite(t_enable_) ? reverse_max_ : NAN) << ",\n";
     os << "  \"newton_iter_mean\": " << json_number(iter_n_ > 0 ? iter_sum_ / iter_n_ : NAN) << ",\n";
     os << "  \"newton_iter_max\": " << json_number(iter_max_ >= 0 ? iter_max_ : NAN) << ",\n";
-    for (const auto& [k, v] : extra) os << "  \"" << k << "\": " << v << ",\n";
-    os << "  \"final_state\": \"" << final_state << "\",\n";
+    for (const auto& [k, v] : extra) os << "  " << json_string(k) << ": " << v << ",\n";
+    os << "  \"final_state\": " << json_string(final_state) << ",\n";
     os << "  \"faults\": [";
-    for (size_t k = 0; k < faults.size(); ++k) os << (k ? ", " : "") << "\"" << faults[k] << "\"";
+    for (size_t k = 0; k < faults.size(); ++k) os << (k ? ", " : "") << json_string(faults[k]);
     os << "],\n";
     os << "  \"windows\": {";
     for (size_t w = 0; w < windows_.size(); ++w) {
         const Acc& a = win_acc_[w];
-        os << (w ? "," : "") << "\n    \"" << windows_[w].name << "\": {"
+        os << (w ? "," : "") << "\n    " << json_string(windows_[w].name) << ": {"
            << "\"from_s\": " << json_number(windows_[w].from_s)
            << ", \"to_s\": " << json_number(windows_[w].to_s)
            << ", \"angle_err_mean_deg\": " << json_number(mean(a.err_sum, a.run_n))

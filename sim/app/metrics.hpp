@@ -66,5 +66,9 @@ private:
 };
 
 std::string json_number(double v);
+// A JSON string literal, quotes included (RFC 8259): '"' and '\\' escaped, control characters as
+// \n, \t, ... or \u00XX, and bytes that are not valid UTF-8 replaced by U+FFFD, so that any
+// std::string (a scenario or window name with quotes, NUL bytes, binary) gives valid JSON.
+std::string json_string(const std::string& s);
 
 }  // namespace mcsim

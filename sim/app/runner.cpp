@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "drive_setup.hpp"
 #include "metrics.hpp"
 #include "mcsim/fluxmap.hpp"
 #include "mcsim/plant.hpp"
@@ -70,10 +71,10 @@ std::unique_ptr<FluxModel> make_plant_model(const Scenario& sc, const MachinePar
     return make_table_model_from(*analytic, grid);
 }
 
-// Every derived default is resolved here, from the preset.
+// The plant-side defaults that follow the preset; the drive's own come from the firmware.
 struct Resolved {
     MachineParams mp;
-    double vdc, ts, i_max, i_trip, vdc_min, vdc_max, inertia, friction, torque_max, kp, ki;
+    double vdc, ts, inertia, friction, i_span, vdc_span;
 };
 
 Resolved resolve(const Scenario& sc)
@@ -86,30 +87,12 @@ Resolved resolve(const Scenario& sc)
     }
     auto opt = [&](const char* k, double def) { return sc.has(k) ? sc.f(k) : def; };
     r.vdc = opt("inverter.vdc_v", r.mp.vdc_nominal);
-    r.ts = sc.f("control.ts_s");
-    r.i_max = opt("control.i_max_a", r.mp.i_rated_peak);
-    r.i_trip = opt("control.i_trip_a", 1.5 * r.mp.i_rated_peak);
-    r.vdc_min = opt("control.vdc_min_v", 0.5 * r.vdc);
-    r.vdc_max = opt("control.vdc_max_v", 1.5 * r.vdc);
+    // the preset's sampling frequency (the drive gets the same value through control.ts_s)
+    r.ts = opt("control.ts_s", 1.0 / r.mp.f_sample);
     r.inertia = opt("mechanics.inertia_kgm2", r.mp.inertia);
     r.friction = opt("mechanics.friction_nms", r.mp.friction);
-    r.torque_max = opt("control.torque_max_nm", 1.2 * r.mp.torque_rated);
-    const double w = 2.0 * kPi * sc.f("control.speed_bw_hz");
-    r.kp = opt("control.speed_kp", r.inertia * w);
-    r.ki = opt("control.speed_ki", r.kp * w / 4.0);
-    if (r.i_trip <= r.i_max)
-        throw ScenarioError(sc.origin() + ": key 'control.i_trip_a' = " + json_number(r.i_trip) +
-                            ": must be above control.i_max_a (" + json_number(r.i_max) + ")");
-    if (r.vdc >= sc.f("sensors.vdc_full_scale_v"))
-        throw ScenarioError(sc.origin() + ": key 'sensors.vdc_full_scale_v' = " + json_number(sc.f("sensors.vdc_full_scale_v")) +
-                            ": must be above the DC-link voltage (" + json_number(r.vdc) + " V)");
-    if (sc.s("control.angle_source") == "unop" && sc.s("injection.kind") != "off" &&
-        sc.f("injection.f_hz") * r.ts > 0.5 + 1e-12)
-        throw ScenarioError(sc.origin() + ": key 'injection.f_hz' = " + json_number(sc.f("injection.f_hz")) +
-                            ": above half the sampling frequency (" + json_number(0.5 / r.ts) + " Hz at control.ts_s)");
-    if (r.vdc <= r.vdc_min || r.vdc >= r.vdc_max)
-        throw ScenarioError(sc.origin() + ": key 'inverter.vdc_v' = " + json_number(r.vdc) +
-                            ": outside the drive's trip window [control.vdc_min_v, control.vdc_max_v]");
+    r.i_span = opt("sensors.i_full_scale_a", default_i_full_scale(r.mp));
+    r.vdc_span = opt("sensors.vdc_full_scale_v", default_vdc_full_scale(r.vdc));
     return r;
 }
 
@@ -187,24 +170,22 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     pc.energy_ledger = false;  // no metric or trace column reads the energy ledger
     const std::string& integ = sc.s("inverter.integrator");
     pc.integrator = integ == "taylor"   ? PlantConfig::Integrator::Taylor
-                    : integ == "ripple" ? PlantConfig::Integrator::Ripple
                     : integ == "rk4"    ? PlantConfig::Integrator::Rk4
                                         : PlantConfig::Integrator::Hermite;
-    if (pc.integrator == PlantConfig::Integrator::Ripple) pc.substeps = 1;  // one step per period (docs/plant.md)
     pc.omega_m0 = mech == "dyno" ? dyno.at(0.0) / kRpm : (mech == "locked" ? 0.0 : sc.f("mechanics.speed0_rpm") / kRpm);
     Plant plant(pc, make_plant_model(sc, mp));
 
     // ---- sensors
     AdcConfig ac;
     ac.bits = static_cast<int>(sc.i("sensors.adc_bits"));
-    ac.i_full_scale = sc.f("sensors.i_full_scale_a");
+    ac.i_full_scale = r.i_span;
     ac.i_noise_rms = sc.f("sensors.i_noise_rms_a");
     const auto ge = sc.f3("sensors.i_gain_err"), oe = sc.f3("sensors.i_offset_err_a");
     for (int k = 0; k < 3; ++k) {
         ac.gain_err[k] = ge[k];
         ac.offset_err[k] = oe[k];
     }
-    ac.vdc_full_scale = sc.f("sensors.vdc_full_scale_v");
+    ac.vdc_full_scale = r.vdc_span;
     ac.vdc_noise_rel = sc.f("sensors.vdc_noise_rel");
     EncoderConfig ec;
     ec.lines = static_cast<int>(sc.i("sensors.encoder_lines"));
@@ -218,126 +199,30 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     hal_qep_t qep{};
     qep.counts_per_rev = 4u * static_cast<uint32_t>(ec.lines);
 
-    mc_drive_cfg_t dc;
-    mc_drive_cfg_default(&dc);
-    dc.pole_pairs = p;
-    dc.rs = static_cast<float>(mp.rs);
-    dc.ld = static_cast<float>(mp.ld);
-    dc.lq = static_cast<float>(mp.lq);
-    dc.psi_pm = static_cast<float>(mp.psi_pm);
-    dc.ts = static_cast<float>(r.ts);
-    dc.adc_amps_per_count = static_cast<float>(sensors.amps_per_count());
-    dc.adc_offset_nominal = static_cast<float>(sensors.offset_counts());
-    dc.adc_offset_tol = static_cast<float>(0.05 * (1 << ac.bits));
-    dc.adc_volts_per_count = static_cast<float>(sensors.volts_per_count());
-    dc.offset_cal_samples = static_cast<uint16_t>(sc.i("control.offset_cal_samples"));
-    dc.i_trip = static_cast<float>(r.i_trip);
-    dc.vdc_min = static_cast<float>(r.vdc_min);
-    dc.vdc_max = static_cast<float>(r.vdc_max);
-    dc.enc_counts_per_rev = qep.counts_per_rev;
-    dc.enc_offset_rad = static_cast<float>(p * ec.offset_rad);
-    dc.enc_pll_bw_hz = static_cast<float>(sc.f("control.encoder_pll_bw_hz"));
-    dc.cc_bw_hz = static_cast<float>(sc.f("control.current_bw_hz"));
-    dc.cc_decouple = sc.b("control.decouple");
-    dc.i_max = static_cast<float>(r.i_max);
-    dc.i_headroom = static_cast<float>(sc.f("control.i_headroom"));
-    dc.i_slew = static_cast<float>(sc.f("control.i_slew_a_per_s"));
-    dc.u_margin = static_cast<float>(sc.f("control.u_margin"));
-    dc.mtpa_table = sc.s("control.mtpa") == "table";
-    dc.sc_kp = static_cast<float>(r.kp);
-    dc.sc_ki = static_cast<float>(r.ki);
-    dc.torque_max = static_cast<float>(r.torque_max);
-    dc.sc_decimation = static_cast<int>(sc.i("control.speed_decimation"));
-    dc.dtc_enable = sc.b("control.deadtime_comp");
-    dc.dtc_i_band = static_cast<float>(sc.f("control.dtc_i_band_a"));
-    dc.dead_time = static_cast<float>(pc.inverter.t_dead);
-
-    // sensorless estimator, PLL and injection
-    const bool unop = sc.s("control.angle_source") == "unop";
-    std::unique_ptr<mc_flux_map_t> est_map;
-    dc.angle_src = unop ? MC_ANGLE_SRC_UNOP : MC_ANGLE_SRC_ENCODER;
-    {
-        const double n1 = sc.f("injection.n1_rpm") / kRpm * p;
-        mc_unop_cfg_t& u = dc.unop;
-        mc_unop_cfg_default(&u);
-        u.ts = dc.ts;
-        u.rs = static_cast<float>(mp.rs * sc.f("estimator.rs_scale"));
-        u.model.kind = MC_FLUX_CONST;
-        u.model.ld = static_cast<float>(mp.ld * sc.f("estimator.l_scale"));
-        u.model.lq = static_cast<float>(mp.lq * sc.f("estimator.l_scale"));
-        u.model.psi_pm = static_cast<float>(mp.psi_pm * sc.f("estimator.psi_scale"));
-        u.model.map = nullptr;
-        if (unop) {
-            // The flux map serves the flux-map estimator and always the polarity detection (its
-            // l_dd(i_d, 0) profile, thesis Fig. 5.6).
-            const double span = sc.has("estimator.map_span_a") ? sc.f("estimator.map_span_a") : 1.5 * mp.i_rated_peak;
-            est_map = make_estimator_map(plant.model(), static_cast<int>(sc.i("estimator.map_points")), span,
-                                         sc.f("estimator.l_scale"), sc.f("estimator.psi_scale"));
-        }
-        if (unop && sc.s("estimator.model") == "fluxmap") {
-            u.model.kind = MC_FLUX_MAP;
-            u.model.map = est_map.get();
-        }
-        u.iter_max = static_cast<int>(sc.i("estimator.iter_max"));
-        u.step_tol = static_cast<float>(sc.f("estimator.step_tol"));
-        u.k1 = static_cast<float>(sc.f("estimator.k1"));
-        u.k2 = static_cast<float>(sc.f("estimator.k2"));
-        u.omega_n1 = static_cast<float>(n1);
-        u.omega_base = static_cast<float>(sc.f("estimator.speed_scale_rpm") / kRpm * p);
-        u.mid_sample = sc.b("estimator.mid_sample");
-        u.reg_predicted = sc.b("estimator.reg_predicted");
-        dc.pll_bw_hz = static_cast<float>(sc.f("estimator.pll_bw_hz"));
-        dc.pll_speed_fc_hz = static_cast<float>(sc.f("estimator.pll_speed_fc_hz"));
-        const std::string& ik = sc.s("injection.kind");
-        dc.inj.kind = ik == "sine" ? MC_INJ_SINE : (ik == "rect" ? MC_INJ_RECT : MC_INJ_OFF);
-        dc.inj.v1 = static_cast<float>(sc.f("injection.v1_v"));
-        dc.inj.f_hz = static_cast<float>(sc.f("injection.f_hz"));
-        dc.inj.omega_n1 = static_cast<float>(n1);
-        dc.inj.ts = dc.ts;
-        dc.notch_q = static_cast<float>(sc.f("injection.notch_q"));
-
-        // startup: thesis chapter 5
-        dc.init_three_step = unop && sc.s("startup.init_pos") == "three_step";
-        mc_initpos_cfg_default(&dc.ip1);
-        dc.ip1.ts = dc.ts;
-        dc.ip1.rs = u.rs;
-        dc.ip1.ld = u.model.ld;
-        dc.ip1.lq = u.model.lq;
-        const std::string& c1 = sc.s("startup.step1_cost");
-        dc.ip1.cost = c1 == "nonlinear" ? MC_IP_COST_NONLINEAR : (c1 == "fluxdiff" ? MC_IP_COST_FLUXDIFF : MC_IP_COST_LINEAR);
-        dc.ip1.model = mc_flux_model_t{MC_FLUX_MAP, u.model.ld, u.model.lq, u.model.psi_pm, est_map.get()};
-        dc.ip1.m = static_cast<int>(sc.i("startup.step1_m"));
-        dc.ip1.n_dir = static_cast<int>(sc.i("startup.step1_dirs"));
-        dc.ip1.i_trip = dc.i_trip;
-        dc.ip1_pulse3 = sc.s("startup.step1_method") == "three_phase";
-        mc_pulse3_cfg_default(&dc.pulse3);
-        dc.pulse3.rs = u.rs;
-        dc.pulse3.n = dc.ip1.m;
-        dc.pulse3.i_trip = dc.i_trip;
-        mc_polarity_cfg_default(&dc.ip2);
-        dc.ip2.ts = dc.ts;
-        dc.ip2.rs = u.rs;
-        dc.ip2.model = dc.ip1.model;
-        dc.ip2.v_pol = static_cast<float>(sc.f("startup.v_pol_v"));
-        dc.ip2.n = static_cast<int>(sc.i("startup.step2_n"));
-        dc.ip2.i_trip = dc.i_trip;
-        mc_dvi_cfg_default(&dc.dvi);
-        dc.dvi.rs = u.rs;
-        dc.dvi.v = dc.ip2.v_pol;
-        dc.dvi.n = static_cast<int>(sc.i("startup.dvi_n"));
-        dc.dvi.i_trip = dc.i_trip;
-        dc.ip2_dvi = sc.s("startup.polarity") == "dvi";
-        dc.step3_speed_tol = static_cast<float>(sc.f("startup.step3_speed_tol_rpm") / kRpm * p);
-        dc.step3_hold = static_cast<float>(sc.f("startup.step3_hold_s"));
-        dc.timeout_step12 = static_cast<float>(sc.f("startup.timeout_step12_s"));
-        dc.timeout_step3 = static_cast<float>(sc.f("startup.timeout_step3_s"));
-        dc.timeout_cal = static_cast<float>(std::max(0.1, 2.0 * sc.i("control.offset_cal_samples") * r.ts));
+    // The drive's configuration: the firmware's parameter table, filled from the preset, the
+    // simulator's sensor keys and the scenario's drive keys; the rest the firmware derives.
+    DriveSetup ds;
+    mc_drive_cfg_default(&ds.cfg);
+    set_drive_params(sc, mp, r.vdc, r.i_span, r.vdc_span, &ds.cfg.p);
+    // The estimator's model: the plant's, scaled by the mismatch keys; its flux map tabulated
+    // from the plant's magnetics (the map always serves the polarity detection's l_dd profile).
+    ds.cfg.est.rs = static_cast<float>(mp.rs * sc.f("estimator.rs_scale"));
+    ds.cfg.est.ld = static_cast<float>(mp.ld * sc.f("estimator.l_scale"));
+    ds.cfg.est.lq = static_cast<float>(mp.lq * sc.f("estimator.l_scale"));
+    ds.cfg.est.psi_pm = static_cast<float>(mp.psi_pm * sc.f("estimator.psi_scale"));
+    const bool unop = ds.cfg.p.angle_src == MC_ANGLE_SRC_unop;
+    if (unop) {
+        const double span = sc.has("estimator.map_span_a") ? sc.f("estimator.map_span_a") : 1.5 * mp.i_rated_peak;
+        ds.est_map = make_estimator_map(plant.model(), static_cast<int>(sc.i("estimator.map_points")), span,
+                                        sc.f("estimator.l_scale"), sc.f("estimator.psi_scale"));
+        ds.cfg.est.map = ds.est_map.get();
     }
     const double theta_init_err = sc.f("estimator.theta0_err_deg") * kPi / 180.0;
 
     auto drive = std::make_unique<mc_drive_t>();
-    if (!mc_drive_init(drive.get(), &dc, &adc, &pwm, &qep))
-        throw ScenarioError(sc.origin() + ": the firmware rejected the drive configuration (check control.* keys)");
+    if (!mc_drive_init(drive.get(), &ds.cfg, &adc, &pwm, &qep))
+        throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive.get())));
+    const mc_params_t& dp = *mc_drive_params(drive.get());
 
     const std::string& mode = sc.s("control.mode");
     const mc_mode_t fw_mode = mode == "current" ? MC_MODE_CURRENT : (mode == "torque" ? MC_MODE_TORQUE : MC_MODE_SPEED);
@@ -477,13 +362,11 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     out.isr_ns_mean = timed > 0 ? isr_ns / timed : 0;
     out.plant_ns_mean = timed > 0 ? plant_ns / timed : 0;
     out.periods = periods;
-    out.ripple_periods = plant.ripple_stats().periods;
-    out.ripple_fallbacks = plant.ripple_stats().fallbacks;
     const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
     out.metrics_json = metrics.json(fault_names(tm.faults), state_name(tm.state),
                                     {{"scenario", "\"" + sc.s("scenario.name") + "\""},
-                                     {"current_limit_a", json_number(r.i_max)},
-                                     {"current_trip_a", json_number(r.i_trip)},
+                                     {"current_limit_a", json_number(dp.i_max)},
+                                     {"current_trip_a", json_number(dp.i_trip)},
                                      {"speed_final_rpm", json_number(plant.omega_m() * kRpm)},
                                      {"sim_time_s", json_number(out.sim_time_s)},
                                      {"wall_time_s", json_number(wall)},

@@ -18,7 +18,6 @@ struct RunSummary {
     double isr_ns_mean = 0;   // wall time of mc_drive_isr per call (noisy; for bench)
     double plant_ns_mean = 0; // wall time of Plant::step_period per call
     long periods = 0;
-    long long ripple_periods = 0, ripple_fallbacks = 0;  // inverter.integrator = "ripple" only
 };
 
 RunSummary run_scenario(const Scenario& sc, const RunOptions& opt);

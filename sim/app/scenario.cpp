@@ -1,8 +1,12 @@
 #include "scenario.hpp"
 
+#include "drive_setup.hpp"
+
 #include <toml++/toml.h>
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <optional>
@@ -34,15 +38,15 @@ const std::vector<KeySpec>& scenario_schema()
     {"inverter.vdc_v", KeyType::Float, "", nullptr, 1, 2000, "V", "", "DC-link voltage (default: the preset's nominal)."},
     {"inverter.dead_time_s", KeyType::Float, "0.5e-6", "0.0", 0, 10e-6, "s", "", "Dead time per commutation."},
     {"inverter.device_drop_v", KeyType::Float, "0.0", nullptr, 0, 10, "V", "", "Device on-state drop."},
-    {"inverter.integrator", KeyType::Enum, "\"taylor\"", nullptr, 0, 0, "", "taylor|hermite|ripple|rk4",
-     "Plant integration (docs/plant.md): taylor: the period in one pass with the current map expanded to second order about mid-period, exact at the period end (tables go edge by edge with Hermite); hermite: one model evaluation per switching interval (the most exact); ripple: one step per period plus the ripple's moments; classical RK4 (reference)."},
+    {"inverter.integrator", KeyType::Enum, "\"taylor\"", nullptr, 0, 0, "", "taylor|hermite|rk4",
+     "Plant integration (docs/plant.md): taylor: the period in one pass with the current map expanded to second order about mid-period, exact at the period end (tables go edge by edge with Hermite); hermite: one model evaluation per switching interval (the most exact); classical RK4 (reference)."},
 
     {"sensors.adc_bits", KeyType::Int, "12", "16", 8, 16, "bit", "", "Current/voltage ADC resolution."},
-    {"sensors.i_full_scale_a", KeyType::Float, "25.0", nullptr, 0.1, 5000, "A", "", "Current ADC span is -fs..+fs."},
+    {"sensors.i_full_scale_a", KeyType::Float, "", nullptr, 0.1, 10000, "A", "", "Current ADC span is -fs..+fs (default: a sensor sized for the motor, 1.875 x rated peak rounded up to 1-1.2-1.5-2-2.5-3-4-5-6-8: 25 A on sun2016-ipm-5kw, 300 A on brodatzki-35kw)."},
     {"sensors.i_noise_rms_a", KeyType::Float, "0.02", "0.0", 0, 10, "A", "", "White noise on each current sample."},
     {"sensors.i_gain_err", KeyType::Float3, "[0.0, 0.0, 0.0]", nullptr, -0.5, 0.5, "1", "", "Relative gain error per phase."},
     {"sensors.i_offset_err_a", KeyType::Float3, "[0.0, 0.0, 0.0]", nullptr, -10, 10, "A", "", "Offset error per phase (removed by the firmware's calibration)."},
-    {"sensors.vdc_full_scale_v", KeyType::Float, "500.0", nullptr, 1, 5000, "V", "", "Vdc ADC span 0..fs."},
+    {"sensors.vdc_full_scale_v", KeyType::Float, "", nullptr, 1, 5000, "V", "", "Vdc ADC span 0..fs (default: 1.6 x inverter.vdc_v rounded up alike: 500 V at 300 V, 400 V at 250 V)."},
     {"sensors.vdc_noise_rel", KeyType::Float, "0.005", "0.0", 0, 0.2, "1", "", "Vdc noise, rms relative to the value."},
     {"sensors.encoder_lines", KeyType::Int, "20000", nullptr, 1, 1000000, "lines/rev", "", "Quadrature encoder lines (4 counts each); 20000 = the thesis' 80000 counts."},
     {"sensors.encoder_offset_deg", KeyType::Float, "0.0", nullptr, -360, 360, "deg (mech)", "", "Mechanical angle where the counter reads 0 and the index sits."},
@@ -57,68 +61,19 @@ const std::vector<KeySpec>& scenario_schema()
     {"mechanics.load_kind", KeyType::Enum, "\"active\"", nullptr, 0, 0, "", "active|reactive", "active: the load torque acts whatever the speed (gravity-like); reactive: it opposes the motion and holds the rotor at rest up to its magnitude (friction-like)."},
     {"mechanics.dyno_speed_rpm", KeyType::Profile, "0.0", nullptr, -30000, 30000, "rpm", "", "Dyno speed profile (dyno mode)."},
 
-    {"control.ts_s", KeyType::Float, "1e-4", nullptr, 5e-5, 5e-4, "s", "", "Control = PWM period (2 kHz to 20 kHz)."},
     {"control.mode", KeyType::Enum, "\"speed\"", nullptr, 0, 0, "", "speed|torque|current", "What the references command."},
-    {"control.angle_source", KeyType::Enum, "\"encoder\"", nullptr, 0, 0, "", "encoder|unop", "Angle used by the controller: the encoder, or the sensorless estimator (the encoder keeps running as the reference)."},
     {"control.enable_at_s", KeyType::Float, "0.0", nullptr, 0, 600, "s", "", "Enable command time (offset calibration follows)."},
-    {"control.offset_cal_samples", KeyType::Int, "64", nullptr, 1, 65535, "periods", "", "Periods averaged for the current offsets."},
-    {"control.i_max_a", KeyType::Float, "", nullptr, 0.01, 5000, "A", "", "Phase current limit, peak; references stay within i_max (1 - i_headroom) (default: preset rated peak)."},
-    {"control.i_headroom", KeyType::Float, "0.03", nullptr, 0, 0.49, "1", "", "Share of control.i_max_a the references leave free for regulation error, noise and ripple."},
-    {"control.i_slew_a_per_s", KeyType::Float, "10000.0", nullptr, 1, 1e8, "A/s", "", "Rate limit of the current reference vector (no overshoot past i_max on steps)."},
-    {"control.i_trip_a", KeyType::Float, "", nullptr, 0.01, 5000, "A", "", "Over-current trip, peak (default: 1.5 x rated peak)."},
-    {"control.vdc_min_v", KeyType::Float, "", nullptr, 0, 5000, "V", "", "Under-voltage trip (default: 0.5 x Vdc)."},
-    {"control.vdc_max_v", KeyType::Float, "", nullptr, 0, 5000, "V", "", "Over-voltage trip (default: 1.5 x Vdc)."},
-    {"control.current_bw_hz", KeyType::Float, "250.0", nullptr, 10, 5000, "Hz", "", "Current-loop bandwidth (with the injection notch in the loop, keep it well below the injection frequency)."},
-    {"control.decouple", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Decoupling feed-forward in the current loop."},
-    {"control.speed_bw_hz", KeyType::Float, "25.0", nullptr, 0.1, 200, "Hz", "", "Speed-loop bandwidth (sets kp = J w, ki = kp w / 4 unless given)."},
-    {"control.speed_kp", KeyType::Float, "", nullptr, 0, 1e4, "N m s/rad", "", "Speed PI proportional gain (mechanical rad/s)."},
-    {"control.speed_ki", KeyType::Float, "", nullptr, 0, 1e6, "N m/rad", "", "Speed PI integral gain."},
-    {"control.speed_decimation", KeyType::Int, "10", nullptr, 1, 100, "periods", "", "Speed loop runs every N periods."},
-    {"control.torque_max_nm", KeyType::Float, "", nullptr, 0.01, 1e5, "N m", "", "Speed-loop torque limit (default: 1.2 x rated torque)."},
-    {"control.u_margin", KeyType::Float, "0.95", nullptr, 0.1, 1.0, "1", "", "Share of Vdc/sqrt(3) the references plan for (field weakening)."},
-    {"control.mtpa", KeyType::Enum, "\"analytic\"", nullptr, 0, 0, "", "analytic|table", "MTPA law (2.24) or its table."},
-    {"control.deadtime_comp", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Dead-time compensation in the modulator."},
-    {"control.dtc_i_band_a", KeyType::Float, "0.3", nullptr, 0.001, 100, "A", "", "Linear zone of the compensation's current sign."},
-    {"control.encoder_pll_bw_hz", KeyType::Float, "150.0", nullptr, 1, 2000, "Hz", "", "Encoder speed PLL bandwidth."},
     {"control.speed_ref_rpm", KeyType::Profile, "0.0", nullptr, -30000, 30000, "rpm", "", "Speed reference (speed mode)."},
     {"control.torque_ref_nm", KeyType::Profile, "0.0", nullptr, -1e5, 1e5, "N m", "", "Torque reference (torque mode)."},
     {"control.id_ref_a", KeyType::Profile, "0.0", nullptr, -5000, 5000, "A", "", "d current reference (current mode)."},
     {"control.iq_ref_a", KeyType::Profile, "0.0", nullptr, -5000, 5000, "A", "", "q current reference (current mode)."},
 
-    {"estimator.model", KeyType::Enum, "\"fluxmap\"", nullptr, 0, 0, "", "const|fluxmap", "UNOP machine model: constant Rs, Ld, Lq, psi_pm (thesis) or a flux map psi_dq(i_dq) tabulated from the plant's magnetics."},
-    {"estimator.iter_max", KeyType::Int, "4", nullptr, 1, 18, "", "", "Newton iterations per sample (early exit on estimator.step_tol)."},
-    {"estimator.step_tol", KeyType::Float, "1e-4", nullptr, 0, 1, "rad", "", "Early exit when the scaled Newton step is below this."},
-    {"estimator.k1", KeyType::Float, "0.5", nullptr, 0, 1e9, "1/rad^2", "", "Angle regularisation weight K1 of (6.5), active below injection.n1_rpm."},
-    {"estimator.k2", KeyType::Float, "100.0", nullptr, 0, 1e9, "1", "", "Speed regularisation weight K2 of (6.5) on the scaled speed, active below injection.n1_rpm."},
-    {"estimator.speed_scale_rpm", KeyType::Float, "600.0", nullptr, 1, 1e5, "rpm", "", "Speed that scales the decision variable omega (float32 conditioning)."},
-    {"estimator.mid_sample", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Rotational terms at the mid-sample angle (false: the thesis' first-order form (5.1))."},
-    {"estimator.reg_predicted", KeyType::Bool, "true", nullptr, 0, 0, "", "", "K1 pulls toward the predicted angle theta(k-1) + omega Ts (false: literal (6.5))."},
-    {"estimator.pll_bw_hz", KeyType::Float, "30.0", nullptr, 1, 2000, "Hz", "", "Bandwidth of the PLL filter after the estimator (Fig. 6.9)."},
-    {"estimator.pll_speed_fc_hz", KeyType::Float, "200.0", nullptr, 1, 5000, "Hz", "", "Speed output filter of that PLL."},
     {"estimator.theta0_err_deg", KeyType::Float, "0.0", nullptr, -180, 180, "deg (elec)", "", "Error of the initial angle handed to the estimator at enable (the initial position is otherwise taken as known)."},
     {"estimator.rs_scale", KeyType::Float, "1.0", nullptr, 0.1, 10, "1", "", "Estimator's Rs / true (parameter-mismatch tests)."},
     {"estimator.psi_scale", KeyType::Float, "1.0", nullptr, 0.1, 10, "1", "", "Estimator's psi_pm / true."},
     {"estimator.l_scale", KeyType::Float, "1.0", nullptr, 0.1, 10, "1", "", "Estimator's Ld, Lq (and flux-map inductances) / true."},
     {"estimator.map_points", KeyType::Int, "41", nullptr, 5, 41, "", "", "Flux-map grid points per axis."},
     {"estimator.map_span_a", KeyType::Float, "", nullptr, 0.1, 5000, "A", "", "Flux map covers +-span on both axes (default: 1.5 x rated peak)."},
-    {"injection.kind", KeyType::Enum, "\"sine\"", nullptr, 0, 0, "", "sine|rect|off", "HF voltage in the estimated d axis (6.4, 7.4); only with control.angle_source = unop."},
-    {"injection.v1_v", KeyType::Float, "70.0", nullptr, 0, 1000, "V", "", "Injection magnitude at standstill, V1 of (6.6)."},
-    {"injection.f_hz", KeyType::Float, "500.0", nullptr, 1, 10000, "Hz", "", "Injection frequency (at most half the sampling frequency)."},
-    {"injection.n1_rpm", KeyType::Float, "400.0", nullptr, 0, 1e5, "rpm", "", "N1 of (6.6): injection fades to zero at this speed; K1, K2 are zero above it."},
-    {"injection.notch_q", KeyType::Float, "1.0", nullptr, 0.1, 50, "1", "", "Quality factor of the notch that keeps the injection out of the current feedback."},
-    {"startup.init_pos", KeyType::Enum, "\"given\"", nullptr, 0, 0, "", "given|three_step", "Sensorless start: the initial angle handed to the estimator (given, plus estimator.theta0_err_deg), or the thesis' three steps (pulse injection, polarity detection, continuous injection)."},
-    {"startup.step1_method", KeyType::Enum, "\"pulses\"", nullptr, 0, 0, "", "pulses|three_phase", "Step I: the thesis' pulse injection with the cost (5.5)/(7.1), or the three-phase pulse reference method (3.21) with Table 3.1."},
-    {"startup.step1_cost", KeyType::Enum, "\"nonlinear\"", nullptr, 0, 0, "", "linear|nonlinear|fluxdiff", "Step I cost: (5.5) with constant Ld, Lq; (7.1) with the flux map's differential inductances; or flux differences of the map."},
-    {"startup.step1_m", KeyType::Int, "5", nullptr, 1, 16, "periods", "", "Step I pulse length m: V(100) m, V(011) 2m, V(100) m."},
-    {"startup.step1_dirs", KeyType::Int, "1", nullptr, 1, 3, "", "", "Step I pulse directions (phase A, then B, C)."},
-    {"startup.polarity", KeyType::Enum, "\"generalized\"", nullptr, 0, 0, "", "generalized|dvi", "Step II: generalized polarity detection (5.6)-(5.7) or dual-voltage injection (3.5.2)."},
-    {"startup.v_pol_v", KeyType::Float, "200.0", nullptr, 10, 2000, "V", "", "Step II pulse magnitude (limited by the voltage hexagon)."},
-    {"startup.step2_n", KeyType::Int, "4", nullptr, 1, 16, "periods", "", "Step II half-pulse length (train +n, -2n, +n)."},
-    {"startup.dvi_n", KeyType::Int, "6", nullptr, 1, 16, "periods", "", "DVI pulse length."},
-    {"startup.step3_speed_tol_rpm", KeyType::Float, "5.0", nullptr, 0.01, 1000, "rpm", "", "Step III converged when the filtered speed estimate stays below this ..."},
-    {"startup.step3_hold_s", KeyType::Float, "0.005", nullptr, 1e-4, 1, "s", "", "... for this long."},
-    {"startup.timeout_step12_s", KeyType::Float, "0.02", nullptr, 1e-3, 10, "s", "", "Step I + II must finish within this (else FAULT)."},
-    {"startup.timeout_step3_s", KeyType::Float, "0.5", nullptr, 1e-3, 60, "s", "", "Step III must converge within this (else FAULT)."},
     {"output.decimation", KeyType::Int, "10", nullptr, 1, 1000000, "periods", "", "Write one trace row every N periods."},
     {"output.trace", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Write trace.csv."},
 
@@ -129,7 +84,13 @@ const std::vector<KeySpec>& scenario_schema()
     {"metrics.window", KeyType::String, "", nullptr, 0, 0, "", "",
      "Array of tables [[metrics.window]] with name (string), from_s, to_s: the steady windows."},
     };
-    return k;
+    // the drive's keys come from the firmware's parameter table (drive_setup.cpp)
+    static const std::vector<KeySpec> all = [] {
+        std::vector<KeySpec> v = k;
+        for (const KeySpec& d : drive_key_specs()) v.push_back(d);
+        return v;
+    }();
+    return all;
 }
 // clang-format on
 
@@ -149,6 +110,64 @@ double Profile::at(double t) const
     return pts.back().second;
 }
 
+// Length of the well-formed UTF-8 sequence at s[k] (1 for printable ASCII), 0 if the byte there
+// must be escaped (control character, DEL, or not valid UTF-8).
+static size_t utf8_printable_len(const std::string& s, size_t k)
+{
+    const unsigned char c = static_cast<unsigned char>(s[k]);
+    if (c < 0x80) return (c >= 0x20 && c != 0x7f) ? 1 : 0;
+    size_t len = 0;
+    unsigned lo = 0x80, hi = 0xBF;
+    if (c >= 0xC2 && c <= 0xDF) len = 2;
+    else if (c >= 0xE0 && c <= 0xEF) {
+        len = 3;
+        if (c == 0xE0) lo = 0xA0;
+        if (c == 0xED) hi = 0x9F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+        len = 4;
+        if (c == 0xF0) lo = 0x90;
+        if (c == 0xF4) hi = 0x8F;
+    }
+    if (len == 0 || k + len > s.size()) return 0;
+    for (size_t j = 1; j < len; ++j) {
+        const unsigned char d = static_cast<unsigned char>(s[k + j]);
+        if (d < (j == 1 ? lo : 0x80u) || d > (j == 1 ? hi : 0xBFu)) return 0;
+    }
+    return len;
+}
+
+std::string message_text(const std::string& s, size_t max_chars)
+{
+    std::string o;
+    size_t k = 0, chars = 0;
+    for (; k < s.size() && chars < max_chars; ++chars) {
+        const char c = s[k];
+        if (c == '"' || c == '\\') {
+            o += '\\';
+            o += c;
+            ++k;
+        } else if (const size_t len = utf8_printable_len(s, k)) {
+            o.append(s, k, len);
+            k += len;
+        } else {
+            static const char* const kHex = "0123456789abcdef";
+            const unsigned char u = static_cast<unsigned char>(c);
+            switch (c) {
+            case '\n': o += "\\n"; break;
+            case '\t': o += "\\t"; break;
+            case '\r': o += "\\r"; break;
+            default:
+                o += "\\x";
+                o += kHex[u >> 4];
+                o += kHex[u & 15];
+            }
+            ++k;
+        }
+    }
+    if (k < s.size()) o += "\u2026(" + std::to_string(s.size()) + " bytes)";
+    return o;
+}
+
 namespace {
 
 const KeySpec* find_spec(const std::string& key)
@@ -158,12 +177,13 @@ const KeySpec* find_spec(const std::string& key)
     return nullptr;
 }
 
-// One-line rendering of a value for error messages.
+// One-line rendering of a value for error messages: strings quoted with message_text (escaped,
+// shortened), arrays cut after ~kMessageChars characters.
 std::string node_text(const toml::node& n)
 {
     std::ostringstream os;
     if (auto s = n.as_string()) {
-        os << '"' << s->get() << '"';
+        os << '"' << message_text(s->get()) << '"';
     } else if (auto f = n.as_floating_point()) {
         os << f->get();
     } else if (auto i = n.as_integer()) {
@@ -172,7 +192,13 @@ std::string node_text(const toml::node& n)
         os << (b->get() ? "true" : "false");
     } else if (auto a = n.as_array()) {
         os << '[';
-        for (size_t k = 0; k < a->size(); ++k) os << (k ? ", " : "") << node_text(*a->get(k));
+        for (size_t k = 0; k < a->size(); ++k) {
+            if (k > 0 && os.tellp() > std::streamoff(kMessageChars)) {
+                os << ", \u2026(" << a->size() << " elements)";
+                break;
+            }
+            os << (k ? ", " : "") << node_text(*a->get(k));
+        }
         os << ']';
     } else if (n.is_table()) {
         os << "(table)";
@@ -209,10 +235,18 @@ std::string range_text(const KeySpec& s)
     return os.str();
 }
 
+// key: raw (escaped and shortened here); value: already rendered (node_text), only capped.
 [[noreturn]] void fail(const std::string& origin, const std::string& key, const std::string& value,
                        const std::string& what)
 {
-    throw ScenarioError(origin + ": key '" + key + "' = " + value + ": " + what);
+    const size_t cap = 3 * kMessageChars;  // nested arrays render each level's first element
+    std::string v = value;
+    if (v.size() > cap) {
+        size_t cut = cap;
+        while (cut > 0 && (static_cast<unsigned char>(v[cut]) & 0xC0) == 0x80) --cut;  // not inside UTF-8
+        v = v.substr(0, cut) + "\u2026(" + std::to_string(value.size()) + " bytes)";
+    }
+    throw ScenarioError(origin + ": key '" + message_text(key) + "' = " + v + ": " + what);
 }
 
 std::optional<double> as_number(const toml::node& n)
@@ -367,12 +401,14 @@ static void walk(const std::string& origin, const toml::table& root, std::map<st
 static void apply_set(toml::table& root, const std::string& set)
 {
     const auto eq = set.find('=');
-    if (eq == std::string::npos || eq == 0) throw ScenarioError("--set '" + set + "': expected key=value");
+    if (eq == std::string::npos || eq == 0) throw ScenarioError("--set '" + message_text(set) + "': expected key=value");
     const std::string key = set.substr(0, eq);
     const std::string val = set.substr(eq + 1);
     const auto dot = key.find('.');
-    if (dot == std::string::npos) throw ScenarioError("--set: key '" + key + "': expected section.key");
-    if (!find_spec(key)) throw ScenarioError("--set: key '" + key + "' = " + val + ": unknown key (see `mcsim keys` for the list)");
+    if (dot == std::string::npos) throw ScenarioError("--set: key '" + message_text(key) + "': expected section.key");
+    if (!find_spec(key))
+        throw ScenarioError("--set: key '" + message_text(key) + "' = " + message_text(val) +
+                            ": unknown key (see `mcsim keys` for the list)");
     const std::string sec = key.substr(0, dot), name = key.substr(dot + 1);
     toml::table parsed;
     try {
@@ -394,7 +430,8 @@ Scenario Scenario::from_string(const std::string& text, const std::string& origi
         root = toml::parse(text, origin);
     } catch (const toml::parse_error& e) {
         std::ostringstream os;
-        os << origin << ":" << e.source().begin.line << ":" << e.source().begin.column << ": TOML syntax error: " << e.description();
+        os << origin << ":" << e.source().begin.line << ":" << e.source().begin.column
+           << ": TOML syntax error: " << message_text(std::string(e.description()), 2 * kMessageChars);
         throw ScenarioError(os.str());
     }
     for (const auto& s : sets) apply_set(root, s);
@@ -432,13 +469,32 @@ Scenario Scenario::from_string(const std::string& text, const std::string& origi
     return sc;
 }
 
+// Only regular files up to kMaxScenarioBytes: a device (/dev/zero), FIFO or directory is refused
+// before it is read, and the read itself is bounded (a file that grows, /proc files of size 0).
 Scenario Scenario::load(const std::string& path, const std::vector<std::string>& sets)
 {
-    std::ifstream in(path);
-    if (!in) throw ScenarioError(path + ": cannot open scenario file");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return from_string(ss.str(), path, sets);
+    namespace fs = std::filesystem;
+    const std::string shown = message_text(path, 2 * kMessageChars);
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) throw ScenarioError(shown + ": cannot open scenario file (no such file)");
+    if (fs::is_directory(st)) throw ScenarioError(shown + ": is a directory, not a scenario file");
+    if (!fs::is_regular_file(st))
+        throw ScenarioError(shown + ": not a regular file (device, FIFO or socket); a scenario must be a TOML file");
+    const auto size = fs::file_size(path, ec);
+    if (!ec && size > kMaxScenarioBytes)
+        throw ScenarioError(shown + ": file of " + std::to_string(size) + " bytes is larger than the limit of " +
+                            std::to_string(kMaxScenarioBytes) + " bytes (1 MiB) for a scenario");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw ScenarioError(shown + ": cannot open scenario file");
+    std::string text(kMaxScenarioBytes + 1, '\0');
+    in.read(&text[0], std::streamsize(text.size()));
+    text.resize(size_t(in.gcount()));
+    if (text.size() > kMaxScenarioBytes)
+        throw ScenarioError(shown + ": larger than the limit of " + std::to_string(kMaxScenarioBytes) +
+                            " bytes (1 MiB) for a scenario");
+    if (in.bad()) throw ScenarioError(shown + ": read error");
+    return from_string(text, path, sets);
 }
 
 double Scenario::f(const std::string& key) const
@@ -497,7 +553,7 @@ std::string schema_markdown()
         case KeyType::Float3: tn = "float[3]"; break;
         case KeyType::Profile: tn = "profile"; break;
         }
-        std::string def = s.def && s.def[0] ? s.def : "(preset)";
+        std::string def = s.def && s.def[0] ? s.def : (s.shown_default ? s.shown_default : "(preset)");
         if (std::string(s.key) == "metrics.window") def = "none";
         std::string range_esc = range;
         for (size_t p = 0; (p = range_esc.find('|', p)) != std::string::npos; p += 2) range_esc.replace(p, 1, "\\|");

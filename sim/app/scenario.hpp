@@ -26,6 +26,7 @@ struct KeySpec {
     const char* unit;
     const char* choices;      // Enum: "a|b|c"
     const char* doc;
+    const char* shown_default = nullptr;  // docs: the default as shown, when def is "" (derived)
 };
 
 const std::vector<KeySpec>& scenario_schema();
@@ -68,6 +69,15 @@ private:
     std::map<std::string, std::vector<double>> f3_;
     std::vector<Window> windows_;
 };
+
+// A string as it is shown inside quotes in an error message: double quotes, backslashes, control
+// characters, NUL and bytes that are not valid UTF-8 escaped (\", \\, \n, \x00, ...), and cut
+// after max_chars characters with "…(N bytes)" appended (N: the full length), so that any
+// value (a 1 MB key, binary) gives a short message that printf("%s") shows in full.
+constexpr size_t kMessageChars = 80;
+std::string message_text(const std::string& s, size_t max_chars = kMessageChars);
+// Largest scenario file Scenario::load reads.
+constexpr size_t kMaxScenarioBytes = size_t(1) << 20;
 
 // Markdown table of every key (for docs/simulator.md).
 std::string schema_markdown();

@@ -2,6 +2,7 @@
 #include <toml++/toml.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -17,21 +18,55 @@ namespace {
 
 bool file_exists(const std::string& p) { return std::ifstream(p).good(); }
 
+// Largest preset file read (a preset is ~2 kB; this refuses /dev/zero and the like unread).
+constexpr std::uintmax_t kMaxPresetBytes = std::uintmax_t(1) << 20;
+
+// A name or value as shown in a message: control characters, NUL and non-ASCII bytes as \xNN,
+// quotes and backslashes escaped, cut after 80 characters with "...(N bytes)".
+std::string shown(const std::string& s) {
+    static const char* const kHex = "0123456789abcdef";
+    std::string o;
+    size_t k = 0;
+    for (; k < s.size() && k < 80; ++k) {
+        const unsigned char c = static_cast<unsigned char>(s[k]);
+        if (c == '"' || c == '\\') {
+            o += '\\';
+            o += char(c);
+        } else if (c >= 0x20 && c < 0x7f) {
+            o += char(c);
+        } else {
+            o += "\\x";
+            o += kHex[c >> 4];
+            o += kHex[c & 15];
+        }
+    }
+    if (k < s.size()) o += "...(" + std::to_string(s.size()) + " bytes)";
+    return o;
+}
+
 // A bare name is looked up in the preset directory; anything that looks like a path (has a
 // directory separator or the .toml suffix) is taken as given.
 std::string resolve_preset(const std::string& name_or_path) {
+    if (name_or_path.empty()) throw std::runtime_error("machine preset: empty name");
+    for (const char c : name_or_path)
+        if (static_cast<unsigned char>(c) < 0x20)
+            throw std::runtime_error("machine preset '" + shown(name_or_path) +
+                                     "': the name contains a control character or NUL byte");
     const bool looks_like_path = name_or_path.find('/') != std::string::npos ||
                                  (name_or_path.size() > 5 && name_or_path.rfind(".toml") == name_or_path.size() - 5);
     if (looks_like_path) return name_or_path;
     const std::string in_dir = std::string(MCSIM_PRESET_DIR) + "/" + name_or_path + ".toml";
     if (file_exists(in_dir)) return in_dir;
-    throw std::runtime_error("machine preset '" + name_or_path + "' not found: no file " + in_dir);
+    throw std::runtime_error("machine preset '" + shown(name_or_path) + "' not found: no file " + shown(in_dir));
 }
 
 std::string node_text(const toml::node& n) {
+    if (auto s = n.as_string()) return '"' + shown(s->get()) + '"';
+    if (n.is_table()) return "(table)";
     std::ostringstream os;
+    os.precision(12);
     n.visit([&os](auto&& v) { os << v; });
-    return os.str();
+    return shown(os.str());
 }
 
 std::string type_name(const toml::node& n) {
@@ -46,14 +81,32 @@ std::string type_name(const toml::node& n) {
     }
 }
 
-enum class Range { Positive, NonNegative, Finite };
+// Plausible range of a preset number: lo < v (lo_open) or lo <= v, and v <= hi. The bounds are
+// generous (from a few-watt servo to a traction machine); they exist to refuse typos and fuzz
+// values such as 1e300 that would make the plant diverge.
+struct Range {
+    double lo;
+    bool lo_open;
+    double hi;
+    const char* unit;
+};
+std::string num_text(double v) {
+    std::ostringstream os;
+    os.precision(10);
+    os << v;
+    return os.str();
+}
+std::string range_text(const Range& r) {
+    return std::string(r.lo_open ? "> " : ">= ") + num_text(r.lo) + " and <= " + num_text(r.hi) +
+           (r.unit[0] ? std::string(" ") + r.unit : std::string());
+}
 
 class Reader {
 public:
     Reader(std::string file, const toml::table& root) : file_(std::move(file)), root_(root) {}
 
     [[noreturn]] void fail(const std::string& key, const std::string& msg) const {
-        throw std::runtime_error(file_ + ": key '" + key + "': " + msg);
+        throw std::runtime_error(file_ + ": key '" + shown(key) + "': " + msg);
     }
 
     const toml::node& need(const toml::table& t, const std::string& prefix, const std::string& key) const {
@@ -68,11 +121,10 @@ public:
         if (auto f = n.as_floating_point()) v = f->get();
         else if (auto i = n.as_integer()) v = double(i->get());
         else fail(prefix + key, "value " + node_text(n) + " is a " + type_name(n) + ", expected a number");
-        const char* expected = nullptr;
-        if (!std::isfinite(v)) expected = "a finite number";
-        else if (r == Range::Positive && !(v > 0)) expected = "a number > 0";
-        else if (r == Range::NonNegative && !(v >= 0)) expected = "a number >= 0";
-        if (expected) fail(prefix + key, "value " + node_text(n) + " out of range, expected " + expected);
+        const bool ok = std::isfinite(v) && (r.lo_open ? v > r.lo : v >= r.lo) && v <= r.hi;
+        if (!ok)
+            fail(prefix + key, "value " + node_text(n) + " out of range, expected a finite number " + range_text(r) +
+                                   " (allowed range of this preset key)");
         return v;
     }
 
@@ -111,14 +163,30 @@ private:
 
 MachineParams load_machine_preset(const std::string& name_or_path) {
     const std::string file = resolve_preset(name_or_path);
-    if (!file_exists(file)) throw std::runtime_error(file + ": cannot open machine preset");
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status st = fs::status(file, ec);
+    if (ec || !fs::exists(st)) throw std::runtime_error(shown(file) + ": cannot open machine preset (no such file)");
+    if (!fs::is_regular_file(st))
+        throw std::runtime_error(shown(file) + ": not a regular file; a machine preset must be a TOML file");
+    const auto size = fs::file_size(file, ec);
+    if (!ec && size > kMaxPresetBytes)
+        throw std::runtime_error(shown(file) + ": file of " + std::to_string(size) +
+                                 " bytes is larger than the 1 MiB limit for a machine preset");
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw std::runtime_error(shown(file) + ": cannot open machine preset");
+    std::string text(size_t(kMaxPresetBytes) + 1, '\0');
+    in.read(&text[0], std::streamsize(text.size()));
+    text.resize(size_t(in.gcount()));
+    if (text.size() > kMaxPresetBytes)
+        throw std::runtime_error(shown(file) + ": larger than the 1 MiB limit for a machine preset");
     toml::table root;
     try {
-        root = toml::parse_file(file);
+        root = toml::parse(text, file);
     } catch (const toml::parse_error& e) {
         std::ostringstream os;
         os << file << ":" << e.source().begin.line << ":" << e.source().begin.column << ": TOML syntax error: "
-           << e.description();
+           << shown(std::string(e.description()));
         throw std::runtime_error(os.str());
     }
     const Reader rd(file, root);
@@ -126,29 +194,31 @@ MachineParams load_machine_preset(const std::string& name_or_path) {
     MachineParams m;
     m.name = rd.string(t, "name");
     m.pole_pairs = rd.integer(t, "pole_pairs", 1, 100);
-    m.rs = rd.number(t, "", "rs_ohm", Range::NonNegative);
-    m.psi_pm = rd.number(t, "", "psi_pm_wb", Range::NonNegative);
-    m.ld = rd.number(t, "", "ld_h", Range::Positive);
-    m.lq = rd.number(t, "", "lq_h", Range::Positive);
-    m.inertia = rd.number(t, "", "inertia_kgm2", Range::Positive);
-    m.friction = rd.number(t, "", "friction_nms", Range::NonNegative);
-    m.i_rated_peak = rd.number(t, "", "i_rated_peak_a", Range::Positive);
-    m.torque_rated = rd.number(t, "", "torque_rated_nm", Range::Positive);
-    m.vdc_nominal = rd.number(t, "", "vdc_nominal_v", Range::Positive);
-    m.f_sample = rd.number(t, "", "f_sample_hz", Range::Positive);
+    // Plausible ranges; the scenario keys these defaults feed have their own (docs/simulator.md).
+    m.rs = rd.number(t, "", "rs_ohm", {0, false, 100, "ohm"});
+    m.psi_pm = rd.number(t, "", "psi_pm_wb", {0, false, 10, "Wb"});
+    m.ld = rd.number(t, "", "ld_h", {1e-7, false, 10, "H"});
+    m.lq = rd.number(t, "", "lq_h", {1e-7, false, 10, "H"});
+    m.inertia = rd.number(t, "", "inertia_kgm2", {1e-6, false, 1e3, "kg m^2"});
+    m.friction = rd.number(t, "", "friction_nms", {0, false, 1e2, "N m s"});
+    m.i_rated_peak = rd.number(t, "", "i_rated_peak_a", {0.01, false, 5000, "A"});
+    m.torque_rated = rd.number(t, "", "torque_rated_nm", {1e-3, false, 1e5, "N m"});
+    m.vdc_nominal = rd.number(t, "", "vdc_nominal_v", {1, false, 2000, "V"});
+    m.f_sample = rd.number(t, "", "f_sample_hz", {100, false, 1e6, "Hz"});
 
     const toml::table& s = rd.table("saturation");
     const std::string sp = "saturation.";
-    m.sat.S = rd.number(s, sp, "S", Range::NonNegative);
-    m.sat.T = rd.number(s, sp, "T", Range::NonNegative);
-    m.sat.U = rd.number(s, sp, "U", Range::NonNegative);
-    m.sat.V = rd.number(s, sp, "V", Range::NonNegative);
-    m.sat.a_d0 = rd.number(s, sp, "a_d0", Range::Positive);
-    m.sat.a_dd = rd.number(s, sp, "a_dd", Range::NonNegative);
-    m.sat.a_q0 = rd.number(s, sp, "a_q0", Range::Positive);
-    m.sat.a_qq = rd.number(s, sp, "a_qq", Range::NonNegative);
-    m.sat.a_dq = rd.number(s, sp, "a_dq", Range::NonNegative);
-    m.sat.i_f = rd.number(s, sp, "i_f", Range::Finite);
+    const Range exponent{0, false, 8, ""};
+    m.sat.S = rd.number(s, sp, "S", exponent);
+    m.sat.T = rd.number(s, sp, "T", exponent);
+    m.sat.U = rd.number(s, sp, "U", exponent);
+    m.sat.V = rd.number(s, sp, "V", exponent);
+    m.sat.a_d0 = rd.number(s, sp, "a_d0", {0.1, false, 1e8, "1/H"});
+    m.sat.a_dd = rd.number(s, sp, "a_dd", {0, false, 1e12, "1/(H Wb^S)"});
+    m.sat.a_q0 = rd.number(s, sp, "a_q0", {0.1, false, 1e8, "1/H"});
+    m.sat.a_qq = rd.number(s, sp, "a_qq", {0, false, 1e12, "1/(H Wb^T)"});
+    m.sat.a_dq = rd.number(s, sp, "a_dq", {0, false, 1e12, "1/(H Wb^(U+V+2))"});
+    m.sat.i_f = rd.number(s, sp, "i_f", {-1e5, false, 1e5, "A"});
     return m;
 }
 

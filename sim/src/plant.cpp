@@ -14,7 +14,6 @@
 #include "mcsim/mechanics.hpp"
 #include "rotation.hpp"
 #include "hermite.hpp"
-#include "ripple.hpp"
 #include "taylor.hpp"
 
 namespace mcsim {
@@ -63,7 +62,6 @@ struct Plant::Impl {
     double th = 0, w = 0;
     bool floating = false;
     bool latched[3] = {false, false, false};
-    Plant::RippleStats ripple_stats;
 
     Vec2 psi0 = Vec2::Zero();
     double w_init = 0;  // W(psi) at the last reset
@@ -243,27 +241,6 @@ struct Plant::Impl {
         for (int k = 0; k < n; ++k) hs.interval(tau0 + k * h, k + 1 == n ? tau1 : tau0 + (k + 1) * h, u.x(), u.y());
     }
 
-    // The Ripple path (ripple.hpp) for one switching period; false: not taken, or handed back
-    // (then hs is restarted for the edge-by-edge path).
-    bool try_ripple(double t0, double Ts, const std::array<double, 3>& duty) {
-        const InverterConfig& inv = cfg.inverter;
-        if (cfg.integrator != PlantConfig::Integrator::Ripple || inv.mode != InverterConfig::Mode::Switching ||
-            inv.v_device != 0.0 || !hs.ripple_capable())
-            return false;
-        detail::RipplePeriodOut o;
-        ++ripple_stats.periods;
-        if (!detail::ripple_period(hs, seq, inv, rs, p, t0, Ts, duty, cfg.substeps, cfg.ripple_margin, &o)) {
-            ++ripple_stats.fallbacks;
-            hermite_begin();
-            return false;
-        }
-        if (cfg.energy_ledger) {
-            for (int k = 0; k < 3; ++k) v_avg[k] += o.v_int[k];
-            u_ab_avg += Vec2(o.ux_int, o.uy_int);
-        }
-        return true;
-    }
-
     // Outputs enabled, Taylor path (taylor.hpp): the period's voltage intervals recorded in one
     // pass (a commanded edge decided with the current predicted for its instant; only a voltage
     // change ends an interval), then integrated at once. The model is evaluated twice: the
@@ -339,10 +316,6 @@ struct Plant::Impl {
             g_valid = false;
         } else {
             hermite_begin();
-            if (try_ripple(t0, Ts, duty)) {
-                finish_hermite(x);
-                return;
-            }
         }
         auto currents = [&] { return rk4 ? phase_currents() : hs.phase_currents(); };
         auto advance = [&](double a, double b, const std::array<double, 3>& v, int n) {
@@ -604,7 +577,6 @@ Vec2 Plant::psi_no_current() const { return impl_->psi0; }
 bool Plant::floating() const { return impl_->floating; }
 const EnergyLedger& Plant::energy() const { return impl_->ledger; }
 const PlantConfig& Plant::config() const { return impl_->cfg; }
-const Plant::RippleStats& Plant::ripple_stats() const { return impl_->ripple_stats; }
 const FluxModel& Plant::model() const { return *impl_->model; }
 void Plant::set_vdc(double vdc) { impl_->cfg.inverter.vdc = vdc; }
 

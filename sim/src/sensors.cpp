@@ -9,9 +9,14 @@ namespace mcsim {
 namespace {
 constexpr double kTwoPi = 6.28318530717958647692;
 
-// round-half-away-from-zero, clamped to [0, max_count]; NaN maps to 0.
+// round-half-away-from-zero, clamped to the ADC rails [0, max_count]; the comparisons come
+// before any conversion, so no value converts to an integer out of range (UB): -inf and values
+// below the rail give 0, +inf and values above give max_count. NaN (a diverged plant) gives 0,
+// the low rail, on purpose: a real ADC reads a rail when its input is out of range, and for the
+// firmware that is a full-scale negative phase current (over-current trip) or Vdc = 0
+// (under-voltage trip), i.e. a fault and a stop rather than plausible-looking samples.
 uint16_t to_counts(double x, double max_count) {
-    if (!(x >= 0.5)) return 0;
+    if (!(x >= 0.5)) return 0;  // also NaN
     if (x >= max_count) return static_cast<uint16_t>(max_count);
     return static_cast<uint16_t>(x + 0.5);  // truncation of a positive value: the same as round
 }
@@ -50,9 +55,13 @@ AdcSample Sensors::sample_adc(const Plant& p) {
 
 QepSample Sensors::sample_qep(const Plant& p) {
     const double n = 4.0 * enc_.lines;
-    const double rev = (p.theta_m() - enc_.offset_rad) / kTwoPi;
+    double rev = (p.theta_m() - enc_.offset_rad) / kTwoPi;
+    // A diverged plant (NaN or inf angle): the counter holds its last position (a quadrature
+    // counter only ever moves by edges), and the conversion below stays defined.
+    if (!std::isfinite(rev)) rev = have_prev_ ? prev_rev_ : 0.0;
     double c = std::fmod(std::floor(rev * n), n);
     if (c < 0) c += n;
+    if (!(c >= 0.0 && c < n)) c = 0.0;  // rev * n overflowed to inf (|theta_m| ~ 1e300): no position left
     // The index mark sits at rev = integer: it was passed if an integer lies in (prev, rev]
     // (forwards) or in (rev, prev] (backwards). Sampling is assumed faster than half a turn.
     if (have_prev_ && !index_seen_) {

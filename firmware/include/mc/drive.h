@@ -1,20 +1,19 @@
 /* The drive: wires the blocks into the control ISR (mc_drive_isr) and the background loop
- * (mc_drive_background). One configuration struct carries motor and drive parameters. */
+ * (mc_drive_background). Its configuration is the parameter table (mc/params.h) plus the model
+ * the estimator gets; everything the ISR uses is derived from it outside the ISR. */
 #ifndef MC_DRIVE_H
 #define MC_DRIVE_H
 #include "mc/types.h"
 #include "mc/angle_source.h"
 #include "mc/current_ctrl.h"
 #include "mc/deadtime.h"
-#include "mc/encoder.h"
 #include "mc/filters.h"
 #include "mc/injection.h"
-#include "mc/pll.h"
 #include "mc/initpos.h"
+#include "mc/params.h"
 #include "mc/polarity.h"
 #include "mc/pulse3.h"
 #include "mc/sequencer.h"
-#include "mc/unop.h"
 #include "mc/speed_ctrl.h"
 #include "mc/svpwm.h"
 #include "mc/torque_ref.h"
@@ -22,83 +21,42 @@
 #include "hal/pwm.h"
 #include "hal/qep.h"
 
-
 typedef enum {
     MC_MODE_CURRENT = 0,    /* i_d, i_q references directly                           */
     MC_MODE_TORQUE,         /* torque -> MTPA / field weakening -> currents            */
-    MC_MODE_SPEED           /* speed PI -> torque -> currents                          */
+    MC_MODE_SPEED,          /* speed PI -> torque -> currents                          */
+    MC_MODE_COUNT
 } mc_mode_t;
 
+/* The machine model the estimator and the initial-position steps get (exact, identified or
+ * deliberately scaled): not a tuning parameter but data, like the flux map it may point to.
+ * A NaN field takes the motor.* parameter. */
 typedef struct {
-    /* motor model the controller uses (small-signal, SI) */
-    int   pole_pairs;
-    float rs, ld, lq, psi_pm;
-    /* timing */
-    float ts;                    /* control period = PWM period [s]                    */
-    /* ADC scaling: i = (count - offset) * amps_per_count; vdc = count * volts_per_count */
-    float adc_amps_per_count;
-    float adc_offset_nominal;    /* [counts] expected offset, checked by the calibration */
-    float adc_offset_tol;        /* [counts] allowed deviation from the nominal offset   */
-    float adc_volts_per_count;
-    uint16_t offset_cal_samples; /* periods averaged at enable                          */
-    /* protection */
-    float i_trip;                /* phase current trip [A]                              */
-    float vdc_min, vdc_max;      /* [V]                                                 */
-    /* angle source */
-    mc_angle_src_kind_t angle_src;
-    uint32_t enc_counts_per_rev;
-    float enc_offset_rad;
-    float enc_pll_bw_hz, enc_speed_fc_hz;
-    /* sensorless: UNOP + PLL filter (Fig. 6.9), HF injection (6.6) with a notch on the feedback */
-    mc_unop_cfg_t unop;          /* its flux-model map pointer must outlive the drive   */
-    float pll_bw_hz;             /* PLL after the estimator                             */
-    float pll_speed_fc_hz;       /* its speed output filter                             */
-    mc_inj_cfg_t inj;
-    float notch_q;               /* notch at the injection frequency in i_dq feedback   */
-    /* startup (thesis ch. 5): Step I pulses, Step II polarity, Step III continuous injection */
-    bool  init_three_step;       /* sensorless: run INIT_POS; false: the angle comes with
-                                    the enable command (mc_drive_cmd_t.theta_init)      */
-    mc_initpos_cfg_t ip1;        /* Step I                                              */
-    bool  ip1_pulse3;            /* Step I by the three-phase pulse reference (3.21)    */
-    mc_pulse3_cfg_t pulse3;
-    bool  ip2_dvi;               /* Step II by dual-voltage injection instead of (5.7)  */
-    mc_polarity_cfg_t ip2;       /* Step II; its model must carry the l_dd asymmetry (map) */
-    mc_dvi_cfg_t dvi;
-    float step3_speed_tol;       /* [rad/s el] Step III converged when the filtered speed
-                                    estimate stays below this ...                       */
-    float step3_hold;            /* [s] ... for this long                               */
-    float timeout_cal, timeout_step12, timeout_step3;   /* [s]                          */
-    /* current loop */
-    float cc_bw_hz;
-    bool  cc_decouple;
-    /* references */
-    float i_max;                 /* phase current limit, peak [A]                       */
-    float i_headroom;            /* share of i_max kept free for regulation error, noise
-                                    and ripple: references stay within i_max (1 - this)  */
-    float i_slew;                /* max rate of the current reference vector [A/s]; keeps
-                                    the delayed loop from overshooting i_max on big steps */
-    float u_margin;              /* share of vdc/sqrt(3) the references plan for         */
-    bool  mtpa_table;
-    /* speed loop (mechanical rad/s) */
-    float sc_kp, sc_ki, torque_max;
-    int   sc_decimation;
-    /* modulator */
-    bool  dtc_enable;
-    float dtc_i_band;
-    float dead_time;             /* [s] for the compensation                            */
+    float rs, ld, lq, psi_pm;         /* [ohm, H, H, Wb]                                   */
+    const mc_flux_map_t *map;         /* psi_dq(i_dq) table; needed by estimator.model =
+                                         fluxmap and by the three-step start (its l_dd profile
+                                         and nonlinear costs). Must outlive the drive.      */
+} mc_est_model_t;
+
+typedef struct {
+    mc_params_t p;
+    mc_est_model_t est;
 } mc_drive_cfg_t;
 
 /* Commands: written by the background side (sim, later CANopen), taken by the ISR at the start
- * of a period as one consistent copy. */
+ * of a period as one consistent copy (see mc_drive_command). */
 typedef struct {
     bool      enable;
     mc_mode_t mode;
     mc_dq_t   i_ref;             /* MC_MODE_CURRENT [A]              */
     float     torque_ref;        /* MC_MODE_TORQUE [N m]             */
     float     speed_ref;         /* MC_MODE_SPEED  [rad/s mechanical] */
-    float     theta_init;        /* sensorless: rotor angle taken as known at enable [rad]
-                                    (until the initial-position routine provides it)  */
+    float     theta_init;        /* startup.init_pos = given: rotor angle taken as known at
+                                    enable [rad electrical]          */
 } mc_drive_cmd_t;
+
+/* Why a command was refused (counted; the previous command stays in force). */
+typedef enum { MC_CMD_OK = 0, MC_CMD_NOT_FINITE, MC_CMD_BAD_MODE } mc_cmd_reject_t;
 
 /* Telemetry of the last period (read from outside the ISR). */
 typedef struct {
@@ -114,8 +72,8 @@ typedef struct {
     mc_dq_t  u_dq;               /* commanded [V]                    */
     mc_ab_t  u_ab;               /* realised by the modulator [V]    */
     float    torque_ref;         /* [N m]                            */
-    float    theta_raw, omega_raw;   /* estimator output before the PLL */
-    int      est_iters;          /* Newton iterations this period     */
+    float    theta_raw, omega_raw;   /* angle source before its filter */
+    int      est_iters;          /* solver iterations this period     */
     float    est_cost, est_cond; /* final cost, Hessian conditioning  */
     float    u_inj;              /* injected d voltage [V]            */
     float    theta1, theta2;     /* Step I (mod pi) and Step II results [rad] */
@@ -123,6 +81,8 @@ typedef struct {
     bool     pol_flip;           /* Step II added pi                         */
     float    duty[3];
     bool     u_limited, fw_active;
+    uint32_t cmd_rejected;       /* commands refused at the hand-over        */
+    mc_cmd_reject_t cmd_reject_last;
 } mc_drive_telem_t;
 
 typedef struct {
@@ -131,8 +91,43 @@ typedef struct {
     hal_qep_t *qep;
 } mc_drive_hal_t;
 
+/* What the ISR uses, in SI, derived from the parameters outside the ISR (drive_config.c). */
 typedef struct {
-    mc_drive_cfg_t cfg;
+    float ts;
+    int   pole_pairs;
+    float amps_per_count, volts_per_count, offset_nominal, offset_tol;   /* [A, V, counts]  */
+    int32_t adc_max;             /* the ADC's upper rail [counts]                            */
+    float i_trip, vdc_min, vdc_max;
+    float i_ref_max, i_slew;     /* [A], [A/s]                                               */
+    uint32_t cal_samples;
+    float step3_speed_tol;       /* [rad/s el]                                               */
+    uint32_t step3_hold;         /* [periods]                                                */
+    bool  inject, three_step, ip1_pulse3, ip2_dvi;
+    float f_notch, notch_q;
+    mc_seq_cfg_t seq;
+    mc_angle_src_cfg_t src;
+    mc_inj_cfg_t inj;
+    mc_initpos_cfg_t ip1;
+    mc_pulse3_cfg_t pulse3;
+    mc_polarity_cfg_t ip2;
+    mc_dvi_cfg_t dvi;
+} mc_drive_blk_t;
+
+/* A complete derived configuration: the parameters, the ISR's values and every block's
+ * configuration. Built in the background (mc_drive_build), applied at a period boundary. */
+typedef struct {
+    mc_params_t p;
+    mc_drive_blk_t blk;
+    mc_cc_cfg_t cc;
+    mc_sc_cfg_t sc;
+    mc_tref_cfg_t tref;
+    mc_dtc_cfg_t dtc;
+} mc_drive_built_t;
+
+typedef struct {
+    mc_params_t p;               /* the resolved parameters in force          */
+    mc_drive_blk_t blk;
+    mc_param_err_t cfg_err;      /* why mc_drive_init refused the configuration */
     mc_drive_hal_t hal;
     mc_drive_cmd_t cmd_next;     /* written by mc_drive_command()            */
     volatile uint32_t cmd_seq;   /* bumped on every write; ISR copies when it changes */
@@ -144,9 +139,8 @@ typedef struct {
     float cal_sum[3];
     float offset[3];             /* calibrated [counts]                      */
 
-    mc_encoder_t enc;
-    mc_unop_t unop;
-    mc_pll_t pll;
+    const mc_angle_src_desc_t *src;
+    mc_angle_src_state_t src_state;
     mc_inj_t inj;
     mc_biquad_t notch_d, notch_q;
     mc_initpos_t ip1;
@@ -166,15 +160,23 @@ typedef struct {
     mc_drive_telem_t tm;
 } mc_drive_t;
 
-/* Returns false (and latches MC_FAULT_CONFIG) when cfg is out of range. */
+/* Defaults (the sun2016-ipm-5kw motor on the 300 V / 10 kHz bench as the motor and hardware
+ * entries; every rule parameter "auto"); the estimator model follows the motor, no map. */
+void mc_drive_cfg_default(mc_drive_cfg_t *cfg);
+/* Derive the "auto" parameters, validate everything (table ranges, cross-checks, the estimator
+ * model and its map) and build the block configurations. false: err says why, out unusable. */
+bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err);
+/* Returns false (and latches MC_FAULT_CONFIG; mc_drive_config_error says why) when the
+ * configuration is refused; the outputs stay off. */
 bool mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, hal_adc_t *adc, hal_pwm_t *pwm, hal_qep_t *qep);
+const mc_param_err_t *mc_drive_config_error(const mc_drive_t *d);
 void mc_drive_command(mc_drive_t *d, const mc_drive_cmd_t *cmd);
 void mc_drive_isr(mc_drive_t *d);          /* the control period, top to bottom               */
 void mc_drive_background(mc_drive_t *d);   /* slow work, outside the ISR                      */
 mc_state_t mc_drive_state(const mc_drive_t *d);
 uint32_t mc_drive_faults(const mc_drive_t *d);
 const mc_drive_telem_t *mc_drive_telemetry(const mc_drive_t *d);
-/* A configuration with the sun2016-ipm-5kw parameters at 10 kHz, for tests and as a template. */
-void mc_drive_cfg_default(mc_drive_cfg_t *cfg);
+/* The parameters in force (resolved: no "auto" left). */
+const mc_params_t *mc_drive_params(const mc_drive_t *d);
 
 #endif

@@ -24,8 +24,10 @@
 #include "mc/svpwm.h"
 #include "mc/types.h"
 
-#define MC_IP_REC_MAX   64   /* measured intervals kept by one program */
+#define MC_IP_REC_MAX   64   /* measured intervals a stored program (mc_ip_prog_t) keeps */
 #define MC_IP_SEG_MAX   16   /* segments of one program */
+#define MC_IP_VEC_MAX   8    /* distinct arbitrary (non-direct) vectors of one program */
+#define MC_IP_TAG_MAX   127  /* segment tags are 0..MC_IP_TAG_MAX (int8_t) */
 #define MC_IP_M_MAX     16   /* upper bound of the pulse length m [periods] */
 #define MC_IP_GRID_MAX  72   /* coarse grid points of the Step I search */
 #define MC_IP_GS_MAX    30   /* golden-section iterations (bounded loop) */
@@ -37,23 +39,29 @@ typedef enum { MC_IP_RUNNING = 0, MC_IP_DONE, MC_IP_FAILED } mc_ip_status_t;
 #define MC_IP_V010 2u
 #define MC_IP_V001 1u
 
-/* ---------------- pulse-program runner (shared by initpos, polarity, pulse3) ---------------- */
+/* ---------------- pulse-program runner (shared by initpos, polarity, pulse3) ----------------
+ * Two layers, so that an engine pays only for the memory it needs:
+ *  - mc_ip_run_t: the runner proper (segments, delay line, trip check). It stores no intervals:
+ *    each call hands the interval closed by the new sample back to the caller, which folds it
+ *    into its result at once (Step II (5.6)-(5.7), DVI peaks, the (3.19) peak currents).
+ *  - mc_ip_prog_t: the runner plus a store of up to MC_IP_REC_MAX intervals, for an engine that
+ *    needs all of them at the end (the Step I search re-evaluates (5.5)/(7.1) on every interval
+ *    for each candidate angle). 24 bytes per interval; the store is 1.5 kB of the 1.9 kB of
+ *    mc_initpos_t, the largest engine. */
 
-/* One measured interval [j-1, j]. */
+/* One measured interval [j-1, j] (its segment's tag is returned beside it, not stored). */
 typedef struct {
     mc_ab_t i0, i1;   /* samples i(j-1), i(j) [A] */
     mc_ab_t ubar;     /* realised vector on [j-1, j] minus Rs (i0 + i1) / 2 [V] (5.1): the mean
                          current is the trapezoid rule of the resistive drop over the interval */
-    int16_t tag;      /* the segment's tag */
 } mc_ip_rec_t;
 
+/* One segment, 4 bytes: the vector of an arbitrary-direction segment is kept once in the
+ * runner's vector table (a program uses few distinct vectors: +V and -V in Step II and DVI). */
 typedef struct {
-    mc_ab_t u;        /* requested vector [V] when !direct (mc_svpwm, hexagon-limited) */
-    uint8_t pattern;  /* direct vector V(abc) when direct */
-    bool direct;
-    bool gap;         /* zero vector; ends after len periods once |i| <= i_rest (or gap_max) */
     int16_t len;      /* periods (for a gap: the minimum) */
-    int16_t tag;      /* >= 0: record its intervals under this tag; < 0: not recorded */
+    int8_t tag;       /* >= 0: record its intervals under this tag; < 0: not recorded */
+    uint8_t kind;     /* internal: gap / direct V(pattern) / vector-table entry */
 } mc_ip_seg_t;
 
 typedef struct {
@@ -63,29 +71,46 @@ typedef struct {
     float i_trip;     /* [A] |i| above this fails the program (<= 0: no check) */
     int gap_max;      /* [periods] a gap ends anyway (decay_timeout set) */
     mc_ip_seg_t seg[MC_IP_SEG_MAX];
-    int n_seg;
+    mc_ab_t vec[MC_IP_VEC_MAX];  /* requested vectors [V] (mc_svpwm, hexagon-limited) */
+    int n_seg, n_vec;
     /* run state */
     int n;            /* calls so far */
     int cur, pos;     /* segment being issued, periods issued from it */
     int open;         /* recorded intervals issued whose end sample has not arrived */
     mc_ab_t i_prev;   /* i(n-1) */
     mc_ab_t u_line[2];   /* at entry of call n: vector on [n-1, n] and on [n, n+1] */
-    int16_t tag_line[2];
-    /* record */
-    mc_ip_rec_t rec[MC_IP_REC_MAX];
-    int n_rec;
+    int8_t tag_line[2];
+    bool decay_timeout;
+    int n_rec;        /* recorded (tag >= 0) intervals closed so far */
     float i_peak;     /* largest |i_ab| sampled [A] */
-    bool decay_timeout, overflow;
+} mc_ip_run_t;
+
+void mc_ip_run_init(mc_ip_run_t *p, float rs, float i_rest, float i_trip, int gap_max);
+/* Append a segment; false when the program (or, for a vector, the vector table) is full,
+ * len < 1 or tag > MC_IP_TAG_MAX. */
+bool mc_ip_run_direct(mc_ip_run_t *p, unsigned pattern, int len, int tag);
+bool mc_ip_run_vector(mc_ip_run_t *p, mc_ab_t u, int len, int tag);
+bool mc_ip_run_gap(mc_ip_run_t *p, int len_min);
+/* One period (calling convention above). When sample i_ab closes a recorded interval, *rec
+ * receives it and *tag its segment's tag (>= 0); otherwise *tag = -1 and *rec is untouched.
+ * DONE once every segment has been issued and every recorded interval has its end sample; then
+ * duty = V(000). FAILED: vdc <= 0, non-finite current, |i| > i_trip (nothing closed). */
+mc_ip_status_t mc_ip_run_step(mc_ip_run_t *p, mc_ab_t i_ab, float vdc, mc_abc_t *duty,
+                              mc_ip_rec_t *rec, int *tag);
+
+/* Runner + interval store. */
+typedef struct {
+    mc_ip_run_t run;
+    int n_rec;        /* intervals stored (every recorded one, up to MC_IP_REC_MAX) */
+    bool overflow;    /* a recorded interval found the store full (and was dropped) */
+    mc_ip_rec_t rec[MC_IP_REC_MAX];
 } mc_ip_prog_t;
 
 void mc_ip_prog_init(mc_ip_prog_t *p, float rs, float i_rest, float i_trip, int gap_max);
-/* Append a segment; false when the program is full or len < 1. */
 bool mc_ip_prog_direct(mc_ip_prog_t *p, unsigned pattern, int len, int tag);
 bool mc_ip_prog_vector(mc_ip_prog_t *p, mc_ab_t u, int len, int tag);
 bool mc_ip_prog_gap(mc_ip_prog_t *p, int len_min);
-/* One period (calling convention above). DONE once every segment has been issued and every
- * recorded interval has its end sample; then duty = V(000). FAILED: vdc <= 0, non-finite
- * current, |i| > i_trip. */
+/* mc_ip_run_step, appending each recorded interval to rec[] (overflow when full). */
 mc_ip_status_t mc_ip_prog_step(mc_ip_prog_t *p, mc_ab_t i_ab, float vdc, mc_abc_t *duty);
 /* Duties and realised vector of a direct vector V(pattern) at vdc: phase voltage (d - 0.5) vdc,
  * Clarke (2.4). V(100) at 300 V gives u_alpha = 200 V. */
@@ -118,7 +143,7 @@ typedef struct {
 
 typedef struct {
     mc_initpos_cfg_t cfg;
-    mc_ip_prog_t prog;
+    mc_ip_prog_t prog;       /* runner + the intervals the search evaluates */
     int phase;               /* internal: collect, grid, golden, done, failed */
     int k, gs_iter, gs_stage;
     float best_th, best_c, ga, gb, x1, x2, f1, f2;

@@ -27,9 +27,8 @@ typedef struct {
 
 typedef struct {
     mc_polarity_cfg_t cfg;
-    mc_ip_prog_t prog;
+    mc_ip_run_t prog;        /* runner only: each interval is folded into (5.7) as it closes */
     mc_sincos_t dir;         /* of theta1 */
-    int used;                /* records already folded into c1, c2 */
     int state;               /* internal */
     /* results */
     float theta1;            /* input [rad] */
@@ -58,7 +57,7 @@ typedef struct {
 
 typedef struct {
     mc_dvi_cfg_t cfg;
-    mc_ip_prog_t prog;
+    mc_ip_run_t prog;        /* runner only: the peaks are tracked as the intervals close */
     mc_sincos_t dir;
     int state;
     float theta1, theta2;    /* theta2 in [-pi, pi) */

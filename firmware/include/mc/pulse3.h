@@ -24,8 +24,10 @@ typedef struct {
 
 typedef struct {
     mc_pulse3_cfg_t cfg;
-    mc_ip_prog_t prog;
+    mc_ip_run_t prog;         /* runner only: the peaks are tracked as the intervals close */
     int state;
+    float i_start[3];         /* internal: phase current at the first sample of each pulse [A] */
+    bool seen[3];             /* internal: pulse x has started */
     float ipk[3];             /* peak phase current rise I_a, I_b, I_c during each pulse [A] */
     float di[3];              /* I_x - I_0 */
     int sector;               /* Table 3.1 row 0..5 (centre 0, 30, ..., 150 deg); -1 impossible */

@@ -23,6 +23,7 @@ typedef enum { MC_INIT_NONE = 0, MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3 } m
 #define MC_FAULT_CONFIG        (1u << 4)   /* configuration rejected at init                */
 #define MC_FAULT_INIT_POS      (1u << 5)   /* an initial-position step failed               */
 #define MC_FAULT_TIMEOUT       (1u << 6)   /* a state waited longer than its timeout        */
+#define MC_FAULT_NUMERIC       (1u << 7)   /* a non-finite value reached the modulator      */
 
 typedef struct {
     float ts;               /* [s] */

@@ -49,20 +49,13 @@ struct PlantConfig {
     // Enabled periods: the two-point Hermite integrator (one model evaluation per step, default)
     // or classical RK4 on the rotor-frame state (four per step; kept as an independent reference
     // for the tests, always with the ledger). Disabled periods always use RK4.
-    // Ripple: the switching inverter's period in `substeps` equal steps at the mean voltage plus
-    // the ripple's moments (one model evaluation per step; sim/src/ripple.hpp), falling back to
-    // Hermite edge by edge for a period whose dead-time decisions are not certain, with a device
-    // drop, or with a model that has no analytic third derivatives.
     // Taylor: the whole switching period at once: the exact voltage integral, the current map
     // expanded to second order about mid-period, Simpson on the mean-voltage path plus the PWM
     // ripple's moments, one exact model evaluation at the period end (sim/src/taylor.hpp); the
     // scenario runner's default. It keeps no energy ledger and takes no device drop: with either,
     // or with a model without FluxModel::current_taylor (tables), the period goes edge by edge
     // with Hermite instead.
-    enum class Integrator { Hermite, Rk4, Ripple, Taylor } integrator = Integrator::Hermite;
-    // Ripple: a dead-time decision closer than this to its threshold (predicted or reconstructed
-    // current) sends the period to the edge-by-edge path [A].
-    double ripple_margin = 5e-3;
+    enum class Integrator { Hermite, Rk4, Taylor } integrator = Integrator::Hermite;
     // Decide dead-time edges ahead when the current cannot reach the zero band before them
     // (fewer integration splits, same outcome); false decides every edge at its instant (the
     // tests' reference for that claim).
@@ -101,12 +94,6 @@ public:
     // Overwrite the state (tests, scenario initial conditions); the energy ledger restarts at 0.
     void reset_state(const Vec2& psi_dq, double theta_m, double omega_m);
     const EnergyLedger& energy() const;
-    // Enabled switching periods integrated by the Ripple path, and those it handed back to the
-    // edge-by-edge path (uncertain dead-time decisions).
-    struct RippleStats {
-        long long periods = 0, fallbacks = 0;
-    };
-    const RippleStats& ripple_stats() const;
     const PlantConfig& config() const;
     const FluxModel& model() const;
     void set_vdc(double vdc);

@@ -179,7 +179,11 @@ TEST(Presets, LoaderErrorsNameFileKeyValueAndExpectation) {
     };
     const std::vector<Bad> cases = {
         {"ld_h", "ld_h = \"ten\"", {"'ld_h'", "ten", "string", "expected a number"}},
-        {"ld_h", "ld_h = -1.0e-3", {"'ld_h'", "-0.001", "> 0"}},
+        {"ld_h", "ld_h = -1.0e-3", {"'ld_h'", "-0.001", ">= 1e-07 and <= 10 H"}},
+        {"ld_h", "ld_h = 1e300", {"'ld_h'", "1e+300", "out of range", ">= 1e-07 and <= 10 H"}},
+        {"lq_h", "lq_h = nan", {"'lq_h'", "nan", "out of range"}},
+        {"inertia_kgm2", "inertia_kgm2 = inf", {"'inertia_kgm2'", "inf", "out of range"}},
+        {"i_f", "i_f = -1e300", {"'saturation.i_f'", "out of range", ">= -100000 and <= 100000 A"}},
         {"pole_pairs", "pole_pairs = 2.5", {"'pole_pairs'", "2.5", "expected an integer"}},
         {"pole_pairs", "pole_pairs = 0", {"'pole_pairs'", "0", "[1, 100]"}},
         {"a_dq", "", {"'saturation.a_dq'", "missing"}},

@@ -119,3 +119,41 @@ TEST(PlantSensors, EncoderCountsAndIndex) {
     EXPECT_TRUE(q.index_seen);
     EXPECT_EQ(q.index_count, 3999u);
 }
+
+// A diverged plant (NaN/inf currents, Vdc or angle) must not reach a float-to-integer conversion
+// out of range (UB): the ADC reads its rails (NaN: the low rail, 0), the encoder holds its count.
+TEST(PlantSensors, NonFiniteInputsClampToTheRails) {
+    AdcConfig a;
+    a.i_noise_rms = 0.0;
+    a.vdc_noise_rel = 0.0;
+    Sensors s(a, EncoderConfig{}, 1);
+    Plant p = locked_plant(0.0);
+    const uint16_t top = uint16_t((1u << a.bits) - 1u);
+    const double nan = std::nan(""), inf = INFINITY;
+    p.reset_state(Vec2(nan, nan), 0.0, 0.0);
+    p.set_vdc(nan);
+    AdcSample q = s.sample_adc(p);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(q.i[k], 0u) << k;
+    EXPECT_EQ(q.vdc, 0u);
+    p.set_vdc(inf);
+    EXPECT_EQ(s.sample_adc(p).vdc, top);
+    p.set_vdc(-inf);
+    EXPECT_EQ(s.sample_adc(p).vdc, 0u);
+    p.set_vdc(1e300);
+    EXPECT_EQ(s.sample_adc(p).vdc, top);
+
+    EncoderConfig e;
+    e.lines = 1000;
+    Sensors r(AdcConfig{}, e, 1);
+    Plant pe = locked_plant(0.0);
+    pe.reset_state(pe.psi_dq(), 1234.2 * 2.0 * kPi / 4000.0, 0.0);
+    EXPECT_EQ(r.sample_qep(pe).count, 1234u);
+    for (const double th : {nan, inf, -inf}) {
+        pe.reset_state(pe.psi_dq(), th, 0.0);
+        EXPECT_EQ(r.sample_qep(pe).count, 1234u) << th;  // held
+    }
+    for (const double th : {1e300, -1e300, 1e20}) {
+        pe.reset_state(pe.psi_dq(), th, 0.0);
+        EXPECT_LT(r.sample_qep(pe).count, 4000u) << th;
+    }
+}

@@ -17,18 +17,18 @@ typedef struct {
     mc_drive_t d;
 } rig_t;
 
-/* ADC counts for a phase current with the default scaling (12 bit over +-25 A). */
-static uint16_t counts(const mc_drive_cfg_t *c, float amps)
+/* ADC counts for a phase current with the drive's scaling (default 12 bit over +-25 A). */
+static uint16_t counts(const mc_drive_t *d, float amps)
 {
-    return (uint16_t)lrintf(c->adc_offset_nominal + amps / c->adc_amps_per_count);
+    return (uint16_t)lrintf(d->blk.offset_nominal + amps / d->blk.amps_per_count);
 }
 
 static void set_inputs(rig_t *r, float ia, float ib, float vdc)
 {
-    r->adc.sample.i[0] = counts(&r->cfg, ia);
-    r->adc.sample.i[1] = counts(&r->cfg, ib);
-    r->adc.sample.i[2] = counts(&r->cfg, -ia - ib);
-    r->adc.sample.vdc = (uint16_t)lrintf(vdc / r->cfg.adc_volts_per_count);
+    r->adc.sample.i[0] = counts(&r->d, ia);
+    r->adc.sample.i[1] = counts(&r->d, ib);
+    r->adc.sample.i[2] = counts(&r->d, -ia - ib);
+    r->adc.sample.vdc = (uint16_t)lrintf(vdc / r->d.blk.volts_per_count);
 }
 
 static void rig_init(rig_t *r)
@@ -67,7 +67,7 @@ static void test_enable_calibrates_then_runs(void **st)
     /* offsets of +30 counts on phase a: the calibration must find and remove them */
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     r.adc.sample.i[0] = (uint16_t)(r.adc.sample.i[0] + 30u);
-    run(&r, (int)r.cfg.offset_cal_samples - 1);
+    run(&r, (int)r.d.p.offset_cal_samples - 1);
     assert_int_equal(mc_drive_telemetry(&r.d)->state, MC_STATE_OFFSET_CAL);
     assert_false(hal_pwm_enabled(&r.pwm));
     run(&r, 1);
@@ -83,10 +83,10 @@ static void test_overcurrent_trips_and_latches(void **st)
     static rig_t r;
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.cfg.offset_cal_samples + 5);
+    run(&r, (int)r.d.p.offset_cal_samples + 5);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 
-    set_inputs(&r, r.cfg.i_trip + 1.0f, 0.0f, 300.0f);
+    set_inputs(&r, r.d.p.i_trip + 1.0f, 0.0f, 300.0f);
     run(&r, 1);
     assert_int_equal(mc_drive_telemetry(&r.d)->state, MC_STATE_FAULT);
     assert_true(mc_drive_telemetry(&r.d)->faults & MC_FAULT_OVERCURRENT);
@@ -106,7 +106,7 @@ static void test_overcurrent_trips_and_latches(void **st)
     run(&r, 1);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
     assert_int_equal(mc_drive_faults(&r.d), 0u);
-    run(&r, (int)r.cfg.offset_cal_samples);
+    run(&r, (int)r.d.p.offset_cal_samples);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 }
 
@@ -116,15 +116,15 @@ static void test_dc_link_limits(void **st)
     static rig_t r;
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.cfg.offset_cal_samples + 2);
-    set_inputs(&r, 0.0f, 0.0f, r.cfg.vdc_max + 10.0f);
+    run(&r, (int)r.d.p.offset_cal_samples + 2);
+    set_inputs(&r, 0.0f, 0.0f, r.d.p.vdc_max + 10.0f);
     run(&r, 1);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERVOLTAGE);
 
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.cfg.offset_cal_samples + 2);
-    set_inputs(&r, 0.0f, 0.0f, r.cfg.vdc_min - 10.0f);
+    run(&r, (int)r.d.p.offset_cal_samples + 2);
+    set_inputs(&r, 0.0f, 0.0f, r.d.p.vdc_min - 10.0f);
     run(&r, 1);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_UNDERVOLTAGE);
     assert_false(hal_pwm_enabled(&r.pwm));
@@ -135,9 +135,9 @@ static void test_implausible_offset_faults(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    r.adc.sample.i[1] = (uint16_t)(r.adc.sample.i[1] + (uint16_t)(r.cfg.adc_offset_tol + 20.0f));
+    r.adc.sample.i[1] = (uint16_t)(r.adc.sample.i[1] + (uint16_t)(r.d.blk.offset_tol + 20.0f));
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.cfg.offset_cal_samples + 2);
+    run(&r, (int)r.d.p.offset_cal_samples + 2);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_OFFSET_CAL);
     assert_false(hal_pwm_enabled(&r.pwm));
@@ -148,8 +148,15 @@ static void test_bad_config_never_runs(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    r.cfg.ts = 1.0f; /* 1 Hz control: out of range */
+    r.cfg.p.ts = 1.0f; /* 1 Hz control: out of range */
     assert_false(mc_drive_init(&r.d, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    /* the reason names the parameter, its value and its range */
+    const mc_param_err_t *e = mc_drive_config_error(&r.d);
+    assert_int_equal(e->kind, MC_PERR_RANGE);
+    assert_int_equal(e->param, MC_PARAM_ts);
+    assert_string_equal(mc_param_table[e->param].name, "control.ts_s");
+    assert_float_equal(e->value, 1.0f, 0.0f);
+    assert_float_equal(e->max, 5e-4f, 1e-9f);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     run(&r, 300);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
@@ -166,9 +173,9 @@ static void test_voltage_history_and_slew(void **st)
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 5.0f);
     /* the ISR that completes the calibration already runs the first control step */
-    run(&r, (int)r.cfg.offset_cal_samples);
+    run(&r, (int)r.d.p.offset_cal_samples);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
-    const float step = r.cfg.i_slew * r.cfg.ts;
+    const float step = r.d.blk.i_slew * r.d.blk.ts;
     assert_float_equal(mc_drive_telemetry(&r.d)->i_ref.q, step, 1e-5f);
     const mc_ab_t u1 = mc_drive_telemetry(&r.d)->u_ab;
     run(&r, 1);
@@ -194,9 +201,9 @@ static void test_slew_step_boundary(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    const float step = r.cfg.i_slew * r.cfg.ts;
+    const float step = r.d.blk.i_slew * r.d.blk.ts;
     command(&r, true, MC_MODE_CURRENT, 0.0f, 2.0f);
-    run(&r, (int)r.cfg.offset_cal_samples + 10);
+    run(&r, (int)r.d.p.offset_cal_samples + 10);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     assert_true(mc_drive_telemetry(&r.d)->i_ref.q == 2.0f);
     /* moves in steps: within the margin, between margin and step, just beyond, far beyond */

@@ -90,9 +90,9 @@ typedef struct {
     double i_force;        /* added to phase a (A) to provoke an over-current */
 } rig_t;
 
-static uint16_t counts(const mc_drive_cfg_t *c, double amps)
+static uint16_t counts(const mc_drive_t *d, double amps)
 {
-    return (uint16_t)lrint(c->adc_offset_nominal + amps / c->adc_amps_per_count);
+    return (uint16_t)lrint(d->blk.offset_nominal + amps / d->blk.amps_per_count);
 }
 
 /* One PWM period of a salient RL machine at standstill with the latched duties (exact enough
@@ -122,10 +122,10 @@ static void sample(rig_t *r)
     const double c = cos(r->theta_r), s = sin(r->theta_r);
     const double ial = c * r->id - s * r->iq, ibe = s * r->id + c * r->iq;
     const double ia = ial + r->i_force, ib = -0.5 * ial + sqrt(3.0) / 2 * ibe, ic = -ia - ib + r->i_force;
-    r->adc.sample.i[0] = counts(&r->cfg, ia);
-    r->adc.sample.i[1] = counts(&r->cfg, ib);
-    r->adc.sample.i[2] = counts(&r->cfg, ic);
-    r->adc.sample.vdc = (uint16_t)lrint(300.0 / r->cfg.adc_volts_per_count);
+    r->adc.sample.i[0] = counts(&r->d, ia);
+    r->adc.sample.i[1] = counts(&r->d, ib);
+    r->adc.sample.i[2] = counts(&r->d, ic);
+    r->adc.sample.vdc = (uint16_t)lrint(300.0 / r->d.blk.volts_per_count);
 }
 
 static void step(rig_t *r, int n)
@@ -161,18 +161,12 @@ static void rig_init(rig_t *r, double theta_r)
         }
     }
     mc_drive_cfg_default(&r->cfg);
-    r->cfg.angle_src = MC_ANGLE_SRC_UNOP;
-    r->cfg.unop.k1 = 0.5f;
-    r->cfg.unop.k2 = 100.0f;
-    r->cfg.unop.omega_base = 314.0f;
-    r->cfg.pll_bw_hz = 30.0f;
-    r->cfg.cc_bw_hz = 250.0f;
-    r->cfg.offset_cal_samples = 64u;
-    r->cfg.init_three_step = true;
-    r->cfg.ip2.model = (mc_flux_model_t){.kind = MC_FLUX_MAP, .ld = (float)LD, .lq = (float)LQ,
-                                         .psi_pm = 0.34305f, .map = &r->map};
-    r->cfg.ip1.model = r->cfg.ip2.model;
-    r->cfg.step3_speed_tol = 3.0f;
+    mc_params_t *p = &r->cfg.p;
+    p->angle_src = MC_ANGLE_SRC_unop;
+    p->est_model = 0;                 /* constant parameters: the plant is linear */
+    p->init_three_step = 1;
+    assert_true(mc_param_set(p, MC_PARAM_step3_tol_rpm, 5.73f, NULL));   /* 3 rad/s electrical */
+    r->cfg.est = (mc_est_model_t){.rs = NAN, .ld = (float)LD, .lq = (float)LQ, .psi_pm = 0.34305f, .map = &r->map};
     assert_true(mc_drive_init(&r->d, &r->cfg, &r->adc, &r->pwm, &r->qep));
 }
 
@@ -296,8 +290,8 @@ static void test_step3_timeout(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r, 0.3);
-    r.cfg.step3_speed_tol = 1e-9f;
-    r.cfg.timeout_step3 = 0.05f;
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_step3_tol_rpm, 0.01f, NULL));   /* the table's minimum */
+    r.cfg.p.timeout_step3 = 0.05f;
     assert_true(mc_drive_init(&r.d, &r.cfg, &r.adc, &r.pwm, &r.qep));
     command(&r, true);
     step(&r, 64 + 60 + 501);

@@ -1,0 +1,184 @@
+/* The drive's configuration, background side: parameters -> validated, derived block
+ * configurations (mc_drive_build). Nothing here runs in the ISR. */
+#include <math.h>
+#include "mc/drive.h"
+
+#define RPM_TO_RAD_S (MC_2PI / 60.0f)
+
+void mc_drive_cfg_default(mc_drive_cfg_t *cfg)
+{
+    mc_params_default(&cfg->p);
+    cfg->est = (mc_est_model_t){.rs = NAN, .ld = NAN, .lq = NAN, .psi_pm = NAN, .map = 0};
+}
+
+static bool model_err(mc_param_err_t *err, int param, float value, const char *text)
+{
+    if (err != 0) {
+        *err = (mc_param_err_t){.kind = MC_PERR_MODEL, .param = param, .param2 = -1, .value = value,
+                                .value2 = 0.0f, .min = mc_param_table[param].min, .max = mc_param_table[param].max,
+                                .text = text};
+    }
+    return false;
+}
+
+static float or_motor(float v, float motor)
+{
+    return isnan(v) ? motor : v;
+}
+
+/* The estimator's model: the motor's unless given, each value as plausible as the motor entry
+ * it stands for; the flux map's grid must fit the table and hold finite numbers only. */
+static bool check_model(const mc_params_t *p, const mc_est_model_t *in, mc_est_model_t *m, bool need_map,
+                        mc_param_err_t *err)
+{
+    *m = (mc_est_model_t){.rs = or_motor(in->rs, p->rs), .ld = or_motor(in->ld, p->ld),
+                          .lq = or_motor(in->lq, p->lq), .psi_pm = or_motor(in->psi_pm, p->psi_pm), .map = in->map};
+    const struct { float v; int id; } vals[4] = {
+        {m->rs, MC_PARAM_rs}, {m->ld, MC_PARAM_ld}, {m->lq, MC_PARAM_lq}, {m->psi_pm, MC_PARAM_psi_pm}};
+    for (int k = 0; k < 4; ++k) {
+        const mc_param_info_t *e = &mc_param_table[vals[k].id];
+        if (!isfinite(vals[k].v) || vals[k].v < e->min || vals[k].v > e->max) {
+            return model_err(err, vals[k].id, vals[k].v, "the estimator model's value is out of the motor entry's range");
+        }
+    }
+    const mc_flux_map_t *map = m->map;
+    if (map == 0) {
+        return need_map ? model_err(err, MC_PARAM_est_model, 0.0f, "this configuration needs the estimator's flux map")
+                        : true;
+    }
+    if (map->n_d < 2 || map->n_d > MC_FLUX_MAP_MAX || map->n_q < 2 || map->n_q > MC_FLUX_MAP_MAX) {
+        return model_err(err, MC_PARAM_est_model, (float)(map->n_d < 2 || map->n_d > MC_FLUX_MAP_MAX ? map->n_d : map->n_q),
+                         "flux map grid points per axis must be 2..41");
+    }
+    if (!isfinite(map->id0) || !isfinite(map->iq0) || !(map->did > 0.0f) || !(map->diq > 0.0f) ||
+        !isfinite(map->did) || !isfinite(map->diq)) {
+        return model_err(err, MC_PARAM_est_model, map->did, "flux map grid origin and steps must be finite, steps > 0");
+    }
+    for (int k = 0; k < map->n_d * map->n_q; ++k) {
+        if (!isfinite(map->psi_d[k]) || !isfinite(map->psi_q[k]) || fabsf(map->psi_d[k]) > 100.0f ||
+            fabsf(map->psi_q[k]) > 100.0f) {
+            return model_err(err, MC_PARAM_est_model, map->psi_d[k], "flux map values must be finite and below 100 Wb");
+        }
+    }
+    return true;
+}
+
+static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
+{
+    mc_initpos_cfg_default(&b->ip1);
+    b->ip1.ts = p->ts;
+    b->ip1.rs = m->rs;
+    b->ip1.ld = m->ld;
+    b->ip1.lq = m->lq;
+    b->ip1.cost = (mc_ip_cost_t)p->ip1_cost;
+    b->ip1.model = (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+    b->ip1.m = (int)p->ip1_m;
+    b->ip1.n_dir = (int)p->ip1_dirs;
+    b->ip1.i_trip = p->i_trip;
+    b->ip1.i_rest = p->ip_i_rest;
+    mc_pulse3_cfg_default(&b->pulse3);
+    b->pulse3.rs = m->rs;
+    b->pulse3.n = (int)p->ip1_m;
+    b->pulse3.i_trip = p->i_trip;
+    b->pulse3.i_rest = p->ip_i_rest;
+    mc_polarity_cfg_default(&b->ip2);
+    b->ip2.ts = p->ts;
+    b->ip2.rs = m->rs;
+    b->ip2.model = b->ip1.model;
+    b->ip2.v_pol = p->v_pol;
+    b->ip2.n = (int)p->ip2_n;
+    b->ip2.i_trip = p->i_trip;
+    b->ip2.i_rest = p->ip_i_rest;
+    mc_dvi_cfg_default(&b->dvi);
+    b->dvi.rs = m->rs;
+    b->dvi.v = p->v_pol;
+    b->dvi.n = (int)p->dvi_n;
+    b->dvi.i_trip = p->i_trip;
+    b->dvi.i_rest = p->ip_i_rest;
+    b->three_step = p->init_three_step != 0;
+    b->ip1_pulse3 = p->ip1_pulse3 != 0;
+    b->ip2_dvi = p->ip2_dvi != 0;
+    const float cal = 2.0f * (float)p->offset_cal_samples * p->ts;
+    b->seq = (mc_seq_cfg_t){.ts = p->ts, .init_pos = b->three_step, .timeout_cal = cal > 0.1f ? cal : 0.1f,
+                            .timeout_step12 = p->timeout_step12, .timeout_step3 = p->timeout_step3};
+    b->step3_speed_tol = p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
+    b->step3_hold = (uint32_t)(p->step3_hold / p->ts + 0.5f);
+}
+
+static void build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
+{
+    const float pp = (float)p->pole_pairs;
+    mc_angle_src_cfg_t *s = &b->src;
+    *s = (mc_angle_src_cfg_t){0};
+    s->ts = p->ts;
+    s->pole_pairs = (int)p->pole_pairs;
+    s->enc_counts_per_rev = 4u * (uint32_t)p->enc_lines;
+    s->enc_offset_rad = p->enc_offset;
+    s->enc_pll_bw_hz = p->enc_pll_bw_hz;
+    s->enc_speed_fc_hz = p->enc_speed_fc_hz;
+    s->rs = m->rs;
+    s->model = p->est_model == 1 ? (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map}
+                                 : (mc_flux_model_t){MC_FLUX_CONST, m->ld, m->lq, m->psi_pm, 0};
+    s->iter_max = (int)p->iter_max;
+    s->step_tol = p->step_tol;
+    s->k1 = p->k1;
+    s->k2 = p->k2;
+    s->omega_n1 = p->n1_rpm * RPM_TO_RAD_S * pp;
+    s->omega_base = p->speed_scale_rpm * RPM_TO_RAD_S * pp;
+    s->mid_sample = p->mid_sample != 0;
+    s->reg_predicted = p->reg_predicted != 0;
+    s->pll_bw_hz = p->pll_bw_hz;
+    s->pll_speed_fc_hz = p->pll_speed_fc_hz;
+    b->inject = mc_angle_src_get(p->angle_src)->needs_injection && p->inj_kind != (int32_t)MC_INJ_OFF;
+    b->inj = (mc_inj_cfg_t){.kind = (mc_inj_kind_t)p->inj_kind, .v1 = p->inj_v1, .f_hz = p->inj_f_hz,
+                            .omega_n1 = s->omega_n1, .ts = p->ts};
+    b->f_notch = p->inj_f_hz < 0.45f / p->ts ? p->inj_f_hz : 0.45f / p->ts;
+    b->notch_q = p->notch_q;
+}
+
+bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err)
+{
+    out->p = cfg->p;
+    mc_params_t *p = &out->p;
+    mc_params_derive(p);
+    if (!mc_params_validate(p, err)) {
+        return false;
+    }
+    const bool estimator = mc_angle_src_get(p->angle_src)->needs_injection;
+    const bool need_map = (estimator && p->est_model == 1) ||
+                          (p->init_three_step != 0 && (p->ip2_dvi == 0 || (p->ip1_pulse3 == 0 && p->ip1_cost != 0)));
+    mc_est_model_t m;
+    if (!check_model(p, &cfg->est, &m, need_map, err)) {
+        return false;
+    }
+    mc_drive_blk_t *b = &out->blk;
+    *b = (mc_drive_blk_t){0};
+    b->ts = p->ts;
+    b->pole_pairs = (int)p->pole_pairs;
+    const float max_count = (float)((1L << p->adc_bits) - 1L);
+    b->adc_max = (int32_t)max_count;
+    b->amps_per_count = 2.0f * p->i_span / max_count;
+    b->volts_per_count = p->vdc_span / max_count;
+    b->offset_nominal = (float)(1L << (p->adc_bits - 1));
+    b->offset_tol = p->adc_offset_tol * (float)(1L << p->adc_bits);
+    b->i_trip = p->i_trip;
+    b->vdc_min = p->vdc_min;
+    b->vdc_max = p->vdc_max;
+    b->i_ref_max = p->i_max * (1.0f - p->i_headroom);
+    b->i_slew = p->i_slew;
+    b->cal_samples = (uint32_t)p->offset_cal_samples;
+    build_startup(p, &m, b);
+    build_source(p, &m, b);
+
+    mc_cc_cfg_from_bandwidth(&out->cc, p->cc_bw_hz, p->rs, p->ld, p->lq, p->psi_pm, p->ts);
+    out->cc.decouple = p->cc_decouple != 0;
+    out->sc = (mc_sc_cfg_t){.kp = p->sc_kp, .ki = p->sc_ki, .ts = p->ts * (float)p->sc_decimation,
+                            .torque_max = p->torque_max, .decimation = (int)p->sc_decimation};
+    out->tref = (mc_tref_cfg_t){.pole_pairs = (int)p->pole_pairs,
+                                .mach = {.ld = p->ld, .lq = p->lq, .psi_pm = p->psi_pm},
+                                .i_max = b->i_ref_max, .u_margin = p->u_margin, .use_table = p->mtpa_table != 0};
+    mc_mtpa_table_fill_linear(&out->tref.table, &out->tref.mach, b->i_ref_max);
+    out->dtc = (mc_dtc_cfg_t){.t_dead = p->dead_time, .t_pwm = p->ts, .i_band = p->dtc_i_band,
+                              .enable = p->dtc_enable != 0};
+    return true;
+}

@@ -1,0 +1,422 @@
+/* The parameter table at run time, the default rules and the validation (mc/params.h). Runs at
+ * init and in the background loop, never in the ISR. */
+#include "mc/params.h"
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+/* clang-format off */
+const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
+#define MC_X(m, name_, type_, unit_, lo, hi, def_, rule_, group_, access_, choices_, doc_) \
+    {.name = name_, .unit = unit_, .choices = choices_, .doc = doc_, \
+     .offset = (uint16_t)offsetof(mc_params_t, m), .type = (uint8_t)MC_PT_##type_, \
+     .group = (uint8_t)MC_PG_##group_, .access = (uint8_t)MC_PA_##access_, \
+     .rule = (uint8_t)MC_RULE_##rule_, .min = (float)(lo), .max = (float)(hi), .def = (float)(def_)},
+    MC_PARAMS(MC_X)
+#undef MC_X
+};
+/* clang-format on */
+
+const char *mc_param_group_name(mc_param_group_t g)
+{
+    static const char *const names[MC_PG_COUNT] = {"motor", "hardware", "protection", "control",
+                                                   "estimator", "injection", "startup"};
+    return (unsigned)g < (unsigned)MC_PG_COUNT ? names[g] : "?";
+}
+
+static bool valid_id(int id)
+{
+    return id >= 0 && id < (int)MC_PARAM_COUNT;
+}
+
+int mc_param_find(const char *name)
+{
+    if (name == NULL) {
+        return -1;
+    }
+    for (int k = 0; k < (int)MC_PARAM_COUNT; ++k) {
+        if (strcmp(mc_param_table[k].name, name) == 0) {
+            return k;
+        }
+    }
+    return -1;
+}
+
+static float *f32_ptr(mc_params_t *p, int id)
+{
+    return (float *)(void *)((char *)p + mc_param_table[id].offset);
+}
+static int32_t *i32_ptr(mc_params_t *p, int id)
+{
+    return (int32_t *)(void *)((char *)p + mc_param_table[id].offset);
+}
+
+float mc_param_get(const mc_params_t *p, int id)
+{
+    if (!valid_id(id)) {
+        return NAN;
+    }
+    const char *base = (const char *)p + mc_param_table[id].offset;
+    return mc_param_table[id].type == MC_PT_F32 ? *(const float *)(const void *)base
+                                                : (float)*(const int32_t *)(const void *)base;
+}
+
+bool mc_param_is_auto(const mc_params_t *p, int id)
+{
+    return valid_id(id) && (p->auto_mask[id / 32] >> (id % 32) & 1u) != 0u;
+}
+
+void mc_param_set_auto(mc_params_t *p, int id, bool on)
+{
+    if (!valid_id(id)) {
+        return;
+    }
+    const uint32_t bit = 1u << (id % 32);
+    p->auto_mask[id / 32] = on ? (p->auto_mask[id / 32] | bit) : (p->auto_mask[id / 32] & ~bit);
+}
+
+static void set_err(mc_param_err_t *err, mc_param_err_kind_t kind, int id, float value, const char *text)
+{
+    if (err == NULL) {
+        return;
+    }
+    *err = (mc_param_err_t){.kind = kind, .param = id, .param2 = -1, .value = value, .value2 = 0.0f,
+                            .min = valid_id(id) ? mc_param_table[id].min : 0.0f,
+                            .max = valid_id(id) ? mc_param_table[id].max : 0.0f, .text = text};
+}
+
+/* Stores without any check (defaults and derived values come from the table itself). */
+static void store(mc_params_t *p, int id, float v)
+{
+    if (mc_param_table[id].type == MC_PT_F32) {
+        *f32_ptr(p, id) = v;
+    } else {
+        *i32_ptr(p, id) = (int32_t)v;
+    }
+}
+
+bool mc_param_set(mc_params_t *p, int id, float value, mc_param_err_t *err)
+{
+    if (!valid_id(id)) {
+        set_err(err, MC_PERR_UNKNOWN, id, value, "no such parameter");
+        return false;
+    }
+    if (mc_param_table[id].type != MC_PT_F32) {
+        /* converting a NaN, an infinity or anything outside int32 to int32_t is undefined */
+        if (!isfinite(value) || fabsf(value) > 2.0e9f) {
+            set_err(err, MC_PERR_NOT_FINITE, id, value, "not a finite integer");
+            return false;
+        }
+        if (floorf(value) != value) {
+            set_err(err, MC_PERR_NOT_INTEGER, id, value, "must be a whole number");
+            return false;
+        }
+    }
+    store(p, id, value);
+    mc_param_set_auto(p, id, false);
+    return true;
+}
+
+/* The position of `choice` in "a|b|c", or -1. */
+static int choice_index(const char *choices, const char *choice)
+{
+    const size_t n = strlen(choice);
+    int k = 0;
+    const char *s = choices;
+    while (*s != '\0') {
+        const char *bar = strchr(s, '|');
+        const size_t len = bar != NULL ? (size_t)(bar - s) : strlen(s);
+        if (len == n && n > 0u && strncmp(s, choice, n) == 0) {
+            return k;
+        }
+        if (bar == NULL) {
+            break;
+        }
+        s = bar + 1;
+        ++k;
+    }
+    return -1;
+}
+
+bool mc_param_set_choice(mc_params_t *p, int id, const char *choice, mc_param_err_t *err)
+{
+    if (!valid_id(id) || mc_param_table[id].type != MC_PT_ENUM || choice == NULL) {
+        set_err(err, MC_PERR_UNKNOWN, id, 0.0f, "not a choice parameter");
+        return false;
+    }
+    const int k = choice_index(mc_param_table[id].choices, choice);
+    if (k < 0) {
+        set_err(err, MC_PERR_RANGE, id, 0.0f, "not one of the choices");
+        return false;
+    }
+    return mc_param_set(p, id, (float)k, err);
+}
+
+void mc_param_choice_text(const mc_params_t *p, int id, char *buf, unsigned n)
+{
+    if (n == 0u) {
+        return;
+    }
+    buf[0] = '\0';
+    if (!valid_id(id) || mc_param_table[id].type != MC_PT_ENUM) {
+        return;
+    }
+    int want = (int)mc_param_get(p, id);
+    const char *s = mc_param_table[id].choices;
+    for (; want > 0 && s != NULL; --want) {
+        s = strchr(s, '|');
+        s = s != NULL ? s + 1 : NULL;
+    }
+    if (s == NULL) {
+        return;
+    }
+    unsigned k = 0u;
+    for (; s[k] != '\0' && s[k] != '|' && k + 1u < n; ++k) {
+        buf[k] = s[k];
+    }
+    buf[k] = '\0';
+}
+
+void mc_params_default(mc_params_t *p)
+{
+    memset(p, 0, sizeof *p);
+    for (int k = 0; k < (int)MC_PARAM_COUNT; ++k) {
+        store(p, k, mc_param_table[k].def);
+        mc_param_set_auto(p, k, mc_param_table[k].rule != MC_RULE_NONE);
+    }
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Default rules. Each follows the motor (p, Rs, Ld, Lq, psi_pm, rated current and torque,
+ * inertia), the power stage (Vdc, ADC span and resolution) and the sampling frequency f_s, and
+ * reproduces the thesis' values on the thesis motor at 10 kHz (docs/parameters.md lists them). */
+
+/* Two significant digits: derived amplitudes and gains land on the round numbers an engineer
+ * would write (70 V, 30 Hz, 0.3 A on the thesis motor) instead of 70.14 V. */
+static float nice2(float x)
+{
+    if (!(x > 0.0f) || !isfinite(x)) {
+        return x;
+    }
+    /* scale by an exact power of ten (a multiplication by 0.01f would round 30 * 0.01f off 0.3f) */
+    const float k = 1.0f - floorf(log10f(x));
+    if (k >= 0.0f) {
+        const float s = powf(10.0f, k);
+        return roundf(x * s) / s;
+    }
+    const float s = powf(10.0f, -k);
+    return roundf(x / s) * s;
+}
+
+static float minf(float a, float b)
+{
+    return a < b ? a : b;
+}
+static float maxf(float a, float b)
+{
+    return a > b ? a : b;
+}
+
+static bool estimating(const mc_params_t *p)
+{
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
+    return src != NULL && src->needs_injection;
+}
+
+static bool injecting(const mc_params_t *p)
+{
+    return estimating(p) && p->inj_kind != 0;
+}
+
+static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
+{
+    const float fs = 1.0f / p->ts;
+    const float pi2 = 6.28318531f;
+    switch (rule) {
+    case MC_RULE_I_TRIP:
+        /* 1.5 x rated: room above the current limit for regulation transients, below what
+         * the power stage of a drive sized for the motor survives */
+        return 1.5f * p->i_rated;
+    case MC_RULE_VDC_MIN:
+        return 0.5f * p->vdc_nominal;
+    case MC_RULE_VDC_MAX:
+        return 1.5f * p->vdc_nominal;
+    case MC_RULE_I_MAX:
+        return p->i_rated;
+    case MC_RULE_CC_BW: {
+        /* f_s / 40 keeps w_bw Ts = 0.16 rad, where the 1.5-period delay costs ~14 deg of phase
+         * (250 Hz at 10 kHz); while injecting, at most half the injection frequency, so the
+         * notch in the feedback stays outside the loop's crossover */
+        const float bw = fs / 40.0f;
+        return injecting(p) ? minf(bw, 0.5f * p->inj_f_hz) : bw;
+    }
+    case MC_RULE_I_SLEW:
+        /* a reference step the loop follows without overshooting i_max: half the rated
+         * current per loop time constant (10 kA/s on the thesis motor at 250 Hz) */
+        return nice2(0.5f * p->i_max * pi2 * p->cc_bw_hz);
+    case MC_RULE_SPEED_BW: {
+        /* at most 1/40 of the speed loop's own sampling rate (25 Hz at 10 kHz and decimation
+         * 10), and sensorless at most the PLL's bandwidth, which filters the speed it uses */
+        float bw = minf(25.0f, fs / (40.0f * (float)p->sc_decimation));
+        if (estimating(p)) {
+            bw = minf(bw, p->pll_bw_hz);
+        }
+        return bw;
+    }
+    case MC_RULE_SPEED_KP:
+        /* crossover at w_bw on the inertia alone: kp = J w_bw */
+        return p->inertia * pi2 * p->speed_bw_hz;
+    case MC_RULE_SPEED_KI:
+        /* PI zero a quarter of the crossover below it */
+        return p->sc_kp * pi2 * p->speed_bw_hz / 4.0f;
+    case MC_RULE_TORQUE_MAX:
+        return p->torque_rated * 6.0f / 5.0f;   /* 1.2 x, rounded once less than 1.2f * T */
+    case MC_RULE_I_SMALL:
+        /* a current "near zero": 2.26 % of rated, the thesis motor's 0.3 A */
+        return nice2(0.0226f * p->i_rated);
+    case MC_RULE_ENC_FC:
+        return minf(500.0f, fs / 4.0f);
+    case MC_RULE_INJ_F:
+        /* the thesis' 500 Hz; at low f_s at least 4 samples per cycle (the thesis runs UNOP with
+         * 500 Hz at 2 kHz, section 7.3) */
+        return minf(500.0f, fs / 4.0f);
+    case MC_RULE_INJ_I:
+        /* an HF current large enough to read the saliency through the sensor noise and small
+         * against the rated current: 16 % of rated, the thesis' 2.1 A (70 V, 500 Hz, 10.5 mH) */
+        return 0.16f * p->i_rated;
+    case MC_RULE_INJ_V1:
+        /* the voltage that drives i_hf through Ld at the injection frequency (R negligible),
+         * at most half the voltage circle Vdc/sqrt3, the rest is the control's */
+        return minf(nice2(p->inj_i_hf * pi2 * p->inj_f_hz * p->ld), 0.5f * p->vdc_nominal * 0.57735027f);
+    case MC_RULE_N1:
+        /* the injection fades out at 33.3 Hz electrical, where the back-EMF (ratio to the HF
+         * voltage psi_pm w / V1 ~ 1 on the thesis motor) carries the estimate: 400 rpm at p = 5 */
+        return 2000.0f / (float)p->pole_pairs;
+    case MC_RULE_PLL_BW:
+        /* 6 % of the injection frequency: the injection ripple on the raw angle is attenuated
+         * ~25 dB while the PLL still follows the speed loop (30 Hz at 500 Hz) */
+        return nice2(0.06f * p->inj_f_hz);
+    case MC_RULE_PLL_FC:
+        return minf(200.0f, fs / 10.0f);
+    case MC_RULE_STEP1_M: {
+        /* the pulse raises the current by ~0.72 x rated through Ld at 2/3 Vdc (V(100) on the
+         * phase): enough for the saliency, far from the trip; m = 5 on the thesis motor */
+        const float di_per_period = (2.0f / 3.0f) * p->vdc_nominal * p->ts / p->ld;
+        const float m = roundf(0.72f * p->i_rated / di_per_period);
+        return maxf(1.0f, minf(16.0f, m));
+    }
+    case MC_RULE_V_POL:
+        /* a swing of 0.57 x rated through Ld in n periods, where l_dd's asymmetry shows: the
+         * thesis' 200 V with n = 4; at most the hexagon's 2/3 Vdc */
+        return minf(nice2(0.573f * p->i_rated * p->ld / ((float)p->ip2_n * p->ts)),
+                    (2.0f / 3.0f) * p->vdc_nominal);
+    case MC_RULE_STEP3_TOL: {
+        /* expected noise of the filtered speed estimate: one ADC count of current noise through
+         * Lq over one period is a voltage error sqrt2 Lq lsb / Ts, read as speed through psi_pm,
+         * averaged over the PLL's bandwidth; 5 sigma of it, but at least 0.42 Hz electrical
+         * (25/p rpm: the thesis motor's 5 rpm) */
+        const float lsb = 2.0f * p->i_span / (float)((1L << p->adc_bits) - 1L);
+        const float psi = maxf(p->psi_pm, 0.1f * p->lq * p->i_rated);
+        const float sigma_w = 1.41421356f * p->lq * lsb / (p->ts * psi) * sqrtf(2.0f * p->pll_bw_hz * p->ts);
+        const float rpm_per_el = 60.0f / (pi2 * (float)p->pole_pairs);
+        return nice2(maxf(25.0f / (float)p->pole_pairs, 5.0f * sigma_w * rpm_per_el));
+    }
+    case MC_RULE_T_STEP12:
+        return maxf(0.02f, 200.0f * p->ts);
+    case MC_RULE_NONE:
+    case MC_RULE_COUNT:
+    default:
+        return 0.0f;
+    }
+}
+
+/* Rules read the motor and hardware entries (never derived) and other rule results (speed_kp
+ * reads speed_bw, which reads pll_bw, which reads inj_f): four passes settle the deepest chain
+ * whatever the table order. A rule result that is not finite (a motor entry out of range) is
+ * stored as it is, for the validation to report. */
+void mc_params_derive(mc_params_t *p)
+{
+    if (!(p->ts > 0.0f) || p->pole_pairs < 1 || p->adc_bits < 1 || p->adc_bits > 30 || p->ip2_n < 1 ||
+        p->sc_decimation < 1) {
+        return;   /* the validation reports the entry; rules would divide by it */
+    }
+    for (int pass = 0; pass < 4; ++pass) {
+        for (int k = 0; k < (int)MC_PARAM_COUNT; ++k) {
+            if (mc_param_table[k].rule != MC_RULE_NONE && mc_param_is_auto(p, k)) {
+                const float v = rule_value(p, (mc_param_rule_t)mc_param_table[k].rule);
+                if (mc_param_table[k].type == MC_PT_F32 || (isfinite(v) && fabsf(v) < 2.0e9f)) {
+                    store(p, k, v);
+                }
+            }
+        }
+    }
+}
+
+/* ------------------------------------------------------------------------------------------ */
+
+static bool cross(mc_param_err_t *err, int id, int id2, const mc_params_t *p, float lo, float hi, const char *text)
+{
+    if (err != NULL) {
+        *err = (mc_param_err_t){.kind = MC_PERR_CROSS, .param = id, .param2 = id2, .value = mc_param_get(p, id),
+                                .value2 = id2 >= 0 ? mc_param_get(p, id2) : 0.0f, .min = lo, .max = hi,
+                                .text = text};
+    }
+    return false;
+}
+
+bool mc_params_validate(const mc_params_t *p, mc_param_err_t *err)
+{
+    for (int k = 0; k < (int)MC_PARAM_COUNT; ++k) {
+        const mc_param_info_t *e = &mc_param_table[k];
+        const float v = mc_param_get(p, k);
+        if (!isfinite(v)) {
+            set_err(err, MC_PERR_NOT_FINITE, k, v, "not a finite number");
+            return false;
+        }
+        if (v < e->min || v > e->max) {
+            set_err(err, MC_PERR_RANGE, k, v, "out of range");
+            return false;
+        }
+    }
+    const float fs = 1.0f / p->ts;
+    /* sensing: the trip must be seen before the ADC clips, with 10 % for noise and ripple */
+    if (p->i_span < 1.1f * p->i_trip) {
+        return cross(err, MC_PARAM_i_span, MC_PARAM_i_trip, p, 1.1f * p->i_trip, mc_param_table[MC_PARAM_i_span].max,
+                     "the current sensor span must exceed the over-current trip level by 10 %");
+    }
+    if (p->i_max >= p->i_trip) {
+        return cross(err, MC_PARAM_i_max, MC_PARAM_i_trip, p, mc_param_table[MC_PARAM_i_max].min, p->i_trip,
+                     "the current limit must be below the over-current trip level");
+    }
+    if (p->vdc_nominal <= p->vdc_min || p->vdc_nominal >= p->vdc_max) {
+        return cross(err, MC_PARAM_vdc_nominal, p->vdc_nominal <= p->vdc_min ? MC_PARAM_vdc_min : MC_PARAM_vdc_max,
+                     p, p->vdc_min, p->vdc_max, "the nominal DC link must lie inside the trip window");
+    }
+    if (p->vdc_span <= p->vdc_max) {
+        return cross(err, MC_PARAM_vdc_span, MC_PARAM_vdc_max, p, p->vdc_max, mc_param_table[MC_PARAM_vdc_span].max,
+                     "the DC-link sensor span must exceed the over-voltage trip level");
+    }
+    if (p->cc_bw_hz * p->ts > 0.05f) {
+        return cross(err, MC_PARAM_cc_bw_hz, MC_PARAM_ts, p, mc_param_table[MC_PARAM_cc_bw_hz].min, 0.05f * fs,
+                     "the current-loop bandwidth must stay below f_s / 20");
+    }
+    if (p->step3_hold < 2.0f * p->ts) {
+        return cross(err, MC_PARAM_step3_hold, MC_PARAM_ts, p, 2.0f * p->ts, mc_param_table[MC_PARAM_step3_hold].max,
+                     "the Step III hold must last at least two periods");
+    }
+    if (estimating(p)) {
+        if (p->inj_kind != 0 && p->inj_f_hz * p->ts > 0.5f) {
+            return cross(err, MC_PARAM_inj_f_hz, MC_PARAM_ts, p, mc_param_table[MC_PARAM_inj_f_hz].min, 0.5f * fs,
+                         "the injection frequency must be at most half the sampling frequency");
+        }
+        if (p->inj_v1 > p->vdc_nominal * 0.57735027f) {
+            return cross(err, MC_PARAM_inj_v1, MC_PARAM_vdc_nominal, p, 0.0f, p->vdc_nominal * 0.57735027f,
+                         "the injection must fit inside the voltage circle Vdc/sqrt3");
+        }
+    }
+    if (p->init_three_step != 0 && !estimating(p)) {
+        return cross(err, MC_PARAM_init_three_step, MC_PARAM_angle_src, p, 0.0f, 0.0f,
+                     "the three-step start needs control.angle_source = unop");
+    }
+    return true;
+}

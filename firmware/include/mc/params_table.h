@@ -1,0 +1,104 @@
+/* The drive's parameter table: every tunable drive parameter once. Everything that names a
+ * parameter comes from this list (design note shared/design/parameters.md):
+ *   - the members of mc_params_t and the ids MC_PARAM_<member> (mc/params.h),
+ *   - the runtime table mc_param_table[] (name, type, unit, range, default, group, access, doc),
+ *   - validation (mc_params_validate: finiteness and range per entry, then the cross-checks),
+ *   - the default rules (mc_params_derive: MC_RULE_* below, each documented in params.c),
+ *   - the simulator's drive keys (`mcsim keys`, docs/simulator.md), generated from the runtime table,
+ *   - the CANopen manufacturer objects 0x2000 + index and the stored parameter block (hook: the
+ *     index of an entry is its position in this list; append new entries, never reorder).
+ *
+ * X(member, "dotted.name", TYPE, "unit", min, max, default, RULE, GROUP, ACCESS, "choices", "doc")
+ *   TYPE    F32 | I32 | BOOL | ENUM (ENUM: the stored value is the position in "choices")
+ *   default a constant; with a RULE other than NONE the value is derived from the motor data
+ *           unless the user sets it (the constant is then unused)
+ *   GROUP   MOTOR and HW entries describe the machine and the power stage: the integrator (or the
+ *           simulator, from the preset and its sensor keys) sets them; the others are tuning
+ *   ACCESS  INIT: only at mc_drive_init; STANDSTILL: while the outputs are off; RUNTIME: any time
+ *
+ * Units are the ones named; the drive converts to SI (rad/s electrical, ...) when it builds the
+ * block configurations. Order matters for the rules: an entry's rule may only read entries above. */
+#ifndef MC_PARAMS_TABLE_H
+#define MC_PARAMS_TABLE_H
+#include "mc/angle_source.h"
+
+/* clang-format off */
+#define MC_PARAMS(X) \
+/* ---- motor: the model the controller uses (small-signal, at i = 0) ---- */ \
+X(pole_pairs,     "motor.pole_pairs",      I32, "",        1,     100,    5,        NONE, MOTOR, INIT, "", "Pole pairs.") \
+X(rs,             "motor.rs_ohm",          F32, "ohm",     1e-5f, 100,    0.400f,   NONE, MOTOR, STANDSTILL, "", "Stator resistance per phase.") \
+X(ld,             "motor.ld_h",            F32, "H",       1e-7f, 10,     10.5e-3f, NONE, MOTOR, STANDSTILL, "", "d-axis inductance, small-signal at i = 0.") \
+X(lq,             "motor.lq_h",            F32, "H",       1e-7f, 10,     12.9e-3f, NONE, MOTOR, STANDSTILL, "", "q-axis inductance, small-signal at i = 0.") \
+X(psi_pm,         "motor.psi_pm_wb",       F32, "Wb",      0,     20,     0.34305f, NONE, MOTOR, STANDSTILL, "", "Permanent-magnet flux linkage at i = 0.") \
+X(i_rated,        "motor.i_rated_a",       F32, "A",       0.01f, 10000,  13.29f,   NONE, MOTOR, STANDSTILL, "", "Rated phase current, peak.") \
+X(torque_rated,   "motor.torque_rated_nm", F32, "N m",     1e-3f, 1e5f,   29.7f,    NONE, MOTOR, STANDSTILL, "", "Rated torque.") \
+X(inertia,        "motor.inertia_kgm2",    F32, "kg m^2",  1e-7f, 1e3f,   0.013f,   NONE, MOTOR, STANDSTILL, "", "Inertia of rotor and load (speed-loop gains).") \
+/* ---- power stage and sensing ---- */ \
+X(ts,             "control.ts_s",          F32, "s",       5e-5f, 5e-4f,  1e-4f,    NONE, HW, INIT, "", "Control = PWM period, sampled at its centre (2 kHz to 20 kHz).") \
+X(vdc_nominal,    "hw.vdc_nominal_v",      F32, "V",       1,     5000,   300,      NONE, HW, STANDSTILL, "", "Nominal DC-link voltage (the protection window follows it).") \
+X(adc_bits,       "hw.adc_bits",           I32, "bit",     8,     16,     12,       NONE, HW, INIT, "", "Resolution of the current and voltage ADC.") \
+X(i_span,         "hw.i_span_a",           F32, "A",       0.1f,  10000,  25,       NONE, HW, INIT, "", "Current ADC span -span..+span (a sample at a rail counts as over-current).") \
+X(vdc_span,       "hw.vdc_span_v",         F32, "V",       1,     5000,   500,      NONE, HW, INIT, "", "DC-link ADC span 0..span.") \
+X(adc_offset_tol, "hw.adc_offset_tol",     F32, "1",       1e-3f, 0.5f,   0.05f,    NONE, HW, INIT, "", "Allowed offset of a current channel from mid-scale, share of the full range (else offset-calibration fault).") \
+X(dead_time,      "hw.dead_time_s",        F32, "s",       0,     1e-5f,  0.5e-6f,  NONE, HW, STANDSTILL, "", "Inverter dead time (for the compensation).") \
+X(enc_lines,      "hw.encoder_lines",      I32, "lines/rev", 1,   1000000, 20000,   NONE, HW, INIT, "", "Quadrature encoder lines (4 counts each).") \
+X(enc_offset,     "hw.encoder_offset_rad", F32, "rad el",  -7,    7,      0,        NONE, HW, STANDSTILL, "", "Electrical angle at encoder count 0.") \
+/* ---- protection ---- */ \
+X(i_trip,         "control.i_trip_a",      F32, "A",       0.01f, 10000,  20,       I_TRIP,  PROTECTION, STANDSTILL, "", "Over-current trip, peak of any phase (default: 1.5 x motor.i_rated_a).") \
+X(vdc_min,        "control.vdc_min_v",     F32, "V",       0,     5000,   150,      VDC_MIN, PROTECTION, STANDSTILL, "", "Under-voltage trip (default: 0.5 x hw.vdc_nominal_v).") \
+X(vdc_max,        "control.vdc_max_v",     F32, "V",       0,     5000,   450,      VDC_MAX, PROTECTION, STANDSTILL, "", "Over-voltage trip (default: 1.5 x hw.vdc_nominal_v).") \
+/* ---- control ---- */ \
+X(angle_src,      "control.angle_source",  ENUM, "",       0,     MC_ANGLE_SRC_COUNT - 1, 0, NONE, CONTROL, STANDSTILL, MC_ANGLE_SRC_CHOICES, "Angle the controller uses: the encoder, or the sensorless estimator UNOP (thesis ch. 6).") \
+X(offset_cal_samples, "control.offset_cal_samples", I32, "periods", 1, 65535, 64, NONE, CONTROL, STANDSTILL, "", "Periods averaged for the current offsets at every enable.") \
+X(i_max,          "control.i_max_a",       F32, "A",       0.01f, 10000,  13.29f,   I_MAX,   CONTROL, RUNTIME, "", "Phase current limit, peak; references stay within i_max (1 - i_headroom) (default: motor.i_rated_a).") \
+X(i_headroom,     "control.i_headroom",    F32, "1",       0,     0.49f,  0.03f,    NONE,    CONTROL, RUNTIME, "", "Share of control.i_max_a the references leave free for regulation error, noise and ripple.") \
+X(cc_bw_hz,       "control.current_bw_hz", F32, "Hz",      10,    5000,   250,      CC_BW,   CONTROL, RUNTIME, "", "Current-loop bandwidth (default: min(f_s / 40, injection.f_hz / 2)).") \
+X(i_slew,         "control.i_slew_a_per_s", F32, "A/s",    1,     1e8f,   10000,    I_SLEW,  CONTROL, RUNTIME, "", "Rate limit of the current reference vector (default: 0.5 x rated current x current-loop bandwidth in rad/s).") \
+X(cc_decouple,    "control.decouple",      BOOL, "",       0,     1,      1,        NONE,    CONTROL, RUNTIME, "", "Decoupling feed-forward in the current loop.") \
+X(u_margin,       "control.u_margin",      F32, "1",       0.1f,  1,      0.95f,    NONE,    CONTROL, RUNTIME, "", "Share of Vdc/sqrt(3) the references plan for (field weakening).") \
+X(mtpa_table,     "control.mtpa",          ENUM, "",       0,     1,      0,        NONE,    CONTROL, STANDSTILL, "analytic|table", "MTPA law (2.24) or its table.") \
+X(speed_bw_hz,    "control.speed_bw_hz",   F32, "Hz",      0.1f,  200,    25,       SPEED_BW, CONTROL, RUNTIME, "", "Speed-loop bandwidth (default: min(25 Hz, estimator.pll_bw_hz)); sets the gains unless given.") \
+X(sc_kp,          "control.speed_kp",      F32, "N m s/rad", 0,   1e4f,   2.04f,    SPEED_KP, CONTROL, RUNTIME, "", "Speed PI proportional gain, mechanical rad/s (default: J w_bw).") \
+X(sc_ki,          "control.speed_ki",      F32, "N m/rad", 0,     1e6f,   80.2f,    SPEED_KI, CONTROL, RUNTIME, "", "Speed PI integral gain (default: kp w_bw / 4).") \
+X(sc_decimation,  "control.speed_decimation", I32, "periods", 1,  100,    10,       NONE,    CONTROL, STANDSTILL, "", "The speed loop runs every N periods.") \
+X(torque_max,     "control.torque_max_nm", F32, "N m",     0.01f, 1e5f,   35.6f,    TORQUE_MAX, CONTROL, RUNTIME, "", "Speed-loop torque limit (default: 1.2 x motor.torque_rated_nm).") \
+X(dtc_enable,     "control.deadtime_comp", BOOL, "",       0,     1,      1,        NONE,    CONTROL, RUNTIME, "", "Dead-time compensation in the modulator.") \
+X(dtc_i_band,     "control.dtc_i_band_a",  F32, "A",       1e-3f, 1000,   0.3f,     I_SMALL, CONTROL, RUNTIME, "", "Linear zone of the compensation's current sign (default: 2.26 % of motor.i_rated_a).") \
+X(enc_pll_bw_hz,  "control.encoder_pll_bw_hz", F32, "Hz",  1,     2000,   150,      NONE,    CONTROL, STANDSTILL, "", "Encoder speed PLL bandwidth.") \
+X(enc_speed_fc_hz, "control.encoder_speed_fc_hz", F32, "Hz", 1,   10000,  500,      ENC_FC,  CONTROL, STANDSTILL, "", "Encoder speed output filter (default: min(500 Hz, f_s / 4)).") \
+/* ---- sensorless estimator (UNOP, thesis ch. 6) and its PLL filter (Fig. 6.9) ---- */ \
+X(est_model,      "estimator.model",       ENUM, "",       0,     1,      1,        NONE, ESTIMATOR, STANDSTILL, "const|fluxmap", "UNOP machine model: constant Rs, Ld, Lq, psi_pm (thesis) or the flux map psi_dq(i_dq).") \
+X(iter_max,       "estimator.iter_max",    I32, "",        1,     18,     4,        NONE, ESTIMATOR, RUNTIME, "", "Newton iterations per sample (early exit on estimator.step_tol).") \
+X(step_tol,       "estimator.step_tol",    F32, "rad",     0,     1,      1e-4f,    NONE, ESTIMATOR, RUNTIME, "", "Early exit when the scaled Newton step is below this.") \
+X(k1,             "estimator.k1",          F32, "1/rad^2", 0,     1e9f,   0.5f,     NONE, ESTIMATOR, RUNTIME, "", "Angle regularisation weight K1 of (6.5), active below injection.n1_rpm.") \
+X(k2,             "estimator.k2",          F32, "1",       0,     1e9f,   100,      NONE, ESTIMATOR, RUNTIME, "", "Speed regularisation weight K2 of (6.5) on the scaled speed, active below injection.n1_rpm.") \
+X(speed_scale_rpm, "estimator.speed_scale_rpm", F32, "rpm", 1,    1e5f,   600,      NONE, ESTIMATOR, STANDSTILL, "", "Speed that scales the decision variable omega (float32 conditioning).") \
+X(mid_sample,     "estimator.mid_sample",  BOOL, "",       0,     1,      1,        NONE, ESTIMATOR, STANDSTILL, "", "Rotational terms at the mid-sample angle (false: the thesis' first-order form (5.1)).") \
+X(reg_predicted,  "estimator.reg_predicted", BOOL, "",     0,     1,      1,        NONE, ESTIMATOR, STANDSTILL, "", "K1 pulls toward the predicted angle theta(k-1) + omega Ts (false: literal (6.5)).") \
+/* ---- HF injection (6.4), (6.6) ---- */ \
+X(inj_kind,       "injection.kind",        ENUM, "",       0,     2,      1,        NONE, INJECTION, STANDSTILL, "off|sine|rect", "HF voltage in the estimated d axis (6.4, 7.4); only with control.angle_source = unop.") \
+X(inj_f_hz,       "injection.f_hz",        F32, "Hz",      1,     10000,  500,      INJ_F,   INJECTION, STANDSTILL, "", "Injection frequency (default: min(500 Hz, f_s / 4): the thesis' 500 Hz, also at 2 kHz).") \
+X(inj_i_hf,       "injection.i_hf_a",      F32, "A",       0,     10000,  2.13f,    INJ_I,   INJECTION, STANDSTILL, "", "Target HF current amplitude at standstill (default: 16 % of motor.i_rated_a, the thesis' 2.1 A).") \
+X(inj_v1,         "injection.v1_v",        F32, "V",       0,     1000,   70,       INJ_V1,  INJECTION, RUNTIME, "", "Injection magnitude at standstill, V1 of (6.6) (default: i_hf_a 2 pi f Ld, 2 significant digits: 70 V on the thesis motor).") \
+X(n1_rpm,         "injection.n1_rpm",      F32, "rpm",     0,     1e5f,   400,      N1,      INJECTION, RUNTIME, "", "N1 of (6.6): the injection fades to zero at this speed; K1, K2 are zero above it (default: 33.3 Hz electrical, the thesis' 400 rpm).") \
+X(notch_q,        "injection.notch_q",     F32, "1",       0.1f,  50,     1,        NONE,    INJECTION, STANDSTILL, "", "Quality factor of the notch that keeps the injection out of the current feedback.") \
+X(pll_bw_hz,      "estimator.pll_bw_hz",   F32, "Hz",      1,     2000,   30,       PLL_BW,  ESTIMATOR, RUNTIME, "", "Bandwidth of the PLL filter after the estimator, Fig. 6.9 (default: 6 % of injection.f_hz: 30 Hz at 500 Hz).") \
+X(pll_speed_fc_hz, "estimator.pll_speed_fc_hz", F32, "Hz", 1,     5000,   200,      PLL_FC,  ESTIMATOR, RUNTIME, "", "Speed output filter of that PLL (default: min(200 Hz, f_s / 10)).") \
+/* ---- startup: offset calibration and the three-step initial position (thesis ch. 5) ---- */ \
+X(init_three_step, "startup.init_pos",     ENUM, "",       0,     1,      0,        NONE, STARTUP, STANDSTILL, "given|three_step", "Sensorless start: the angle handed over with the enable command (given), or the thesis' three steps (pulse injection, polarity detection, continuous injection).") \
+X(ip1_pulse3,     "startup.step1_method",  ENUM, "",       0,     1,      0,        NONE, STARTUP, STANDSTILL, "pulses|three_phase", "Step I: the thesis' pulse injection with the cost (5.5)/(7.1), or the three-phase pulse reference method (3.21) with Table 3.1.") \
+X(ip1_cost,       "startup.step1_cost",    ENUM, "",       0,     2,      1,        NONE, STARTUP, STANDSTILL, "linear|nonlinear|fluxdiff", "Step I cost: (5.5) with constant Ld, Lq; (7.1) with the flux map's differential inductances; or flux differences of the map.") \
+X(ip1_m,          "startup.step1_m",       I32, "periods", 1,     16,     5,        STEP1_M, STARTUP, STANDSTILL, "", "Step I pulse length m: V(100) m, V(011) 2m, V(100) m (default: a 0.72 x rated current peak through Ld at 2/3 Vdc, the thesis' 5).") \
+X(ip1_dirs,       "startup.step1_dirs",    I32, "",        1,     3,      1,        NONE,    STARTUP, STANDSTILL, "", "Step I pulse directions (phase A, then B, C).") \
+X(ip_i_rest,      "startup.i_rest_a",      F32, "A",       1e-3f, 1000,   0.3f,     I_SMALL, STARTUP, STANDSTILL, "", "A pulse gap ends once |i| is below this (default: 2.26 % of motor.i_rated_a, the thesis' 0.3 A).") \
+X(ip2_dvi,        "startup.polarity",      ENUM, "",       0,     1,      0,        NONE,    STARTUP, STANDSTILL, "generalized|dvi", "Step II: generalized polarity detection (5.6)-(5.7) or dual-voltage injection (3.5.2).") \
+X(ip2_n,          "startup.step2_n",       I32, "periods", 1,     16,     4,        NONE,    STARTUP, STANDSTILL, "", "Step II half-pulse length (train +n, -2n, +n).") \
+X(v_pol,          "startup.v_pol_v",       F32, "V",       1,     2000,   200,      V_POL,   STARTUP, STANDSTILL, "", "Step II pulse magnitude, hexagon-limited (default: a 0.57 x rated current swing through Ld in n periods, at most 2/3 Vdc: the thesis' 200 V).") \
+X(dvi_n,          "startup.dvi_n",         I32, "periods", 1,     16,     6,        NONE,    STARTUP, STANDSTILL, "", "DVI pulse length.") \
+X(step3_tol_rpm,  "startup.step3_speed_tol_rpm", F32, "rpm", 0.01f, 1000, 5,        STEP3_TOL, STARTUP, STANDSTILL, "", "Step III converged when the filtered speed estimate stays below this ... (default: the larger of 0.42 Hz electrical (the thesis motor's 5 rpm) and 5 x the estimator's expected speed noise).") \
+X(step3_hold,     "startup.step3_hold_s",  F32, "s",       1e-4f, 1,      0.005f,   NONE,    STARTUP, STANDSTILL, "", "... for this long (1.5 time constants of its 50 Hz low-pass).") \
+X(timeout_step12, "startup.timeout_step12_s", F32, "s",    1e-3f, 10,     0.02f,    T_STEP12, STARTUP, STANDSTILL, "", "Step I + II must finish within this, else FAULT (default: the larger of 20 ms and 200 periods).") \
+X(timeout_step3,  "startup.timeout_step3_s", F32, "s",     1e-3f, 60,     0.5f,     NONE,    STARTUP, STANDSTILL, "", "Step III must converge within this, else FAULT.")
+/* clang-format on */
+
+#endif
