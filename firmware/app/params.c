@@ -230,7 +230,9 @@ static bool injecting(const mc_params_t *p)
 
 static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
 {
-    const float fs = 1.0f / p->ts;
+    /* f_s to the hertz: 1 / 5e-4f is 1999.99994 Hz in float, and a filter corner 2e-5 Hz off
+     * its round value would change nothing but the last bits of every trace */
+    const float fs = roundf(1.0f / p->ts);
     const float pi2 = 6.28318531f;
     switch (rule) {
     case MC_RULE_I_TRIP:
@@ -266,9 +268,12 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
     case MC_RULE_SPEED_KP:
         /* crossover at w_bw on the inertia alone: kp = J w_bw */
         return p->inertia * pi2 * p->speed_bw_hz;
-    case MC_RULE_SPEED_KI:
-        /* PI zero a quarter of the crossover below it */
-        return p->sc_kp * pi2 * p->speed_bw_hz / 4.0f;
+    case MC_RULE_SPEED_KI: {
+        /* PI zero a quarter of the crossover below it: kp w_bw / 4 (with kp from its rule,
+         * J w_bw^2 / 4, which rounds as the double computation does) */
+        const float w = pi2 * p->speed_bw_hz;
+        return mc_param_is_auto(p, MC_PARAM_sc_kp) ? p->inertia * (w * w) / 4.0f : p->sc_kp * w / 4.0f;
+    }
     case MC_RULE_TORQUE_MAX:
         return p->torque_rated * 6.0f / 5.0f;   /* 1.2 x, rounded once less than 1.2f * T */
     case MC_RULE_I_SMALL:
@@ -298,6 +303,16 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         return nice2(0.06f * p->inj_f_hz);
     case MC_RULE_PLL_FC:
         return minf(200.0f, fs / 10.0f);
+    case MC_RULE_K2: {
+        /* K2 acts on the scaled speed omega / w_base; the data term's curvature in that variable
+         * is (psi_pm w_base)^2. Keeping their ratio as on the thesis motor (psi_pm w_base =
+         * 107.77 V at 600 rpm) keeps the regularisation's share: a weak-magnet machine
+         * (brodatzki-35kw: 19 V) otherwise has its speed estimate held back 30 times harder and
+         * UNOP settles in a wrong basin at a few hundred rpm */
+        const float wb = p->speed_scale_rpm * pi2 / 60.0f * (float)p->pole_pairs;
+        const float r = p->psi_pm * wb / 107.77f;
+        return nice2(100.0f * r * r);
+    }
     case MC_RULE_STEP1_M: {
         /* the pulse raises the current by ~0.72 x rated through Ld at 2/3 Vdc (V(100) on the
          * phase): enough for the saliency, far from the trip; m = 5 on the thesis motor */

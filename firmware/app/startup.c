@@ -3,6 +3,7 @@
  * pipeline with zero current references and the injection on, until its convergence test holds.
  * The sequencer (mc/sequencer.h) owns the states, timeouts and fault reasons. */
 #include <math.h>
+#include <stddef.h>
 #include "drive_internal.h"
 #include "mc/transforms.h"
 
@@ -78,6 +79,32 @@ static void protect(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i, floa
     }
 }
 
+/* The phase programs of Steps I and II (mc/phase_program.h), by the value of startup.step1_method
+ * and startup.polarity, each with where its configuration sits in the derived block set. */
+typedef struct {
+    const mc_phase_program_t *prog;
+    size_t cfg_offset;
+} program_slot_t;
+
+static const program_slot_t step1_programs[] = {
+    {&mc_phase_step1_pulses, offsetof(mc_drive_blk_t, ip1)},      /* "pulses"      */
+    {&mc_phase_step1_pulse3, offsetof(mc_drive_blk_t, pulse3)},   /* "three_phase" */
+};
+static const program_slot_t step2_programs[] = {
+    {&mc_phase_step2_polarity, offsetof(mc_drive_blk_t, ip2)},    /* "generalized" */
+    {&mc_phase_step2_dvi, offsetof(mc_drive_blk_t, dvi)},         /* "dvi"         */
+};
+
+static bool begin_program(mc_drive_t *d, const program_slot_t *slot, float theta_in)
+{
+    return mc_phase_begin(&d->phase, slot->prog, (const char *)&d->blk + slot->cfg_offset, theta_in);
+}
+
+static bool begin_step1(mc_drive_t *d)
+{
+    return begin_program(d, &step1_programs[d->blk.ip1_pulse3 ? 1 : 0], 0.0f);
+}
+
 /* Average the current channels with the outputs off; the offsets must be plausible. */
 static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 {
@@ -96,8 +123,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         d->offset[k] = off;
     }
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
-    const bool started = d->blk.ip1_pulse3 ? mc_pulse3_start(&d->pulse3, &d->blk.pulse3)
-                                           : mc_initpos_start(&d->ip1, &d->blk.ip1);
+    const bool started = d->seq.state != MC_STATE_INIT_POS || begin_step1(d);
     if (d->seq.state == MC_STATE_INIT_POS && !started) {
         mc_drive_trip(d, MC_FAULT_CONFIG);
         return;
@@ -106,45 +132,35 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     hal_pwm_enable(d->hal.pwm, true);
 }
 
-/* Step I, then Step II (generalized polarity detection or DVI); returns the engine status. */
+/* Step I, then Step II on the same workspace; returns the program's status. */
 static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
 {
-    mc_abc_t duty = {0.0f, 0.0f, 0.0f};
-    mc_ip_status_t st;
-    if (d->seq.step == MC_INIT_STEP1) {
-        st = d->blk.ip1_pulse3 ? mc_pulse3_step(&d->pulse3, i_ab, vdc, &duty)
-                               : mc_initpos_step(&d->ip1, i_ab, vdc, &duty);
-        write_duties(d, duty, vdc);
-        if (st == MC_IP_DONE) {
-            const float theta1 = d->blk.ip1_pulse3 ? d->pulse3.theta : d->ip1.theta1;
-            d->tm.theta1 = theta1;
-            const bool ok = d->blk.ip2_dvi ? mc_dvi_start(&d->dvi, &d->blk.dvi, theta1)
-                                           : mc_polarity_start(&d->ip2, &d->blk.ip2, theta1);
-            if (!ok) {
-                return MC_IP_FAILED;
-            }
-            mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
-            return MC_IP_RUNNING;
-        }
+    const mc_phase_in_t in = {.i_ab = i_ab, .vdc = vdc};
+    mc_phase_out_t out;
+    const mc_ip_status_t st = mc_phase_step(&d->phase, &in, &out);
+    write_duties(d, out.duty, vdc);
+    if (st != MC_IP_DONE) {
         return st;
     }
-    if (d->blk.ip2_dvi) {
-        st = mc_dvi_step(&d->dvi, i_ab, vdc, &duty);
-    } else {
-        st = mc_polarity_step(&d->ip2, i_ab, vdc, &duty);
-    }
-    write_duties(d, duty, vdc);
-    if (st == MC_IP_DONE) {
-        const float theta2 = d->blk.ip2_dvi ? d->dvi.theta2 : d->ip2.theta2;
-        d->tm.theta2 = theta2;
-        d->tm.pol_flip = d->blk.ip2_dvi ? d->dvi.flip : d->ip2.flip;
-        d->tm.c1 = d->blk.ip2_dvi ? d->dvi.peak_pos : d->ip2.c1;
-        d->tm.c2 = d->blk.ip2_dvi ? d->dvi.peak_neg : d->ip2.c2;
-        /* Step III continues from theta2 with the running-state estimator itself (no method
-         * switch later): only its state is set here. */
-        pipeline_reset(d, theta2);
+    mc_phase_result_t res;
+    mc_phase_result(&d->phase, &res);
+    if (d->seq.step == MC_INIT_STEP1) {
+        d->tm.theta1 = res.theta;
+        if (!begin_program(d, &step2_programs[d->blk.ip2_dvi ? 1 : 0], res.theta)) {
+            return MC_IP_FAILED;
+        }
         mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
+        return MC_IP_RUNNING;
     }
+    d->tm.theta2 = res.theta;
+    d->tm.pol_flip = res.flip;
+    d->tm.c1 = res.c1;
+    d->tm.c2 = res.c2;
+    mc_phase_stop(&d->phase);
+    /* Step III continues from theta2 with the running-state estimator itself (no method switch
+     * later): only its state is set here. */
+    pipeline_reset(d, res.theta);
+    mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
     return st;
 }
 

@@ -163,6 +163,23 @@ void set_drive_params(const Scenario& sc, const MachineParams& mp, double vdc, d
     }
 }
 
+// A parameter's value as the scenario writes it (an ENUM by its choice).
+static std::string shown(int param, float v)
+{
+    if (param >= 0 && param < static_cast<int>(MC_PARAM_COUNT) && mc_param_table[param].type == MC_PT_ENUM &&
+        std::isfinite(v)) {
+        mc_params_t p;
+        mc_params_default(&p);
+        mc_param_err_t err{};
+        char buf[64];
+        if (mc_param_set(&p, param, v, &err)) {
+            mc_param_choice_text(&p, param, buf, sizeof buf);
+            if (buf[0] != '\0') return std::string("\"") + buf + "\"";
+        }
+    }
+    return number(v);
+}
+
 std::string explain_config_error(const Scenario& sc, const mc_param_err_t& e)
 {
     std::ostringstream os;
@@ -171,12 +188,13 @@ std::string explain_config_error(const Scenario& sc, const mc_param_err_t& e)
     const std::string key = scenario_key_of(e.param);
     const bool derived = e.param < static_cast<int>(MC_PARAM_COUNT) && mc_param_table[e.param].rule != MC_RULE_NONE &&
                          !sc.has(mc_param_table[e.param].name);
-    os << "key '" << key << "' = " << number(e.value);
+    const bool is_enum = mc_param_table[e.param].type == MC_PT_ENUM;
+    os << "key '" << key << "' = " << shown(e.param, e.value);
     if (derived) os << " (derived from the motor data)";
     os << ": " << (e.text ? e.text : "refused");
     if (e.kind == MC_PERR_CROSS && e.param2 >= 0) {
-        os << "; key '" << scenario_key_of(e.param2) << "' = " << number(e.value2);
-        os << "; allowed range [" << number(e.min) << ", " << number(e.max) << "]";
+        os << "; key '" << scenario_key_of(e.param2) << "' = " << shown(e.param2, e.value2);
+        if (!is_enum) os << "; allowed range [" << number(e.min) << ", " << number(e.max) << "]";
     } else if (e.kind == MC_PERR_RANGE || e.kind == MC_PERR_NOT_FINITE || e.kind == MC_PERR_MODEL) {
         os << "; allowed range [" << number(e.min) << ", " << number(e.max) << "]";
     }

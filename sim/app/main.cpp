@@ -87,6 +87,7 @@ int cmd_run(int argc, char** argv, bool check_only)
     }
     const mcsim::Scenario sc = mcsim::Scenario::load(file, sets);
     if (check_only) {
+        mcsim::check_scenario(sc);
         std::printf("%s: ok\n", file.c_str());
         return 0;
     }

@@ -57,6 +57,7 @@ std::vector<std::string> fault_names(uint32_t f)
     if (f & MC_FAULT_CONFIG) out.push_back("config");
     if (f & MC_FAULT_INIT_POS) out.push_back("init_pos");
     if (f & MC_FAULT_TIMEOUT) out.push_back("timeout");
+    if (f & MC_FAULT_NUMERIC) out.push_back("numeric");
     return out;
 }
 
@@ -141,15 +142,11 @@ private:
     double total_, last_ = -1;
 };
 
-}  // namespace
+// ---- the steps of a run
 
-RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
+PlantConfig plant_config(const Scenario& sc, const Resolved& r)
 {
-    const Resolved r = resolve(sc);
     const MachineParams& mp = r.mp;
-    const int p = mp.pole_pairs;
-
-    // ---- plant
     PlantConfig pc;
     pc.machine = mp;
     pc.inverter.mode = sc.s("inverter.mode") == "averaged" ? InverterConfig::Mode::Averaged : InverterConfig::Mode::Switching;
@@ -166,16 +163,18 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     pc.mech.load_torque = [load](double t) { return load.at(t); };
     pc.mech.reactive_load = sc.s("mechanics.load_kind") == "reactive";
     pc.mech.dyno_speed = [dyno](double t) { return dyno.at(t) / kRpm; };
-    pc.theta_m0 = sc.f("mechanics.theta0_deg") * kPi / 180.0 / p;
+    pc.theta_m0 = sc.f("mechanics.theta0_deg") * kPi / 180.0 / mp.pole_pairs;
     pc.energy_ledger = false;  // no metric or trace column reads the energy ledger
     const std::string& integ = sc.s("inverter.integrator");
-    pc.integrator = integ == "taylor"   ? PlantConfig::Integrator::Taylor
-                    : integ == "rk4"    ? PlantConfig::Integrator::Rk4
-                                        : PlantConfig::Integrator::Hermite;
+    pc.integrator = integ == "taylor" ? PlantConfig::Integrator::Taylor
+                    : integ == "rk4"  ? PlantConfig::Integrator::Rk4
+                                      : PlantConfig::Integrator::Hermite;
     pc.omega_m0 = mech == "dyno" ? dyno.at(0.0) / kRpm : (mech == "locked" ? 0.0 : sc.f("mechanics.speed0_rpm") / kRpm);
-    Plant plant(pc, make_plant_model(sc, mp));
+    return pc;
+}
 
-    // ---- sensors
+Sensors make_sensors(const Scenario& sc, const Resolved& r)
+{
     AdcConfig ac;
     ac.bits = static_cast<int>(sc.i("sensors.adc_bits"));
     ac.i_full_scale = r.i_span;
@@ -190,83 +189,168 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     EncoderConfig ec;
     ec.lines = static_cast<int>(sc.i("sensors.encoder_lines"));
     ec.offset_rad = sc.f("sensors.encoder_offset_deg") * kPi / 180.0;
-    Sensors sensors(ac, ec, static_cast<uint64_t>(sc.i("scenario.seed")));
+    return Sensors(ac, ec, static_cast<uint64_t>(sc.i("scenario.seed")));
+}
 
-    // ---- host HAL and firmware
-    hal_pwm_t pwm;
-    hal_host_pwm_init(&pwm, static_cast<float>(r.ts), static_cast<float>(pc.inverter.t_dead));
-    hal_adc_t adc{};
-    hal_qep_t qep{};
-    qep.counts_per_rev = 4u * static_cast<uint32_t>(ec.lines);
-
-    // The drive's configuration: the firmware's parameter table, filled from the preset, the
-    // simulator's sensor keys and the scenario's drive keys; the rest the firmware derives.
+// The drive's configuration: the firmware's parameter table, filled from the preset, the
+// simulator's sensor keys and the scenario's drive keys (the firmware derives the rest), and the
+// estimator's model: the plant's, scaled by the mismatch keys, with its flux map tabulated from
+// the plant's magnetics (the map also serves the polarity detection's l_dd profile). Validated
+// here, as the firmware will: a refusal is a ScenarioError naming the keys.
+DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& magnetics)
+{
+    const MachineParams& mp = r.mp;
     DriveSetup ds;
     mc_drive_cfg_default(&ds.cfg);
     set_drive_params(sc, mp, r.vdc, r.i_span, r.vdc_span, &ds.cfg.p);
-    // The estimator's model: the plant's, scaled by the mismatch keys; its flux map tabulated
-    // from the plant's magnetics (the map always serves the polarity detection's l_dd profile).
     ds.cfg.est.rs = static_cast<float>(mp.rs * sc.f("estimator.rs_scale"));
     ds.cfg.est.ld = static_cast<float>(mp.ld * sc.f("estimator.l_scale"));
     ds.cfg.est.lq = static_cast<float>(mp.lq * sc.f("estimator.l_scale"));
     ds.cfg.est.psi_pm = static_cast<float>(mp.psi_pm * sc.f("estimator.psi_scale"));
-    const bool unop = ds.cfg.p.angle_src == MC_ANGLE_SRC_unop;
-    if (unop) {
+    const mc_angle_src_desc_t* src = mc_angle_src_get(ds.cfg.p.angle_src);
+    if (src != nullptr && src->needs_injection) {
         const double span = sc.has("estimator.map_span_a") ? sc.f("estimator.map_span_a") : 1.5 * mp.i_rated_peak;
-        ds.est_map = make_estimator_map(plant.model(), static_cast<int>(sc.i("estimator.map_points")), span,
-                                        sc.f("estimator.l_scale"), sc.f("estimator.psi_scale"));
+        try {
+            ds.est_map = make_estimator_map(magnetics, static_cast<int>(sc.i("estimator.map_points")), span,
+                                            sc.f("estimator.l_scale"), sc.f("estimator.psi_scale"));
+        } catch (const std::exception& e) {
+            throw ScenarioError(sc.origin() + ": key 'estimator.map_span_a' = " + json_number(span) +
+                                ": the plant's magnetics cannot be tabulated over this span (" + e.what() + ")");
+        }
         ds.cfg.est.map = ds.est_map.get();
     }
-    const double theta_init_err = sc.f("estimator.theta0_err_deg") * kPi / 180.0;
+    auto built = std::make_unique<mc_drive_built_t>();
+    mc_param_err_t err{};
+    if (!mc_drive_build(&ds.cfg, built.get(), &err)) throw ScenarioError(explain_config_error(sc, err));
+    return ds;
+}
 
+// Commands from the scenario's profiles, as the background side (later CANopen) would send them.
+struct Commander {
+    mc_mode_t mode;
+    Profile speed_ref, torque_ref, id_ref, iq_ref;
+    double enable_at, theta_init_err;
+
+    explicit Commander(const Scenario& sc)
+        : speed_ref(sc.profile("control.speed_ref_rpm")), torque_ref(sc.profile("control.torque_ref_nm")),
+          id_ref(sc.profile("control.id_ref_a")), iq_ref(sc.profile("control.iq_ref_a")),
+          enable_at(sc.f("control.enable_at_s")), theta_init_err(sc.f("estimator.theta0_err_deg") * kPi / 180.0)
+    {
+        const std::string& m = sc.s("control.mode");
+        mode = m == "current" ? MC_MODE_CURRENT : (m == "torque" ? MC_MODE_TORQUE : MC_MODE_SPEED);
+    }
+    // The angle handed over with the enable (startup.init_pos = given): the true one plus the
+    // scenario's error; the drive reads it only at the enable edge.
+    mc_drive_cmd_t at(double t, double theta_true) const
+    {
+        mc_drive_cmd_t cmd{};
+        cmd.enable = t >= enable_at;
+        cmd.mode = mode;
+        cmd.speed_ref = static_cast<float>(speed_ref.at(t) / kRpm);
+        cmd.torque_ref = static_cast<float>(torque_ref.at(t));
+        cmd.i_ref = mc_dq_t{static_cast<float>(id_ref.at(t)), static_cast<float>(iq_ref.at(t))};
+        cmd.theta_init = static_cast<float>(wrap_pi(theta_true + theta_init_err));
+        return cmd;
+    }
+    // the intended direction of rotation, for reverse_angle_max_deg: the last reference's sign
+    double direction(double end) const
+    {
+        const double ref = mode == MC_MODE_SPEED    ? speed_ref.at(end)
+                           : mode == MC_MODE_TORQUE ? torque_ref.at(end)
+                                                    : iq_ref.at(end);
+        return ref < 0 ? -1.0 : 1.0;
+    }
+};
+
+// trace.csv, one row every output.decimation periods.
+class Trace {
+public:
+    Trace(const Scenario& sc, const std::string& dir) : decim_(sc.i("output.decimation"))
+    {
+        if (dir.empty() || !sc.b("output.trace")) return;
+        const std::string tp = dir + "/trace.csv";
+        f_ = std::fopen(tp.c_str(), "w");
+        if (!f_) throw std::runtime_error("cannot write " + tp);
+        std::fputs("t_s,theta_deg,theta_hat_deg,angle_err_deg,speed_rpm,speed_hat_rpm,speed_ref_rpm,"
+                   "id_a,iq_a,id_ref_a,iq_ref_a,ud_v,uq_v,torque_nm,torque_ref_nm,load_nm,"
+                   "ia_a,ib_a,ic_a,vdc_v,state,theta_raw_deg,speed_raw_rpm,newton_iter,cost,u_inj_v\n", f_);
+    }
+    ~Trace()
+    {
+        if (f_) std::fclose(f_);
+    }
+    Trace(const Trace&) = delete;
+    Trace& operator=(const Trace&) = delete;
+    bool wants(long k) const { return f_ && k % decim_ == 0; }
+    void row(double t, const Plant& plant, const mc_drive_telem_t& tm, const Sample& s, double load, int p, bool est)
+    {
+        const double deg = 180.0 / kPi;
+        const bool run = s.running;
+        const auto iabc = plant.i_abc();
+        std::fprintf(f_,
+                     "%.6f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.5f,%.5f,%.3f,%d,"
+                     "%.4f,%.4f,%d,%.4g,%.3f\n",
+                     t, s.theta_true_deg, run ? tm.theta * deg : NAN, s.angle_err_deg, s.speed_rpm,
+                     run ? tm.omega / p * kRpm : NAN, s.speed_ref_rpm, s.id, s.iq, run ? tm.i_ref.d : NAN,
+                     run ? tm.i_ref.q : NAN, run ? tm.u_dq.d : NAN, run ? tm.u_dq.q : NAN, s.torque,
+                     run ? tm.torque_ref : NAN, load, iabc[0], iabc[1], iabc[2], tm.vdc, static_cast<int>(tm.state),
+                     run ? tm.theta_raw * deg : NAN, run ? tm.omega_raw / p * kRpm : NAN,
+                     run && est ? tm.est_iters : 0, run && est ? tm.est_cost : NAN, run ? tm.u_inj : NAN);
+    }
+
+private:
+    std::FILE* f_ = nullptr;
+    long decim_;
+};
+
+}  // namespace
+
+void check_scenario(const Scenario& sc)
+{
+    const Resolved r = resolve(sc);
+    const PlantConfig pc = plant_config(sc, r);
+    const std::unique_ptr<FluxModel> magnetics = make_plant_model(sc, r.mp);
+    (void)pc;
+    drive_setup(sc, r, *magnetics);
+}
+
+RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
+{
+    const Resolved r = resolve(sc);
+    const int p = r.mp.pole_pairs;
+    Plant plant(plant_config(sc, r), make_plant_model(sc, r.mp));
+    Sensors sensors = make_sensors(sc, r);
+    const DriveSetup ds = drive_setup(sc, r, plant.model());
+
+    // ---- host HAL and firmware
+    hal_pwm_t pwm;
+    hal_host_pwm_init(&pwm, static_cast<float>(r.ts), static_cast<float>(sc.f("inverter.dead_time_s")));
+    hal_adc_t adc{};
+    hal_qep_t qep{};
+    qep.counts_per_rev = 4u * static_cast<uint32_t>(sc.i("sensors.encoder_lines"));
     auto drive = std::make_unique<mc_drive_t>();
     if (!mc_drive_init(drive.get(), &ds.cfg, &adc, &pwm, &qep))
         throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive.get())));
     const mc_params_t& dp = *mc_drive_params(drive.get());
+    const bool estimator = drive->src->needs_injection;
 
-    const std::string& mode = sc.s("control.mode");
-    const mc_mode_t fw_mode = mode == "current" ? MC_MODE_CURRENT : (mode == "torque" ? MC_MODE_TORQUE : MC_MODE_SPEED);
-    const Profile speed_ref = sc.profile("control.speed_ref_rpm");
-    const Profile torque_ref = sc.profile("control.torque_ref_nm");
-    const Profile id_ref = sc.profile("control.id_ref_a");
-    const Profile iq_ref = sc.profile("control.iq_ref_a");
-    const double enable_at = sc.f("control.enable_at_s");
-
-    // ---- outputs
-    std::FILE* trace = nullptr;
-    const bool write = !opt.out_dir.empty();
-    if (write) {
-        std::filesystem::create_directories(opt.out_dir);
-        if (sc.b("output.trace")) {
-            const std::string tp = opt.out_dir + "/trace.csv";
-            trace = std::fopen(tp.c_str(), "w");
-            if (!trace) throw std::runtime_error("cannot write " + tp);
-            std::fputs("t_s,theta_deg,theta_hat_deg,angle_err_deg,speed_rpm,speed_hat_rpm,speed_ref_rpm,"
-                       "id_a,iq_a,id_ref_a,iq_ref_a,ud_v,uq_v,torque_nm,torque_ref_nm,load_nm,"
-                       "ia_a,ib_a,ic_a,vdc_v,state,theta_raw_deg,speed_raw_rpm,newton_iter,cost,u_inj_v\n", trace);
-        }
-    }
-    const long decim = sc.i("output.decimation");
-
+    // ---- commands and outputs
+    const Commander commander(sc);
+    if (!opt.out_dir.empty()) std::filesystem::create_directories(opt.out_dir);
+    Trace trace(sc, opt.out_dir);
     Metrics metrics(sc);
-    // the intended direction of rotation, for reverse_angle_max_deg: the last reference's sign
-    double direction = 1.0;
-    {
-        const double dur = sc.f("scenario.duration_s");
-        const std::string& m = sc.s("control.mode");
-        const double ref = m == "speed" ? sc.profile("control.speed_ref_rpm").at(dur)
-                                        : (m == "torque" ? sc.profile("control.torque_ref_nm").at(dur)
-                                                         : sc.profile("control.iq_ref_a").at(dur));
-        if (ref < 0) direction = -1.0;
-    }
     const double duration = sc.f("scenario.duration_s");
+    const double direction = commander.direction(duration);
     const long periods = static_cast<long>(std::llround(duration / r.ts));
     Progress progress(opt.progress, duration);
     const double deg = 180.0 / kPi;
+    const std::string& mech = sc.s("mechanics.mode");
+    const bool is_dyno = mech == "dyno", is_inertia = mech == "inertia", is_locked = mech == "locked";
+    const Profile load = sc.profile("mechanics.load_torque_nm");
+    const Profile dyno = sc.profile("mechanics.dyno_speed_rpm");
 
     double isr_ns = 0, plant_ns = 0;
     long timed = 0;
-    const bool is_dyno = mech == "dyno", is_inertia = mech == "inertia", is_locked = mech == "locked";
     const auto wall0 = std::chrono::steady_clock::now();
     for (long k = 0; k < periods; ++k) {
         const double t = k * r.ts;
@@ -280,16 +364,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         qep.sample.index_seen = qs.index_seen;
         qep.sample.index_count = qs.index_count;
 
-        mc_drive_cmd_t cmd{};
-        cmd.enable = t >= enable_at;
-        cmd.mode = fw_mode;
-        cmd.speed_ref = static_cast<float>(speed_ref.at(t) / kRpm);
-        cmd.torque_ref = static_cast<float>(torque_ref.at(t));
-        cmd.i_ref = mc_dq_t{static_cast<float>(id_ref.at(t)), static_cast<float>(iq_ref.at(t))};
-        // The initial position is taken as known (plus the scenario's error) until the
-        // three-step routine exists; the drive only reads it at the enable edge.
         const double theta = plant.theta_e();
-        cmd.theta_init = static_cast<float>(wrap_pi(theta + theta_init_err));
+        const mc_drive_cmd_t cmd = commander.at(t, theta);
         mc_drive_command(drive.get(), &cmd);
 
         // The ISR / plant split is timed on every 17th period: a clock read costs about a tenth
@@ -306,16 +382,15 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         // Record the state at the sample instant, before the plant moves on.
         const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
         const bool running = tm.state == MC_STATE_RUN;
-        const double err = running ? wrap_pi(tm.theta - theta) * deg : NAN;
         const auto iabc = plant.i_abc();
         const double ipk = std::max({std::fabs(iabc[0]), std::fabs(iabc[1]), std::fabs(iabc[2])});
         const Vec2 idq = plant.i_dq();
         double sref = NAN;
         if (is_dyno) sref = dyno.at(t);
-        else if (fw_mode == MC_MODE_SPEED && !is_locked) sref = speed_ref.at(t);
-        const double speed = plant.omega_m() * kRpm;
-        Sample smp{t, running, err, speed, sref, idq.x(), idq.y(), tm.i_ref.d, tm.i_ref.q, plant.torque(), ipk,
-                   running && unop ? tm.est_iters : -1};
+        else if (commander.mode == MC_MODE_SPEED && !is_locked) sref = commander.speed_ref.at(t);
+        Sample smp{t, running, running ? wrap_pi(tm.theta - theta) * deg : NAN, plant.omega_m() * kRpm, sref,
+                   idq.x(), idq.y(), tm.i_ref.d, tm.i_ref.q, plant.torque(), ipk,
+                   running && estimator ? tm.est_iters : -1};
         smp.state = static_cast<int>(tm.state);
         smp.init_step = static_cast<int>(tm.init_step);
         const bool pipeline = running || (tm.state == MC_STATE_INIT_POS && tm.init_step == MC_INIT_STEP3);
@@ -327,20 +402,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         smp.direction = direction;
         smp.ts = r.ts;
         metrics.add(smp);
-
-        if (trace && k % decim == 0) {
-            std::fprintf(trace,
-                         "%.6f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.5f,%.5f,%.3f,%d,"
-                         "%.4f,%.4f,%d,%.4g,%.3f\n",
-                         t, theta * deg, running ? tm.theta * deg : NAN, err, speed,
-                         running ? tm.omega / p * kRpm : NAN, sref, idq.x(), idq.y(), running ? tm.i_ref.d : NAN,
-                         running ? tm.i_ref.q : NAN, running ? tm.u_dq.d : NAN, running ? tm.u_dq.q : NAN,
-                         plant.torque(), running ? tm.torque_ref : NAN, is_inertia ? load.at(t) : NAN, iabc[0],
-                         iabc[1], iabc[2], tm.vdc, static_cast<int>(tm.state),
-                         running ? tm.theta_raw * deg : NAN, running ? tm.omega_raw / p * kRpm : NAN,
-                         running && unop ? tm.est_iters : 0, running && unop ? tm.est_cost : NAN,
-                         running ? tm.u_inj : NAN);
-        }
+        if (trace.wants(k)) trace.row(t, plant, tm, smp, is_inertia ? load.at(t) : NAN, p, estimator);
 
         // The inverter applies the latched duties over (t, t + Ts).
         std::chrono::steady_clock::time_point p0;
@@ -353,7 +415,6 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     progress.done();
-    if (trace) std::fclose(trace);
 
     RunSummary out;
     out.sim_time_s = periods * r.ts;
@@ -364,7 +425,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     out.periods = periods;
     const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
     out.metrics_json = metrics.json(fault_names(tm.faults), state_name(tm.state),
-                                    {{"scenario", "\"" + sc.s("scenario.name") + "\""},
+                                    {{"scenario", json_string(sc.s("scenario.name"))},
                                      {"current_limit_a", json_number(dp.i_max)},
                                      {"current_trip_a", json_number(dp.i_trip)},
                                      {"speed_final_rpm", json_number(plant.omega_m() * kRpm)},
@@ -372,7 +433,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
                                      {"wall_time_s", json_number(wall)},
                                      {"realtime_factor", json_number(out.realtime_factor)},
                                      {"fault_count", std::to_string(fault_names(tm.faults).size())}});
-    if (write) {
+    if (!opt.out_dir.empty()) {
         std::ofstream m(opt.out_dir + "/metrics.json");
         m << out.metrics_json;
     }

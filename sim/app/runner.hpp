@@ -21,5 +21,8 @@ struct RunSummary {
 };
 
 RunSummary run_scenario(const Scenario& sc, const RunOptions& opt);
+// Everything run_scenario checks before it runs (preset, plant, the drive's configuration as the
+// firmware will validate it); throws ScenarioError.
+void check_scenario(const Scenario& sc);
 
 }  // namespace mcsim

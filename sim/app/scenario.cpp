@@ -136,13 +136,13 @@ static size_t utf8_printable_len(const std::string& s, size_t k)
     return len;
 }
 
-std::string message_text(const std::string& s, size_t max_chars)
+std::string message_text(const std::string& s, size_t max_chars, bool escape_quotes)
 {
     std::string o;
     size_t k = 0, chars = 0;
     for (; k < s.size() && chars < max_chars; ++chars) {
         const char c = s[k];
-        if (c == '"' || c == '\\') {
+        if (escape_quotes && (c == '"' || c == '\\')) {
             o += '\\';
             o += c;
             ++k;
@@ -431,7 +431,7 @@ Scenario Scenario::from_string(const std::string& text, const std::string& origi
     } catch (const toml::parse_error& e) {
         std::ostringstream os;
         os << origin << ":" << e.source().begin.line << ":" << e.source().begin.column
-           << ": TOML syntax error: " << message_text(std::string(e.description()), 2 * kMessageChars);
+           << ": TOML syntax error: " << message_text(std::string(e.description()), 2 * kMessageChars, false);
         throw ScenarioError(os.str());
     }
     for (const auto& s : sets) apply_set(root, s);

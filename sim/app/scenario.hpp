@@ -75,7 +75,8 @@ private:
 // after max_chars characters with "…(N bytes)" appended (N: the full length), so that any
 // value (a 1 MB key, binary) gives a short message that printf("%s") shows in full.
 constexpr size_t kMessageChars = 80;
-std::string message_text(const std::string& s, size_t max_chars = kMessageChars);
+// escape_quotes = false: '"' and '\\' as they are (text that is not inside quotes).
+std::string message_text(const std::string& s, size_t max_chars = kMessageChars, bool escape_quotes = true);
 // Largest scenario file Scenario::load reads.
 constexpr size_t kMaxScenarioBytes = size_t(1) << 20;
 

@@ -64,7 +64,11 @@ std::string node_text(const toml::node& n) {
     if (auto s = n.as_string()) return '"' + shown(s->get()) + '"';
     if (n.is_table()) return "(table)";
     std::ostringstream os;
-    os.precision(12);
+    if (auto f = n.as_floating_point()) {
+        os.precision(12);
+        os << f->get();
+        return os.str();
+    }
     n.visit([&os](auto&& v) { os << v; });
     return shown(os.str());
 }

@@ -120,8 +120,12 @@ void check_flux_map(const mcsim::FluxMapTable& f, const std::string& what) {
     const double hx = f.x.step(), hy = f.y.step();
     const double ref = (d_hi - d_lo) / (f.x.hi - f.x.lo) * (q_hi - q_lo) / (f.y.hi - f.y.lo);
     if (!(std::isfinite(ref) && ref > 0 && std::isfinite(1.0 / hx) && std::isfinite(1.0 / hy)))
-        throw BadInput(what + ": the current grid is degenerate (spacing " + std::to_string(hx) + " x " +
-                       std::to_string(hy) + " A against the flux span)");
+    {
+        char buf[256];
+        std::snprintf(buf, sizeof buf, "current spacing %.6g x %.6g A, flux spans %.6g and %.6g Wb", hx, hy,
+                      d_hi - d_lo, q_hi - q_lo);
+        throw BadInput(what + ": the flux map is degenerate: " + buf + " give no usable gradient (under- or overflow)");
+    }
     double det_max = 0;
     for (int i = 0; i + 1 < f.x.n; ++i)
         for (int j = 0; j + 1 < f.y.n; ++j) {

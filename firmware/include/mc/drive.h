@@ -10,6 +10,7 @@
 #include "mc/filters.h"
 #include "mc/injection.h"
 #include "mc/initpos.h"
+#include "mc/phase_program.h"
 #include "mc/params.h"
 #include "mc/polarity.h"
 #include "mc/pulse3.h"
@@ -143,10 +144,7 @@ typedef struct {
     mc_angle_src_state_t src_state;
     mc_inj_t inj;
     mc_biquad_t notch_d, notch_q;
-    mc_initpos_t ip1;
-    mc_pulse3_t pulse3;
-    mc_polarity_t ip2;
-    mc_dvi_t dvi;
+    mc_phase_t phase;            /* the running phase program (Step I, II) and its workspace */
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
     uint32_t step3_count;
     mc_cc_t cc;

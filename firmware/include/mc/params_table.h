@@ -71,7 +71,7 @@ X(est_model,      "estimator.model",       ENUM, "",       0,     1,      1,    
 X(iter_max,       "estimator.iter_max",    I32, "",        1,     18,     4,        NONE, ESTIMATOR, RUNTIME, "", "Newton iterations per sample (early exit on estimator.step_tol).") \
 X(step_tol,       "estimator.step_tol",    F32, "rad",     0,     1,      1e-4f,    NONE, ESTIMATOR, RUNTIME, "", "Early exit when the scaled Newton step is below this.") \
 X(k1,             "estimator.k1",          F32, "1/rad^2", 0,     1e9f,   0.5f,     NONE, ESTIMATOR, RUNTIME, "", "Angle regularisation weight K1 of (6.5), active below injection.n1_rpm.") \
-X(k2,             "estimator.k2",          F32, "1",       0,     1e9f,   100,      NONE, ESTIMATOR, RUNTIME, "", "Speed regularisation weight K2 of (6.5) on the scaled speed, active below injection.n1_rpm.") \
+X(k2,             "estimator.k2",          F32, "1",       0,     1e9f,   100,      K2,   ESTIMATOR, RUNTIME, "", "Speed regularisation weight K2 of (6.5) on the scaled speed, active below injection.n1_rpm (default: 100 (psi_pm w_base / 107.77 V)^2, so that it weighs against the back-EMF term as on the thesis motor).") \
 X(speed_scale_rpm, "estimator.speed_scale_rpm", F32, "rpm", 1,    1e5f,   600,      NONE, ESTIMATOR, STANDSTILL, "", "Speed that scales the decision variable omega (float32 conditioning).") \
 X(mid_sample,     "estimator.mid_sample",  BOOL, "",       0,     1,      1,        NONE, ESTIMATOR, STANDSTILL, "", "Rotational terms at the mid-sample angle (false: the thesis' first-order form (5.1)).") \
 X(reg_predicted,  "estimator.reg_predicted", BOOL, "",     0,     1,      1,        NONE, ESTIMATOR, STANDSTILL, "", "K1 pulls toward the predicted angle theta(k-1) + omega Ts (false: literal (6.5)).") \
