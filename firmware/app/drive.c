@@ -41,29 +41,59 @@ void mc_drive_init_blocks(mc_drive_t *d)
     mc_biquad_init_notch(&d->notch_q, b->f_notch, b->notch_q, b->ts);
 }
 
-bool mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, hal_adc_t *adc, hal_pwm_t *pwm, hal_qep_t *qep)
+/* A command is taken whole or not at all: every number finite, the mode known. The validator of
+ * the command buffer (mc/handover.h): it runs in the ISR on the published slot. */
+static uint32_t check_command(const void *cmd, void *ctx)
+{
+    (void)ctx;
+    const mc_drive_cmd_t *c = (const mc_drive_cmd_t *)cmd;
+    if ((unsigned)c->mode >= (unsigned)MC_MODE_COUNT) {
+        return (uint32_t)MC_CMD_BAD_MODE;
+    }
+    const bool finite = isfinite(c->i_ref.d) && isfinite(c->i_ref.q) && isfinite(c->torque_ref) &&
+                        isfinite(c->speed_ref) && isfinite(c->theta_init);
+    return finite ? (uint32_t)MC_CMD_OK : (uint32_t)MC_CMD_NOT_FINITE;
+}
+
+bool mc_drive_init(mc_drive_t *d, mc_drive_link_t *link, const mc_drive_cfg_t *cfg, hal_adc_t *adc, hal_pwm_t *pwm,
+                   hal_qep_t *qep)
 {
     *d = (mc_drive_t){0};
     d->hal = (mc_drive_hal_t){.adc = adc, .pwm = pwm, .qep = qep};
+    d->link = link;
     d->cfg_err = (mc_param_err_t){.kind = MC_PERR_NONE, .param = -1, .param2 = -1};
+    d->est = cfg->est;
     hal_pwm_enable(pwm, false);
     hal_pwm_set_duties(pwm, 0.5f, 0.5f, 0.5f);
+    const mc_drive_cmd_t idle = {.enable = false, .mode = MC_MODE_CURRENT};
+    mc_drive_cmdbuf_init(&link->cmd, &idle, check_command, 0);
+    mc_drive_telbuf_init(&link->telem, 0);
     /* a refused configuration still leaves a sequencer that never leaves FAULT */
     const mc_seq_cfg_t none = {.ts = 1e-4f};
     mc_seq_init(&d->seq, &none);
-    mc_drive_built_t b;
-    if (!mc_drive_build(cfg, &b, &d->cfg_err)) {
+    /* the configuration is built in the link's first slot: the active one from now on */
+    mc_drive_built_t *b = &link->cfg.slot[0];
+    if (!mc_drive_build(cfg, b, &d->cfg_err)) {
+        mc_drive_cfgbuf_init(&link->cfg, 0);
         mc_seq_fault(&d->seq, MC_FAULT_CONFIG);
         d->tm.state = d->seq.state;
         d->tm.faults = d->seq.faults;
+        mc_drive_telbuf_write(&link->telem, &d->tm);
         return false;
     }
-    mc_seq_init(&d->seq, &b.blk.seq);
-    mc_drive_apply(d, &b);
+    mc_drive_cfgbuf_init(&link->cfg, 0);
+    mc_seq_init(&d->seq, &b->blk.seq);
+    mc_drive_apply(d, b);
     for (int k = 0; k < 3; ++k) {
-        d->offset[k] = b.blk.offset_nominal;
+        d->offset[k] = b->blk.offset_nominal;
     }
+    mc_drive_telbuf_write(&link->telem, &d->tm);
     return true;
+}
+
+bool mc_drive_telemetry_read(const mc_drive_t *d, mc_drive_telem_t *out)
+{
+    return mc_drive_telbuf_read(&d->link->telem, out, 4u, 0);
 }
 
 const mc_param_err_t *mc_drive_config_error(const mc_drive_t *d)
@@ -78,19 +108,7 @@ const mc_params_t *mc_drive_params(const mc_drive_t *d)
 
 void mc_drive_command(mc_drive_t *d, const mc_drive_cmd_t *cmd)
 {
-    d->cmd_next = *cmd;
-    d->cmd_seq++;
-}
-
-/* A command is taken whole or not at all: every number finite, the mode known. */
-static mc_cmd_reject_t check_command(const mc_drive_cmd_t *c)
-{
-    if ((unsigned)c->mode >= (unsigned)MC_MODE_COUNT) {
-        return MC_CMD_BAD_MODE;
-    }
-    const bool finite = isfinite(c->i_ref.d) && isfinite(c->i_ref.q) && isfinite(c->torque_ref) &&
-                        isfinite(c->speed_ref) && isfinite(c->theta_init);
-    return finite ? MC_CMD_OK : MC_CMD_NOT_FINITE;
+    mc_drive_cmdbuf_write(&d->link->cmd, cmd);
 }
 
 const mc_drive_telem_t *mc_drive_telemetry(const mc_drive_t *d)
@@ -102,23 +120,53 @@ const mc_drive_telem_t *mc_drive_telemetry(const mc_drive_t *d)
 /* Commands change only here, at the start of a period, as one consistent copy. */
 static void take_command(mc_drive_t *d)
 {
-    if (d->cmd_seq == d->cmd_seen) {
-        return;
-    }
-    d->cmd_seen = d->cmd_seq;
-    const mc_cmd_reject_t why = check_command(&d->cmd_next);
-    if (why != MC_CMD_OK) {
-        d->tm.cmd_rejected++;
-        d->tm.cmd_reject_last = why;
+    const mc_cmdbuf_status_t st = mc_drive_cmdbuf_take(&d->link->cmd, &d->cmd);
+    if (st == MC_CMDBUF_REFUSED) {
+        d->tm.cmd_rejected = mc_cmdbuf_refused(&d->link->cmd.base);
+        d->tm.cmd_reject_last = (mc_cmd_reject_t)mc_cmdbuf_last_reason(&d->link->cmd.base);
         return;   /* the previous command stays in force */
     }
-    d->cmd = d->cmd_next;
-    if ((d->seq.faults & MC_FAULT_CONFIG) != 0u) {
-        return;   /* a rejected configuration never runs */
+    if (st != MC_CMDBUF_TAKEN || (d->seq.faults & MC_FAULT_CONFIG) != 0u) {
+        return;   /* nothing new; a rejected configuration never runs */
     }
     if (mc_seq_enable(&d->seq, d->cmd.enable)) {
         mc_drive_startup_reset(d);   /* a new enable always starts clean */
     }
+}
+
+/* A configuration the background built and validated (mc_drive_param_write) takes effect here,
+ * at a period boundary, by copies only. With the outputs off every block starts from it; while
+ * running only RUNTIME parameters can have changed, and the controllers keep their state. */
+static void take_config(mc_drive_t *d)
+{
+    bool changed = false;
+    const mc_drive_built_t *b = mc_drive_cfgbuf_take(&d->link->cfg, &changed);
+    if (!changed) {
+        return;
+    }
+    if (d->seq.state == MC_STATE_IDLE || d->seq.state == MC_STATE_FAULT) {
+        mc_drive_apply(d, b);
+        return;
+    }
+    d->p = b->p;
+    d->blk.i_ref_max = b->blk.i_ref_max;
+    d->blk.i_slew = b->blk.i_slew;
+    d->inj.cfg.v1 = b->blk.inj.v1;
+    d->inj.cfg.omega_n1 = b->blk.inj.omega_n1;
+    const float integ_d = d->cc.pi_d.integ, integ_q = d->cc.pi_q.integ;
+    const mc_dq_t u = d->cc.u;
+    mc_cc_init(&d->cc, &b->cc);
+    d->cc.pi_d.integ = integ_d;
+    d->cc.pi_q.integ = integ_q;
+    d->cc.u = u;
+    const float integ_s = d->sc.pi.integ, t_ref = d->sc.torque_ref;
+    const int count = d->sc.count;
+    mc_sc_init(&d->sc, &b->sc);
+    d->sc.pi.integ = integ_s;
+    d->sc.count = count;
+    d->sc.torque_ref = t_ref;
+    mc_tref_init(&d->tref, &b->tref);
+    mc_dtc_init(&d->dtc, &b->dtc);
 }
 
 /* The selected angle source (mc/angle_source.h), with its diagnostics into the telemetry. */
@@ -179,6 +227,7 @@ void mc_drive_isr(mc_drive_t *d)
 {
     const mc_drive_blk_t *c = &d->blk;
     take_command(d);
+    take_config(d);
 
     /* 1. Samples of this period (ADC triggered at the PWM centre) and the encoder. */
     hal_adc_sample_t raw;
@@ -200,6 +249,7 @@ void mc_drive_isr(mc_drive_t *d)
      *    Only RUN and Step III continue into the control pipeline. */
     if (!mc_drive_startup(d, &raw, i_abc, i_ab, vdc)) {
         d->i_ab_prev = i_ab;
+        mc_drive_telbuf_write(&d->link->telem, &d->tm);
         return;
     }
 
@@ -248,6 +298,7 @@ void mc_drive_isr(mc_drive_t *d)
         mc_drive_trip(d, MC_FAULT_NUMERIC);
         d->tm.state = d->seq.state;
         d->tm.faults = d->seq.faults;
+        mc_drive_telbuf_write(&d->link->telem, &d->tm);
         return;
     }
     hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
@@ -272,6 +323,9 @@ void mc_drive_isr(mc_drive_t *d)
     if (step3) {
         mc_drive_step3_check(d, ang.omega);
     }
+
+    /* 12. The telemetry, published as one consistent record. */
+    mc_drive_telbuf_write(&d->link->telem, &d->tm);
 }
 
 void mc_drive_background(mc_drive_t *d)

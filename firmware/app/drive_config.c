@@ -182,3 +182,50 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
                               .enable = p->dtc_enable != 0};
     return true;
 }
+
+static bool write_err(mc_param_err_t *err, mc_param_err_kind_t kind, int id, float value, const char *text)
+{
+    if (err != 0) {
+        *err = (mc_param_err_t){.kind = kind, .param = id, .param2 = -1, .value = value, .value2 = 0.0f,
+                                .min = id >= 0 && id < (int)MC_PARAM_COUNT ? mc_param_table[id].min : 0.0f,
+                                .max = id >= 0 && id < (int)MC_PARAM_COUNT ? mc_param_table[id].max : 0.0f,
+                                .text = text};
+    }
+    return false;
+}
+
+/* Background side of a parameter change: the whole configuration is derived and validated again
+ * from the newest one with this one value changed, into the spare slot of the link; the ISR swaps
+ * it in at its next period (take_config in drive.c). */
+bool mc_drive_param_write(mc_drive_t *d, int id, float value, mc_param_err_t *err)
+{
+    if (id < 0 || id >= (int)MC_PARAM_COUNT) {
+        return write_err(err, MC_PERR_UNKNOWN, id, value, "no such parameter");
+    }
+    if ((mc_drive_faults(d) & MC_FAULT_CONFIG) != 0u) {
+        return write_err(err, MC_PERR_ACCESS, id, value, "the configuration was refused at init: init again");
+    }
+    const mc_state_t st = mc_drive_state(d);
+    const bool outputs_off = st == MC_STATE_IDLE || st == MC_STATE_FAULT;
+    switch ((mc_param_access_t)mc_param_table[id].access) {
+    case MC_PA_INIT:
+        return write_err(err, MC_PERR_ACCESS, id, value, "only at init");
+    case MC_PA_STANDSTILL:
+        if (!outputs_off) {
+            return write_err(err, MC_PERR_ACCESS, id, value, "only while the outputs are off");
+        }
+        break;
+    case MC_PA_RUNTIME:
+    default:
+        break;
+    }
+    mc_drive_built_t *slot = mc_drive_cfgbuf_begin(&d->link->cfg);
+    if (slot == 0) {
+        return write_err(err, MC_PERR_BUSY, id, value, "the previous change is not taken yet: retry");
+    }
+    mc_drive_cfg_t cfg = {.p = mc_drive_cfgbuf_latest(&d->link->cfg)->p, .est = d->est};
+    if (!mc_param_set(&cfg.p, id, value, err) || !mc_drive_build(&cfg, slot, err)) {
+        return false;   /* the slot stays spare: nothing is committed */
+    }
+    return mc_drive_cfgbuf_commit(&d->link->cfg);
+}

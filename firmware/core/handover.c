@@ -2,6 +2,9 @@
  * mc/handover.h. B-side calls are marked with test points; I-side calls have none (the ISR is
  * indivisible as seen from the background, which is what the tests run at the test points). */
 #include "mc/handover.h"
+
+_Static_assert(sizeof(MC_ATOMIC_U32) == sizeof(uint32_t) && _Alignof(MC_ATOMIC_U32) == _Alignof(uint32_t),
+               "the C++ view of the shared words (plain uint32_t) must match");
 #include <string.h>
 
 #if defined(MC_HANDOVER_TESTING)

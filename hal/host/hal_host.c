@@ -1,5 +1,6 @@
 /* Host HAL port: the peripheral "registers" are the structs in hal_host/host.h. */
 #include "hal_host/host.h"
+#include <math.h>
 
 void hal_host_pwm_init(hal_pwm_t *pwm, float period_s, float dead_time_s)
 {
@@ -20,16 +21,25 @@ void hal_host_pwm_latch(hal_pwm_t *pwm)
     }
 }
 
-static float clamp01(float x)
+/* A NaN compares false both ways, so a plain clamp would pass it on: it becomes 50 % (zero
+ * voltage) here, and is counted. */
+static float clamp01(hal_pwm_t *pwm, float x)
 {
-    return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
+    if (!(x >= 0.0f && x <= 1.0f)) {
+        if (x != x || x == INFINITY || x == -INFINITY) {
+            pwm->nonfinite++;
+            return 0.5f;
+        }
+        return x < 0.0f ? 0.0f : 1.0f;
+    }
+    return x;
 }
 
 void hal_pwm_set_duties(hal_pwm_t *pwm, float da, float db, float dc)
 {
-    pwm->shadow[0] = clamp01(da);
-    pwm->shadow[1] = clamp01(db);
-    pwm->shadow[2] = clamp01(dc);
+    pwm->shadow[0] = clamp01(pwm, da);
+    pwm->shadow[1] = clamp01(pwm, db);
+    pwm->shadow[2] = clamp01(pwm, dc);
     pwm->writes++;
 }
 

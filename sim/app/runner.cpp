@@ -329,7 +329,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     hal_qep_t qep{};
     qep.counts_per_rev = 4u * static_cast<uint32_t>(sc.i("sensors.encoder_lines"));
     auto drive = std::make_unique<mc_drive_t>();
-    if (!mc_drive_init(drive.get(), &ds.cfg, &adc, &pwm, &qep))
+    auto link = std::make_unique<mc_drive_link_t>();
+    if (!mc_drive_init(drive.get(), link.get(), &ds.cfg, &adc, &pwm, &qep))
         throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive.get())));
     const mc_params_t& dp = *mc_drive_params(drive.get());
     const bool estimator = drive->src->needs_injection;
@@ -379,8 +380,10 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         if (time_it) isr_ns += std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - i0).count();
         if (k % 10 == 0) mc_drive_background(drive.get());
 
-        // Record the state at the sample instant, before the plant moves on.
-        const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
+        // Record the state at the sample instant, before the plant moves on, as the background
+        // would read it.
+        mc_drive_telem_t tm;
+        if (!mc_drive_telemetry_read(drive.get(), &tm)) throw std::runtime_error("telemetry: no consistent snapshot");
         const bool running = tm.state == MC_STATE_RUN;
         const auto iabc = plant.i_abc();
         const double ipk = std::max({std::fabs(iabc[0]), std::fabs(iabc[1]), std::fabs(iabc[2])});

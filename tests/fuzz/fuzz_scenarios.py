@@ -440,6 +440,8 @@ def main(argv=None):
     ap.add_argument("--keep", default=None, help="save failing cases here (default: a temp dir, printed)")
     ap.add_argument("--root", default=ROOT, help="repository root (scenarios/, presets/)")
     ap.add_argument("--quiet", action="store_true", help="print failures and the summary only")
+    ap.add_argument("--messages", type=int, default=0, metavar="K",
+                    help="also list the K most frequent exit-2 messages of `run` calls (key names kept)")
     args = ap.parse_args(argv)
     args.mcsim = os.path.abspath(args.mcsim)
     if not os.access(args.mcsim, os.X_OK):
@@ -481,6 +483,18 @@ def main(argv=None):
     slow = max(results, key=lambda r: r["seconds"]) if results else None
     if slow:
         print(f"  slowest: #{slow['i']} {slow['seconds']:.2f} s")
+    if args.messages:
+        cls = {}
+        for r in results:
+            if r["run"] and r["rc"] == 2:
+                m = r["stderr"].strip().splitlines()[0] if r["stderr"].strip() else ""
+                m = re.sub(r"^mcsim: error: \S+?: ", "", m)
+                m = re.sub(r"' = .*?: ", "' = V: ", m)
+                m = re.sub(r"[-+0-9.eE]{2,}", "N", m)[:140]
+                cls[m] = cls.get(m, 0) + 1
+        print(f"  most frequent exit-2 messages of runs:")
+        for m, n in sorted(cls.items(), key=lambda kv: -kv[1])[: args.messages]:
+            print(f"    {n:5d}  {m}")
     if fails:
         print(f"  {len(fails)} FAILED: " + " ".join(f"#{r['i']}" for r in sorted(fails, key=lambda r: r["i"])))
         print(f"  cases saved under {args.keep} (reproduce: --seed {args.seed} --only I)")

@@ -8,6 +8,7 @@
 #include "mc/current_ctrl.h"
 #include "mc/deadtime.h"
 #include "mc/filters.h"
+#include "mc/handover.h"
 #include "mc/injection.h"
 #include "mc/initpos.h"
 #include "mc/phase_program.h"
@@ -125,15 +126,28 @@ typedef struct {
     mc_dtc_cfg_t dtc;
 } mc_drive_built_t;
 
+/* The hand-over between the background loop and the ISR (mc/handover.h): commands (double
+ * buffer, validated when the ISR takes them), the telemetry (one writer, consistent snapshots)
+ * and configuration changes (built in the background, swapped in at a period boundary). Owned by
+ * the caller beside the drive: it is the mailbox both sides share, not the ISR's state. */
+MC_CMDBUF_TYPED(mc_drive_cmdbuf, mc_drive_cmd_t)
+MC_SNAPSHOT_TYPED(mc_drive_telbuf, mc_drive_telem_t)
+MC_CFGSWAP_TYPED(mc_drive_cfgbuf, mc_drive_built_t)
+
+typedef struct {
+    mc_drive_cmdbuf_t cmd;
+    mc_drive_telbuf_t telem;
+    mc_drive_cfgbuf_t cfg;
+} mc_drive_link_t;
+
 typedef struct {
     mc_params_t p;               /* the resolved parameters in force          */
+    mc_est_model_t est;          /* the estimator's model as given            */
     mc_drive_blk_t blk;
     mc_param_err_t cfg_err;      /* why mc_drive_init refused the configuration */
     mc_drive_hal_t hal;
-    mc_drive_cmd_t cmd_next;     /* written by mc_drive_command()            */
-    volatile uint32_t cmd_seq;   /* bumped on every write; ISR copies when it changes */
-    uint32_t cmd_seen;
-    mc_drive_cmd_t cmd;          /* the ISR's copy                           */
+    mc_drive_link_t *link;       /* the caller's mailbox (commands, telemetry, configuration) */
+    mc_drive_cmd_t cmd;          /* the ISR's copy of the command in force   */
 
     mc_seq_t seq;                /* state, init step, faults          */
     uint32_t cal_count;
@@ -164,15 +178,30 @@ void mc_drive_cfg_default(mc_drive_cfg_t *cfg);
 /* Derive the "auto" parameters, validate everything (table ranges, cross-checks, the estimator
  * model and its map) and build the block configurations. false: err says why, out unusable. */
 bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err);
-/* Returns false (and latches MC_FAULT_CONFIG; mc_drive_config_error says why) when the
- * configuration is refused; the outputs stay off. */
-bool mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, hal_adc_t *adc, hal_pwm_t *pwm, hal_qep_t *qep);
+/* Before the ISR runs. Returns false (and latches MC_FAULT_CONFIG; mc_drive_config_error says
+ * why) when the configuration is refused; the outputs stay off. */
+bool mc_drive_init(mc_drive_t *d, mc_drive_link_t *link, const mc_drive_cfg_t *cfg, hal_adc_t *adc, hal_pwm_t *pwm,
+                   hal_qep_t *qep);
 const mc_param_err_t *mc_drive_config_error(const mc_drive_t *d);
+/* Background: publish a command; the ISR takes the newest at the start of its next period, as one
+ * copy, if every number in it is finite and the mode known (else it keeps the previous one and
+ * counts the refusal in the telemetry). */
 void mc_drive_command(mc_drive_t *d, const mc_drive_cmd_t *cmd);
+/* Background: change one parameter. Checked against its access (INIT: refused; STANDSTILL: only
+ * while the outputs are off), then the whole configuration is derived and validated again in the
+ * background and handed to the ISR, which swaps it in at the next period boundary (running:
+ * gains and limits change without resetting the controllers' state). false with err: nothing
+ * changed (MC_PERR_BUSY: the previous change is not taken yet, retry a period later). */
+bool mc_drive_param_write(mc_drive_t *d, int id, float value, mc_param_err_t *err);
+/* Background: a consistent copy of the last period's telemetry (false if the ISR overwrote it on
+ * every one of a few tries: practically never). */
+bool mc_drive_telemetry_read(const mc_drive_t *d, mc_drive_telem_t *out);
 void mc_drive_isr(mc_drive_t *d);          /* the control period, top to bottom               */
 void mc_drive_background(mc_drive_t *d);   /* slow work, outside the ISR                      */
 mc_state_t mc_drive_state(const mc_drive_t *d);
 uint32_t mc_drive_faults(const mc_drive_t *d);
+/* The ISR's own telemetry record: for single-threaded hosts and tests only (on a target, the
+ * background uses mc_drive_telemetry_read). */
 const mc_drive_telem_t *mc_drive_telemetry(const mc_drive_t *d);
 /* The parameters in force (resolved: no "auto" left). */
 const mc_params_t *mc_drive_params(const mc_drive_t *d);

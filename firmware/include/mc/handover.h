@@ -54,13 +54,22 @@
  * (mc_handover_test_hook) so that a test can run the ISR side between any two steps. */
 #ifndef MC_HANDOVER_H
 #define MC_HANDOVER_H
+#ifdef __cplusplus
+/* A C++ host (the simulator) only allocates these structs for the C firmware, never touches the
+ * shared words: plain uint32_t has the size and alignment of _Atomic uint32_t (checked in
+ * handover.c), and C++17 has no _Atomic. */
+#define MC_ATOMIC_U32 uint32_t
+#else
 #include <stdatomic.h>
+#define MC_ATOMIC_U32 _Atomic uint32_t
+#endif
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
 /* ---- barriers --------------------------------------------------------------------------- */
 
+#ifndef __cplusplus
 /* Hardware data memory barrier (plus compiler barrier). */
 #if defined(__ARM_ARCH)
 #define MC_DMB() __asm__ volatile("dmb" ::: "memory")
@@ -72,6 +81,7 @@
 /* The barrier at the background-side publication points (see above). */
 #ifndef MC_HANDOVER_FENCE
 #define MC_HANDOVER_FENCE() MC_DMB()
+#endif
 #endif
 
 /* ---- 1. command double buffer: background writes, ISR takes --------------------------------
@@ -107,9 +117,9 @@ typedef enum {
 } mc_cmdbuf_status_t;
 
 typedef struct {
-    _Atomic uint32_t seq;          /* B writes: publishes so far; newest in slot seq & 1      */
-    _Atomic uint32_t refused;      /* I writes: commands refused by the validator             */
-    _Atomic uint32_t last_reason;  /* I writes: reason code of the last refusal (0: none yet) */
+    MC_ATOMIC_U32 seq;             /* B writes: publishes so far; newest in slot seq & 1      */
+    MC_ATOMIC_U32 refused;      /* I writes: commands refused by the validator             */
+    MC_ATOMIC_U32 last_reason;  /* I writes: reason code of the last refusal (0: none yet) */
     uint32_t seen;                 /* I private: seq at the last take                         */
     unsigned char *slots;          /* 2 * size bytes, caller's                                */
     size_t size;
@@ -160,7 +170,7 @@ mc_cmdbuf_status_t mc_cmdbuf_take(mc_cmdbuf_t *b, void *cur);
  * race in the C11 model, as in every seqlock; their bytes are never used. */
 
 typedef struct {
-    _Atomic uint32_t seq;          /* I writes: publishes so far; newest in slot seq & 1      */
+    MC_ATOMIC_U32 seq;             /* I writes: publishes so far; newest in slot seq & 1      */
     unsigned char *slots;          /* 2 * size bytes, caller's                                */
     size_t size;
 } mc_snapshot_t;
@@ -206,8 +216,8 @@ bool mc_snapshot_read(const mc_snapshot_t *s, void *dst, size_t size, unsigned t
  * keeps every shared word single-writer. The configuration is never derived in the ISR. */
 
 typedef struct {
-    _Atomic uint32_t req;          /* B writes: commits so far; newest in slot req & 1        */
-    _Atomic uint32_t ack;          /* I writes: commits taken; active slot ack & 1            */
+    MC_ATOMIC_U32 req;          /* B writes: commits so far; newest in slot req & 1        */
+    MC_ATOMIC_U32 ack;          /* I writes: commits taken; active slot ack & 1            */
     unsigned char *slots;          /* 2 * size bytes, caller's                                */
     size_t size;
 } mc_cfgswap_t;

@@ -75,7 +75,10 @@ typedef enum {
     MC_PERR_NOT_INTEGER,     /* I32 / BOOL / ENUM given a fraction                         */
     MC_PERR_CROSS,           /* violates a relation with param2 (see text)                 */
     MC_PERR_MODEL,           /* the estimator model or flux map (not a table entry)        */
-    MC_PERR_UNKNOWN          /* no parameter of that name / id                             */
+    MC_PERR_UNKNOWN,         /* no parameter of that name / id                             */
+    MC_PERR_ACCESS,          /* not writable in this state (INIT: never after init;
+                                STANDSTILL: only while the outputs are off)                */
+    MC_PERR_BUSY             /* the previous change is not taken by the ISR yet: retry    */
 } mc_param_err_kind_t;
 
 typedef struct {

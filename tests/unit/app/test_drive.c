@@ -14,6 +14,7 @@ typedef struct {
     hal_adc_t adc;
     hal_qep_t qep;
     mc_drive_cfg_t cfg;
+    mc_drive_link_t link;
     mc_drive_t d;
 } rig_t;
 
@@ -37,7 +38,7 @@ static void rig_init(rig_t *r)
     r->adc = (hal_adc_t){0};
     r->qep = (hal_qep_t){.counts_per_rev = 80000u};
     mc_drive_cfg_default(&r->cfg);
-    assert_true(mc_drive_init(&r->d, &r->cfg, &r->adc, &r->pwm, &r->qep));
+    assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     set_inputs(r, 0.0f, 0.0f, 300.0f);
 }
 
@@ -149,7 +150,7 @@ static void test_bad_config_never_runs(void **st)
     static rig_t r;
     rig_init(&r);
     r.cfg.p.ts = 1.0f; /* 1 Hz control: out of range */
-    assert_false(mc_drive_init(&r.d, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    assert_false(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     /* the reason names the parameter, its value and its range */
     const mc_param_err_t *e = mc_drive_config_error(&r.d);
     assert_int_equal(e->kind, MC_PERR_RANGE);

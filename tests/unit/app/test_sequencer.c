@@ -84,6 +84,7 @@ typedef struct {
     hal_qep_t qep;
     mc_flux_map_t map;
     mc_drive_cfg_t cfg;
+    mc_drive_link_t link;
     mc_drive_t d;
     double theta_r;        /* rotor angle (standstill) */
     double id, iq;         /* plant currents */
@@ -167,7 +168,7 @@ static void rig_init(rig_t *r, double theta_r)
     p->init_three_step = 1;
     assert_true(mc_param_set(p, MC_PARAM_step3_tol_rpm, 5.73f, NULL));   /* 3 rad/s electrical */
     r->cfg.est = (mc_est_model_t){.rs = NAN, .ld = (float)LD, .lq = (float)LQ, .psi_pm = 0.34305f, .map = &r->map};
-    assert_true(mc_drive_init(&r->d, &r->cfg, &r->adc, &r->pwm, &r->qep));
+    assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
 }
 
 /* Runs until the state changes (or n periods); returns the periods used. */
@@ -292,7 +293,7 @@ static void test_step3_timeout(void **st)
     rig_init(&r, 0.3);
     assert_true(mc_param_set(&r.cfg.p, MC_PARAM_step3_tol_rpm, 0.01f, NULL));   /* the table's minimum */
     r.cfg.p.timeout_step3 = 0.05f;
-    assert_true(mc_drive_init(&r.d, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     command(&r, true);
     step(&r, 64 + 60 + 501);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);

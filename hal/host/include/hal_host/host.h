@@ -15,6 +15,8 @@ struct hal_pwm {
     float active[3];    /* latched at the period boundary, seen by plant */
     bool  enabled;
     uint32_t writes;    /* number of duty writes (diagnostics)            */
+    uint32_t nonfinite; /* duties that arrived as NaN or infinite (a firmware bug: the drive
+                           checks before it writes; the port still never passes one on) */
 };
 
 struct hal_adc {
