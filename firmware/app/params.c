@@ -435,3 +435,24 @@ bool mc_params_validate(const mc_params_t *p, mc_param_err_t *err)
     }
     return true;
 }
+
+static uint32_t fnv1a(uint32_t h, const char *s)
+{
+    for (; *s != '\0'; ++s) {
+        h = (h ^ (uint8_t)*s) * 16777619u;
+    }
+    return (h ^ 0xffu) * 16777619u;   /* a separator: "ab" + "c" differs from "a" + "bc" */
+}
+
+uint32_t mc_params_table_hash(void)
+{
+    uint32_t h = 2166136261u;
+    for (int k = 0; k < (int)MC_PARAM_COUNT; ++k) {
+        const mc_param_info_t *e = &mc_param_table[k];
+        h = (h ^ (uint32_t)k) * 16777619u;
+        h = (h ^ e->type) * 16777619u;
+        h = fnv1a(h, e->name);
+        h = fnv1a(h, e->unit);
+    }
+    return h;
+}

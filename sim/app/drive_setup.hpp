@@ -40,6 +40,9 @@ void set_drive_params(const Scenario& sc, const MachineParams& mp, double vdc, d
 // values and the allowed range.
 std::string explain_config_error(const Scenario& sc, const mc_param_err_t& e);
 
+// The firmware's whole parameter table as markdown (docs/parameters.md, `mcsim params`).
+std::string params_markdown();
+
 // The scenario key behind a firmware parameter (hw.i_span_a -> sensors.i_full_scale_a, ...).
 std::string scenario_key_of(int param);
 

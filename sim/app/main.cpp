@@ -2,6 +2,7 @@
 //   mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]
 //   mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]
 //   mcsim keys                      (the scenario key table, markdown)
+//   mcsim params                    (the firmware's parameter table, markdown)
 //   mcsim check SCENARIO.toml [--set key=value]...   (validate only)
 // Exit status: 0 done, 2 bad input (scenario, key, value, file), 1 failure while running.
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "drive_setup.hpp"
 #include "runner.hpp"
 #include "scenario.hpp"
 
@@ -46,7 +48,8 @@ const char* kUsage =
     "usage: mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
     "       mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]\n"
-    "       mcsim keys\n";
+    "       mcsim keys      (the scenario keys)\n"
+    "       mcsim params    (the drive's parameter table: ids, CANopen objects, rules)\n";
 
 // The standard closed-loop benchmark: encoder FOC speed step 0 -> 600 rpm with 76 % rated load,
 // default realism profile (switching inverter with 0.5 us dead time, 12-bit ADC, noise), 10 kHz.
@@ -176,6 +179,10 @@ int main(int argc, char** argv)
         if (cmd == "bench") return cmd_bench(argc, argv);
         if (cmd == "keys") {
             std::printf("%s", mcsim::schema_markdown().c_str());
+            return 0;
+        }
+        if (cmd == "params") {
+            std::printf("%s", mcsim::params_markdown().c_str());
             return 0;
         }
         if (cmd == "-h" || cmd == "--help" || cmd == "help") {

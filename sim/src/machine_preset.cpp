@@ -217,9 +217,9 @@ MachineParams load_machine_preset(const std::string& name_or_path) {
     m.sat.T = rd.number(s, sp, "T", exponent);
     m.sat.U = rd.number(s, sp, "U", exponent);
     m.sat.V = rd.number(s, sp, "V", exponent);
-    m.sat.a_d0 = rd.number(s, sp, "a_d0", {0.1, false, 1e8, "1/H"});
+    m.sat.a_d0 = rd.number(s, sp, "a_d0", {0.1, false, 1e7, "1/H"});  // as ld_h: 0.1 uH .. 10 H
     m.sat.a_dd = rd.number(s, sp, "a_dd", {0, false, 1e12, "1/(H Wb^S)"});
-    m.sat.a_q0 = rd.number(s, sp, "a_q0", {0.1, false, 1e8, "1/H"});
+    m.sat.a_q0 = rd.number(s, sp, "a_q0", {0.1, false, 1e7, "1/H"});
     m.sat.a_qq = rd.number(s, sp, "a_qq", {0, false, 1e12, "1/(H Wb^T)"});
     m.sat.a_dq = rd.number(s, sp, "a_dq", {0, false, 1e12, "1/(H Wb^(U+V+2))"});
     m.sat.i_f = rd.number(s, sp, "i_f", {-1e5, false, 1e5, "A"});

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -556,6 +557,14 @@ double Plant::theta_e() const {
     if (a >= -kPi && a < kPi) return a;
     // Number of turns by truncation (no libm): exact enough for |a| < 1e12 rad.
     double x = (a + kPi) * (0.5 / kPi);
+    if (!(std::fabs(x) < 9.0e18)) {
+        // A diverged state (NaN, inf, or beyond long long turns): the integer conversion below would
+        // be UB. NaN stays NaN (the metrics show null); a huge finite angle has no digits left.
+        if (!std::isfinite(a)) return std::numeric_limits<double>::quiet_NaN();
+        double r = std::fmod(a + kPi, 2.0 * kPi);
+        if (r < 0) r += 2.0 * kPi;
+        return r - kPi;
+    }
     double turns = static_cast<double>(static_cast<long long>(x));
     if (turns > x) turns -= 1.0;
     double r = a - turns * (2.0 * kPi);

@@ -490,7 +490,7 @@ def main(argv=None):
                 m = r["stderr"].strip().splitlines()[0] if r["stderr"].strip() else ""
                 m = re.sub(r"^mcsim: error: \S+?: ", "", m)
                 m = re.sub(r"' = .*?: ", "' = V: ", m)
-                m = re.sub(r"[-+0-9.eE]{2,}", "N", m)[:140]
+                m = re.sub(r"(?<![A-Za-z_])[-+]?\d[\d.eE+-]*", "N", m)[:140]
                 cls[m] = cls.get(m, 0) + 1
         print(f"  most frequent exit-2 messages of runs:")
         for m, n in sorted(cls.items(), key=lambda kv: -kv[1])[: args.messages]:

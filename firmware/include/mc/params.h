@@ -108,6 +108,12 @@ bool mc_param_set_choice(mc_params_t *p, int id, const char *choice, mc_param_er
  * possible in C without allocation: the choice is written into buf, at most n bytes). */
 void mc_param_choice_text(const mc_params_t *p, int id, char *buf, unsigned n);
 
+/* The table's identity for the stored parameter block and the CANopen object dictionary (the
+ * hook the CAN issue fills): FNV-1a over every entry's index, name, type and unit. A stored
+ * block whose hash differs was written by another table: it falls back to the defaults. The
+ * object of an entry is 0x2000 + its id (sub-index 0), its data type the entry's type. */
+uint32_t mc_params_table_hash(void);
+
 /* Fill every "auto" parameter from its rule (may read any other parameter; runs until stable). */
 void mc_params_derive(mc_params_t *p);
 /* Every entry finite and in range, integers integral, then the cross-checks. */

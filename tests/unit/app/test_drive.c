@@ -5,6 +5,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <string.h>
 
 #include "hal_host/host.h"
 #include "mc/drive.h"
@@ -16,6 +17,7 @@ typedef struct {
     mc_drive_cfg_t cfg;
     mc_drive_link_t link;
     mc_drive_t d;
+    double pid, piq;     /* RL plant at standstill, rotor at 0 (run_plant only) */
 } rig_t;
 
 /* ADC counts for a phase current with the drive's scaling (default 12 bit over +-25 A). */
@@ -40,6 +42,7 @@ static void rig_init(rig_t *r)
     mc_drive_cfg_default(&r->cfg);
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     set_inputs(r, 0.0f, 0.0f, 300.0f);
+    r->pid = r->piq = 0.0;
 }
 
 static void command(rig_t *r, bool enable, mc_mode_t mode, float id, float iq)
@@ -237,6 +240,402 @@ static void test_command_taken_at_period_start(void **st)
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
 }
 
+/* ------------------------------------------------------------------ robustness, hand-over */
+
+/* Every duty in the PWM's shadow register is a finite number in [0, 1], and the port never had
+ * to replace a non-finite one. */
+static void assert_duties_sane(const rig_t *r)
+{
+    assert_int_equal(r->pwm.nonfinite, 0u);
+    for (int k = 0; k < 3; ++k) {
+        assert_true(isfinite(r->pwm.shadow[k]));
+        assert_true(r->pwm.shadow[k] >= 0.0f && r->pwm.shadow[k] <= 1.0f);
+    }
+}
+
+/* The drive's state must fit a small MCU's RAM beside everything else. */
+static void test_drive_state_size(void **st)
+{
+    (void)st;
+    print_message("sizeof(mc_drive_t)      = %zu bytes\n", sizeof(mc_drive_t));
+    print_message("sizeof(mc_drive_link_t) = %zu bytes\n", sizeof(mc_drive_link_t));
+    print_message("sizeof(mc_phase_t)      = %zu bytes\n", sizeof(mc_phase_t));
+    print_message("sizeof(mc_drive_built_t) = %zu bytes\n", sizeof(mc_drive_built_t));
+    assert_true(sizeof(mc_drive_t) <= 4096u);
+}
+
+static void assert_cmd_equal(const mc_drive_cmd_t *a, const mc_drive_cmd_t *b)
+{
+    assert_int_equal(a->enable, b->enable);
+    assert_int_equal(a->mode, b->mode);
+    assert_true(a->i_ref.d == b->i_ref.d && a->i_ref.q == b->i_ref.q);
+    assert_true(a->torque_ref == b->torque_ref && a->speed_ref == b->speed_ref);
+    assert_true(a->theta_init == b->theta_init);
+}
+
+/* A NaN or an infinity in any field of a command, or an unknown mode, sent while running: the
+ * ISR refuses the whole command (counted, reason kept), the previous one stays in force and the
+ * PWM never sees a non-finite duty. */
+static void test_nonfinite_command_refused(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    command(&r, true, MC_MODE_CURRENT, 0.5f, 2.0f);
+    run(&r, (int)r.d.p.offset_cal_samples + 400);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    mc_drive_cmd_t good = {0};
+    good = r.d.cmd;
+    assert_true(good.i_ref.q == 2.0f);
+
+    const float bad[] = {NAN, INFINITY, -INFINITY};
+    uint32_t refused = 0u;
+    for (int field = 0; field < 5; ++field) {
+        for (size_t v = 0; v < sizeof bad / sizeof bad[0]; ++v) {
+            mc_drive_cmd_t c = good;
+            c.i_ref.q = 4.0f;   /* a change that must not come through either */
+            switch (field) {
+            case 0: c.i_ref.d = bad[v]; break;
+            case 1: c.i_ref.q = bad[v]; break;
+            case 2: c.torque_ref = bad[v]; break;
+            case 3: c.speed_ref = bad[v]; break;
+            default: c.theta_init = bad[v]; break;
+            }
+            mc_drive_command(&r.d, &c);
+            run(&r, 3);
+            ++refused;
+            mc_drive_telem_t tm;
+            assert_true(mc_drive_telemetry_read(&r.d, &tm));
+            assert_int_equal(tm.cmd_rejected, refused);
+            assert_int_equal(tm.cmd_reject_last, MC_CMD_NOT_FINITE);
+            assert_int_equal(tm.state, MC_STATE_RUN);
+            assert_cmd_equal(&r.d.cmd, &good);
+            assert_true(tm.i_ref.q == 2.0f);   /* the previous reference, not 4 A */
+            assert_true(hal_pwm_enabled(&r.pwm));
+            assert_duties_sane(&r);
+        }
+    }
+    const int modes[] = {(int)MC_MODE_COUNT, -1, 1000};
+    for (size_t k = 0; k < sizeof modes / sizeof modes[0]; ++k) {
+        mc_drive_cmd_t c = good;
+        c.mode = (mc_mode_t)modes[k];
+        c.i_ref.q = 4.0f;
+        mc_drive_command(&r.d, &c);
+        run(&r, 3);
+        ++refused;
+        mc_drive_telem_t tm;
+        assert_true(mc_drive_telemetry_read(&r.d, &tm));
+        assert_int_equal(tm.cmd_rejected, refused);
+        assert_int_equal(tm.cmd_reject_last, MC_CMD_BAD_MODE);
+        assert_cmd_equal(&r.d.cmd, &good);
+        assert_true(tm.i_ref.q == 2.0f);
+        assert_duties_sane(&r);
+    }
+    /* a valid command afterwards is taken; the count stays */
+    command(&r, true, MC_MODE_CURRENT, 0.5f, 2.5f);
+    run(&r, 3);
+    mc_drive_telem_t tm;
+    assert_true(mc_drive_telemetry_read(&r.d, &tm));
+    assert_int_equal(tm.cmd_rejected, refused);
+    assert_true(r.d.cmd.i_ref.q == 2.5f);
+    assert_true(tm.i_ref.q == 2.5f);
+    assert_int_equal(tm.state, MC_STATE_RUN);
+    assert_duties_sane(&r);
+}
+
+/* A sample at an ADC rail says only "beyond the span": it trips at once, even where the scaled
+ * current (with a calibrated offset far from mid-scale) is still below the trip level. Span 30 A,
+ * trip 27.2 A (span >= 1.1 trip); an offset of +-200 counts (within the 204.8-count tolerance)
+ * puts the rail at ~27.06 A. */
+static void test_adc_rail_trips(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_span, 30.0f, NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_trip, 27.2f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    assert_int_equal(r.d.blk.adc_max, 4095);
+    const struct { int phase; int offset; uint16_t near, rail; } cases[] = {
+        {0, +200, 4094u, 4095u},
+        {1, -200, 1u, 0u},
+        {2, +200, 4094u, 4095u},
+    };
+    for (size_t n = 0; n < sizeof cases / sizeof cases[0]; ++n) {
+        command(&r, false, MC_MODE_CURRENT, 0.0f, 0.0f);
+        run(&r, 2);
+        set_inputs(&r, 0.0f, 0.0f, 300.0f);
+        const int ph = cases[n].phase;
+        const uint16_t mid = r.adc.sample.i[ph];
+        r.adc.sample.i[ph] = (uint16_t)(mid + cases[n].offset);
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        run(&r, (int)r.d.p.offset_cal_samples + 5);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_float_equal(r.d.offset[ph], (float)(mid + cases[n].offset), 1e-3f);
+
+        /* one count inside the rail: below the trip level, no trip */
+        r.adc.sample.i[ph] = cases[n].near;
+        const float i_near = ((float)cases[n].near - r.d.offset[ph]) * r.d.blk.amps_per_count;
+        assert_true(fabsf(i_near) < r.d.blk.i_trip);
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+
+        /* at the rail: still below the trip level as a current, but it trips */
+        r.adc.sample.i[ph] = cases[n].rail;
+        const float i_rail = ((float)cases[n].rail - r.d.offset[ph]) * r.d.blk.amps_per_count;
+        assert_true(fabsf(i_rail) < r.d.blk.i_trip);
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERCURRENT);
+        assert_false(hal_pwm_enabled(&r.pwm));
+        const float i_tm[3] = {r.d.tm.i_abc.a, r.d.tm.i_abc.b, r.d.tm.i_abc.c};
+        assert_float_equal(i_tm[ph], i_rail, 1e-4f);
+        assert_true(fabsf(i_tm[ph]) < r.d.blk.i_trip);
+        assert_duties_sane(&r);
+    }
+}
+
+/* A current sensor whose span does not reach 1.1 x the trip level: refused at init, the error
+ * names both parameters with their values. */
+static void test_span_below_trip_refused(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_span, 20.0f, NULL));   /* trip: 1.5 x 13.29 A */
+    assert_false(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    const mc_param_err_t *e = mc_drive_config_error(&r.d);
+    assert_int_equal(e->kind, MC_PERR_CROSS);
+    assert_int_equal(e->param, MC_PARAM_i_span);
+    assert_int_equal(e->param2, MC_PARAM_i_trip);
+    assert_string_equal(mc_param_table[e->param].name, "hw.i_span_a");
+    assert_string_equal(mc_param_table[e->param2].name, "control.i_trip_a");
+    assert_float_equal(e->value, 20.0f, 0.0f);
+    assert_float_equal(e->value2, 1.5f * 13.29f, 1e-4f);
+    assert_float_equal(e->min, 1.1f * e->value2, 1e-4f);
+    assert_non_null(e->text);
+    assert_true(mc_drive_faults(&r.d) & MC_FAULT_CONFIG);
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(&r, 100);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    assert_duties_sane(&r);
+}
+
+/* ---- parameter writes through the hand-over, with a salient RL plant at standstill ---- */
+
+#define P_LD 10.5e-3
+#define P_LQ 12.9e-3
+#define P_RS 0.4
+#define P_TS 1e-4
+
+/* n periods of the plant (rotor at 0, which is where the encoder at count 0 puts it) */
+static void run_plant(rig_t *r, int n)
+{
+    for (int k = 0; k < n; ++k) {
+        hal_host_pwm_latch(&r->pwm);
+        const double ia = r->pid, ib = -0.5 * r->pid + sqrt(3.0) / 2.0 * r->piq;
+        r->adc.sample.i[0] = counts(&r->d, (float)ia);
+        r->adc.sample.i[1] = counts(&r->d, (float)ib);
+        r->adc.sample.i[2] = counts(&r->d, (float)(-ia - ib));
+        r->adc.sample.vdc = (uint16_t)lrintf(300.0f / r->d.blk.volts_per_count);
+        mc_drive_isr(&r->d);
+        assert_duties_sane(r);
+        if (!r->pwm.enabled) {
+            r->pid = r->piq = 0.0;
+            continue;
+        }
+        const double ua = (r->pwm.active[0] - 0.5) * 300.0, ub = (r->pwm.active[1] - 0.5) * 300.0,
+                     uc = (r->pwm.active[2] - 0.5) * 300.0;
+        const double ud = (2.0 * ua - ub - uc) / 3.0, uq = (ub - uc) / sqrt(3.0);
+        for (int j = 0; j < 10; ++j) {
+            r->pid += P_TS / 10 * (ud - P_RS * r->pid) / P_LD;
+            r->piq += P_TS / 10 * (uq - P_RS * r->piq) / P_LQ;
+        }
+    }
+}
+
+static void rig_running(rig_t *r)
+{
+    rig_init(r);
+    /* the plant has no dead time: without the compensation the integrators hold ~Rs i */
+    assert_true(mc_param_set(&r->cfg.p, MC_PARAM_dtc_enable, 0.0f, NULL));
+    assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
+    command(r, true, MC_MODE_CURRENT, 1.0f, 3.0f);
+    run_plant(r, (int)r->d.p.offset_cal_samples + 400);
+    assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
+    assert_float_equal(r->d.tm.i_dq.q, 3.0f, 0.1f);
+    assert_float_equal(r->d.cc.pi_d.integ, (float)P_RS * 1.0f, 0.1f);   /* a state worth keeping */
+    assert_float_equal(r->d.cc.pi_q.integ, (float)P_RS * 3.0f, 0.1f);
+}
+
+/* Nothing pending, nothing changed: the newest configuration is still the active one's values. */
+static void assert_unchanged(rig_t *r, const mc_params_t *before)
+{
+    assert_false(mc_cfgswap_pending(&r->link.cfg.base));
+    assert_memory_equal(&mc_drive_cfgbuf_latest(&r->link.cfg)->p, before, sizeof *before);
+    run_plant(r, 1);
+    assert_memory_equal(&r->d.p, before, sizeof *before);
+}
+
+/* (a) A RUNTIME parameter while running: effective at the next period, not before; the current
+ * loop's integrators carry on (only the new gains act on them). */
+static void test_param_write_runtime(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_running(&r);
+    const float kp_old = r.d.cc.cfg.kp_d;
+    mc_param_err_t err;
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 200.0f, &err));
+    assert_true(r.d.cc.cfg.kp_d == kp_old);           /* not before the ISR */
+    assert_true(r.d.p.cc_bw_hz == 250.0f);
+    const float integ_d = r.d.cc.pi_d.integ, integ_q = r.d.cc.pi_q.integ;
+    run_plant(&r, 1);
+    mc_cc_cfg_t want;
+    mc_cc_cfg_from_bandwidth(&want, 200.0f, r.d.p.rs, r.d.p.ld, r.d.p.lq, r.d.p.psi_pm, r.d.p.ts);
+    assert_true(r.d.p.cc_bw_hz == 200.0f);
+    assert_float_equal(r.d.cc.cfg.kp_d, want.kp_d, 1e-6f);
+    assert_float_equal(r.d.cc.cfg.ki_q, want.ki_q, 1e-6f);
+    assert_true(r.d.cc.cfg.kp_d != kp_old);
+    /* the rule-derived slew rate follows the bandwidth (nice2(0.5 x 13.29 A x 2 pi 200 Hz)) */
+    assert_float_equal(r.d.blk.i_slew, 8400.0f, 1e-2f);
+    /* integrators: the old value plus this period's ki ts e, not a reset */
+    const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+    assert_false(r.d.cc.limited);
+    assert_float_equal(r.d.cc.pi_d.integ, integ_d + want.ki_d * want.ts * (tm->i_ref.d - tm->i_dq.d), 1e-5f);
+    assert_float_equal(r.d.cc.pi_q.integ, integ_q + want.ki_q * want.ts * (tm->i_ref.q - tm->i_dq.q), 1e-5f);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    run_plant(&r, 200);
+    assert_float_equal(r.d.tm.i_dq.q, 3.0f, 0.1f);
+}
+
+/* (b) A STANDSTILL parameter while running: refused, nothing changes. */
+static void test_param_write_standstill_while_running(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_running(&r);
+    const mc_params_t before = r.d.p;
+    mc_param_err_t err;
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_step3_tol_rpm, 7.0f, &err));
+    assert_int_equal(err.kind, MC_PERR_ACCESS);
+    assert_int_equal(err.param, MC_PARAM_step3_tol_rpm);
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_dead_time, 1e-6f, &err));
+    assert_int_equal(err.kind, MC_PERR_ACCESS);
+    assert_unchanged(&r, &before);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+}
+
+/* (c) Two writes within one period: the second is BUSY; a period later it goes through. */
+static void test_param_write_busy(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_running(&r);
+    mc_param_err_t err;
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 200.0f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_i_headroom, 0.05f, &err));
+    assert_int_equal(err.kind, MC_PERR_BUSY);
+    run_plant(&r, 1);
+    assert_true(r.d.p.cc_bw_hz == 200.0f);
+    assert_true(r.d.p.i_headroom == 0.03f);
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_headroom, 0.05f, &err));
+    run_plant(&r, 1);
+    assert_true(r.d.p.i_headroom == 0.05f);
+    assert_true(r.d.p.cc_bw_hz == 200.0f);   /* built from the newest, not from the defaults */
+    assert_float_equal(r.d.blk.i_ref_max, r.d.p.i_max * 0.95f, 1e-5f);
+}
+
+/* (d) Out of range (and non-finite, and a cross-check): refused, nothing changes. */
+static void test_param_write_range(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_running(&r);
+    const mc_params_t before = r.d.p;
+    mc_param_err_t err;
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 5.0f, &err));
+    assert_int_equal(err.kind, MC_PERR_RANGE);
+    assert_int_equal(err.param, MC_PARAM_cc_bw_hz);
+    assert_float_equal(err.value, 5.0f, 0.0f);
+    assert_float_equal(err.min, 10.0f, 0.0f);
+    assert_float_equal(err.max, 5000.0f, 0.0f);
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, NAN, &err));
+    assert_int_equal(err.kind, MC_PERR_NOT_FINITE);
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 600.0f, &err));   /* > f_s / 20 */
+    assert_int_equal(err.kind, MC_PERR_CROSS);
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_decouple, 0.5f, &err));
+    assert_int_equal(err.kind, MC_PERR_NOT_INTEGER);
+    assert_false(mc_drive_param_write(&r.d, (int)MC_PARAM_COUNT, 1.0f, &err));
+    assert_int_equal(err.kind, MC_PERR_UNKNOWN);
+    assert_unchanged(&r, &before);
+    /* the spare slot was left untouched: the next valid write goes through */
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 200.0f, &err));
+}
+
+/* (e) An INIT parameter: refused while running and while idle. */
+static void test_param_write_init_refused(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    const mc_params_t before = r.d.p;
+    mc_param_err_t err;
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_ts, 2e-4f, &err));
+    assert_int_equal(err.kind, MC_PERR_ACCESS);
+    assert_int_equal(err.param, MC_PARAM_ts);
+    assert_unchanged(&r, &before);
+    rig_running(&r);
+    const mc_params_t before2 = r.d.p;
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_ts, 2e-4f, &err));
+    assert_int_equal(err.kind, MC_PERR_ACCESS);
+    assert_unchanged(&r, &before2);
+}
+
+/* (f) A STANDSTILL parameter while idle: taken at the next period, with its derived value. */
+static void test_param_write_standstill_idle(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    run(&r, 3);
+    mc_param_err_t err;
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_step3_tol_rpm, 7.0f, &err));
+    assert_true(r.d.p.step3_tol_rpm == 5.0f);
+    run(&r, 1);
+    assert_true(r.d.p.step3_tol_rpm == 7.0f);
+    assert_float_equal(r.d.blk.step3_speed_tol, 7.0f * MC_2PI / 60.0f * 5.0f, 1e-4f);
+    assert_false(mc_param_is_auto(&r.d.p, MC_PARAM_step3_tol_rpm));
+    /* and it runs with it */
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(&r, (int)r.d.p.offset_cal_samples + 2);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+}
+
+/* (g) A rule-derived parameter follows the motor parameter it derives from. */
+static void test_param_write_rule_follows(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    assert_float_equal(r.d.p.i_trip, 1.5f * 13.29f, 1e-5f);
+    mc_param_err_t err;
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_rated, 12.0f, &err));
+    run(&r, 1);
+    assert_true(r.d.p.i_rated == 12.0f);
+    assert_true(mc_param_is_auto(&r.d.p, MC_PARAM_i_trip));
+    assert_float_equal(r.d.p.i_trip, 18.0f, 1e-5f);
+    assert_float_equal(r.d.blk.i_trip, 18.0f, 1e-5f);
+    assert_float_equal(r.d.p.i_max, 12.0f, 1e-6f);   /* control.i_max_a follows too */
+    /* a trip level set by the user stays where it was put */
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_trip, 16.0f, &err));
+    run(&r, 1);
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_rated, 10.0f, &err));
+    run(&r, 1);
+    assert_float_equal(r.d.p.i_trip, 16.0f, 0.0f);
+    assert_float_equal(r.d.p.i_max, 10.0f, 1e-6f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -248,6 +647,17 @@ int main(void)
         cmocka_unit_test(test_voltage_history_and_slew),
         cmocka_unit_test(test_slew_step_boundary),
         cmocka_unit_test(test_command_taken_at_period_start),
+        cmocka_unit_test(test_drive_state_size),
+        cmocka_unit_test(test_nonfinite_command_refused),
+        cmocka_unit_test(test_adc_rail_trips),
+        cmocka_unit_test(test_span_below_trip_refused),
+        cmocka_unit_test(test_param_write_runtime),
+        cmocka_unit_test(test_param_write_standstill_while_running),
+        cmocka_unit_test(test_param_write_busy),
+        cmocka_unit_test(test_param_write_range),
+        cmocka_unit_test(test_param_write_init_refused),
+        cmocka_unit_test(test_param_write_standstill_idle),
+        cmocka_unit_test(test_param_write_rule_follows),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
