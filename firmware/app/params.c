@@ -265,6 +265,10 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         }
         return bw;
     }
+    case MC_RULE_SC_DEC:
+        /* the speed loop at 1 kHz whatever f_s: at 2 kHz a decimation of 10 left it 200 Hz and a
+         * 5 Hz bandwidth, too slow to hold an active load at standstill */
+        return maxf(1.0f, roundf(fs / 1000.0f));
     case MC_RULE_SPEED_KP:
         /* crossover at w_bw on the inertia alone: kp = J w_bw */
         return p->inertia * pi2 * p->speed_bw_hz;

@@ -57,10 +57,10 @@ X(i_slew,         "control.i_slew_a_per_s", F32, "A/s",    1,     1e8f,   10000,
 X(cc_decouple,    "control.decouple",      BOOL, "",       0,     1,      1,        NONE,    CONTROL, RUNTIME, "", "Decoupling feed-forward in the current loop.") \
 X(u_margin,       "control.u_margin",      F32, "1",       0.1f,  1,      0.95f,    NONE,    CONTROL, RUNTIME, "", "Share of Vdc/sqrt(3) the references plan for (field weakening).") \
 X(mtpa_table,     "control.mtpa",          ENUM, "",       0,     1,      0,        NONE,    CONTROL, STANDSTILL, "analytic|table", "MTPA law (2.24) or its table.") \
-X(speed_bw_hz,    "control.speed_bw_hz",   F32, "Hz",      0.1f,  200,    25,       SPEED_BW, CONTROL, RUNTIME, "", "Speed-loop bandwidth (default: min(25 Hz, estimator.pll_bw_hz)); sets the gains unless given.") \
+X(speed_bw_hz,    "control.speed_bw_hz",   F32, "Hz",      0.1f,  200,    25,       SPEED_BW, CONTROL, RUNTIME, "", "Speed-loop bandwidth (default: min(25 Hz, f_s / (40 x decimation), estimator.pll_bw_hz when sensorless)); sets the gains unless given.") \
 X(sc_kp,          "control.speed_kp",      F32, "N m s/rad", 0,   1e4f,   2.04f,    SPEED_KP, CONTROL, RUNTIME, "", "Speed PI proportional gain, mechanical rad/s (default: J w_bw).") \
 X(sc_ki,          "control.speed_ki",      F32, "N m/rad", 0,     1e6f,   80.2f,    SPEED_KI, CONTROL, RUNTIME, "", "Speed PI integral gain (default: kp w_bw / 4).") \
-X(sc_decimation,  "control.speed_decimation", I32, "periods", 1,  100,    10,       NONE,    CONTROL, STANDSTILL, "", "The speed loop runs every N periods.") \
+X(sc_decimation,  "control.speed_decimation", I32, "periods", 1,  100,    10,       SC_DEC,  CONTROL, STANDSTILL, "", "The speed loop runs every N periods (default: f_s / 1 kHz, the speed loop at 1 kHz).") \
 X(torque_max,     "control.torque_max_nm", F32, "N m",     0.01f, 1e5f,   35.6f,    TORQUE_MAX, CONTROL, RUNTIME, "", "Speed-loop torque limit (default: 1.2 x motor.torque_rated_nm).") \
 X(dtc_enable,     "control.deadtime_comp", BOOL, "",       0,     1,      1,        NONE,    CONTROL, RUNTIME, "", "Dead-time compensation in the modulator.") \
 X(dtc_i_band,     "control.dtc_i_band_a",  F32, "A",       1e-3f, 1000,   0.3f,     I_SMALL, CONTROL, RUNTIME, "", "Linear zone of the compensation's current sign (default: 2.26 % of motor.i_rated_a).") \
