@@ -84,7 +84,7 @@ Resolved resolve(const Scenario& sc)
     try {
         r.mp = load_machine_preset(sc.s("machine.preset"));
     } catch (const std::exception& e) {
-        throw ScenarioError(sc.origin() + ": key 'machine.preset' = \"" + sc.s("machine.preset") + "\": " + e.what());
+        throw ScenarioError(sc.origin() + ": key 'machine.preset' = \"" + message_text(sc.s("machine.preset")) + "\": " + message_text(e.what(), 400, false));
     }
     auto opt = [&](const char* k, double def) { return sc.has(k) ? sc.f(k) : def; };
     r.vdc = opt("inverter.vdc_v", r.mp.vdc_nominal);

@@ -419,7 +419,7 @@ static void apply_set(toml::table& root, const std::string& set)
     }
     if (!root.contains(sec)) root.insert(sec, toml::table{});
     auto* t = root[sec].as_table();
-    if (!t) throw ScenarioError("--set: section '" + sec + "' is not a table");
+    if (!t) throw ScenarioError("--set: section '" + message_text(sec) + "' is not a table (the file sets it to a value)");
     t->insert_or_assign(name, *parsed.get("v"));
 }
 
