@@ -1,8 +1,15 @@
 #include "mc/sequencer.h"
 
+/* A timeout in periods; 0 (none) for a non-positive or NaN time. Converting a float beyond
+ * uint32_t is undefined behaviour: anything above ~4e9 periods (or a non-positive ts) becomes the
+ * longest representable timeout instead. */
 static uint32_t periods(const mc_seq_t *s, float seconds)
 {
-    return seconds > 0.0f ? (uint32_t)(seconds / s->cfg.ts + 0.5f) : 0u;
+    if (!(seconds > 0.0f)) {
+        return 0u;
+    }
+    const float n = seconds / s->cfg.ts + 0.5f;
+    return (s->cfg.ts > 0.0f && n < 4.0e9f) ? (uint32_t)n : 4000000000u;
 }
 
 static void enter(mc_seq_t *s, mc_state_t st, mc_init_step_t step, float timeout)

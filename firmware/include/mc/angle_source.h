@@ -7,7 +7,7 @@
  * Adding a source: one file with `const mc_angle_src_desc_t mc_angle_src_NAME` (its state must
  * fit MC_ANGLE_SRC_STATE_MAX: check with MC_ANGLE_SRC_FITS), plus one line X(NAME) in
  * MC_ANGLE_SOURCES below. The line also adds NAME to the choices of control.angle_source. A test
- * build adds its own through MC_ANGLE_SOURCES_EXTRA (tests/unit/app/test_angle_registry.c). */
+ * build adds its own through MC_ANGLE_SOURCES_EXTRA (tests/unit/app/test_angle_source_extra.c, target app_angle_registry). */
 #ifndef MC_ANGLE_SOURCE_H
 #define MC_ANGLE_SOURCE_H
 #include "mc/types.h"

@@ -70,6 +70,23 @@ static void test_seq_path_and_timeouts(void **st)
     assert_int_equal(g.state, MC_STATE_RUN);
 }
 
+/* Timeouts that do not fit 32 bits of periods (1e9 s), NaN or a zero period are defined: the
+ * longest timeout, none, the longest (converting them was undefined behaviour). */
+static void test_seq_extreme_timeouts(void **st)
+{
+    (void)st;
+    const float ts[3] = {1e-4f, 1e-4f, 0.0f};
+    const float t[3] = {1e9f, NAN, 0.01f};
+    const uint32_t want[3] = {4000000000u, 0u, 4000000000u};
+    for (int k = 0; k < 3; ++k) {
+        const mc_seq_cfg_t c = {.ts = ts[k], .init_pos = false, .timeout_cal = t[k]};
+        mc_seq_t s;
+        mc_seq_init(&s, &c);
+        mc_seq_enable(&s, true);
+        assert_int_equal(s.limit, want[k]);
+    }
+}
+
 /* ---------------------------------------------------------------- the drive with a plant */
 
 #define LD 10.5e-3
@@ -305,6 +322,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_seq_path_and_timeouts),
+        cmocka_unit_test(test_seq_extreme_timeouts),
         cmocka_unit_test(test_drive_full_path),
         cmocka_unit_test(test_fault_in_every_step),
         cmocka_unit_test(test_repeated_enable_disable),
