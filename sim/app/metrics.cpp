@@ -49,29 +49,13 @@ std::string json_string(const std::string& s)
             ++k;
             continue;
         }
-        // Multi-byte UTF-8: copy a well-formed sequence (no overlongs, no surrogates, <= U+10FFFF),
-        // replace each byte of anything else by U+FFFD.
-        int len = 0;
-        unsigned lo = 0x80, hi = 0xBF;
-        if (c >= 0xC2 && c <= 0xDF) len = 2;
-        else if (c >= 0xE0 && c <= 0xEF) {
-            len = 3;
-            if (c == 0xE0) lo = 0xA0;
-            if (c == 0xED) hi = 0x9F;
-        } else if (c >= 0xF0 && c <= 0xF4) {
-            len = 4;
-            if (c == 0xF0) lo = 0x90;
-            if (c == 0xF4) hi = 0x8F;
-        }
-        bool ok = len > 0 && k + size_t(len) <= n;
-        for (int j = 1; ok && j < len; ++j) {
-            const unsigned char d = static_cast<unsigned char>(s[k + j]);
-            const unsigned a = j == 1 ? lo : 0x80, b = j == 1 ? hi : 0xBF;
-            ok = d >= a && d <= b;
-        }
+        // Multi-byte UTF-8: copy a well-formed sequence, replace each byte of anything else by
+        // U+FFFD.
+        const size_t len = utf8_sequence_len(s, k);
+        const bool ok = len > 1;
         if (ok) {
-            o.append(s, k, size_t(len));
-            k += size_t(len);
+            o.append(s, k, len);
+            k += len;
         } else {
             o += "\\ufffd";
             ++k;

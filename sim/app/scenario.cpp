@@ -116,6 +116,13 @@ static size_t utf8_printable_len(const std::string& s, size_t k)
 {
     const unsigned char c = static_cast<unsigned char>(s[k]);
     if (c < 0x80) return (c >= 0x20 && c != 0x7f) ? 1 : 0;
+    return utf8_sequence_len(s, k);
+}
+
+size_t utf8_sequence_len(const std::string& s, size_t k)
+{
+    const unsigned char c = static_cast<unsigned char>(s[k]);
+    if (c < 0x80) return 1;
     size_t len = 0;
     unsigned lo = 0x80, hi = 0xBF;
     if (c >= 0xC2 && c <= 0xDF) len = 2;

@@ -76,6 +76,9 @@ private:
 // value (a 1 MB key, binary) gives a short message that printf("%s") shows in full.
 constexpr size_t kMessageChars = 80;
 // escape_quotes = false: '"' and '\\' as they are (text that is not inside quotes).
+// Length of the well-formed UTF-8 sequence at s[k] (1 for any ASCII byte; no overlongs, no
+// surrogates, <= U+10FFFF), 0 if the bytes there are not valid UTF-8.
+size_t utf8_sequence_len(const std::string& s, size_t k);
 std::string message_text(const std::string& s, size_t max_chars = kMessageChars, bool escape_quotes = true);
 // Largest scenario file Scenario::load reads.
 constexpr size_t kMaxScenarioBytes = size_t(1) << 20;

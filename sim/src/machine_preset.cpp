@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "mcsim/machine.hpp"
+#include "mcsim/text.hpp"
 
 #ifndef MCSIM_PRESET_DIR
 #define MCSIM_PRESET_DIR "presets"
@@ -21,28 +22,7 @@ bool file_exists(const std::string& p) { return std::ifstream(p).good(); }
 // Largest preset file read (a preset is ~2 kB; this refuses /dev/zero and the like unread).
 constexpr std::uintmax_t kMaxPresetBytes = std::uintmax_t(1) << 20;
 
-// A name or value as shown in a message: control characters, NUL and non-ASCII bytes as \xNN,
-// quotes and backslashes escaped, cut after 80 characters with "...(N bytes)".
-std::string shown(const std::string& s) {
-    static const char* const kHex = "0123456789abcdef";
-    std::string o;
-    size_t k = 0;
-    for (; k < s.size() && k < 80; ++k) {
-        const unsigned char c = static_cast<unsigned char>(s[k]);
-        if (c == '"' || c == '\\') {
-            o += '\\';
-            o += char(c);
-        } else if (c >= 0x20 && c < 0x7f) {
-            o += char(c);
-        } else {
-            o += "\\x";
-            o += kHex[c >> 4];
-            o += kHex[c & 15];
-        }
-    }
-    if (k < s.size()) o += "...(" + std::to_string(s.size()) + " bytes)";
-    return o;
-}
+std::string shown(const std::string& s) { return shown_text(s, true); }
 
 // A bare name is looked up in the preset directory; anything that looks like a path (has a
 // directory separator or the .toml suffix) is taken as given.

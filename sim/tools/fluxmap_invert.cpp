@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "mcsim/fluxmap.hpp"
+#include "mcsim/text.hpp"
 #include "mcsim/machine.hpp"
 
 namespace {
@@ -45,23 +46,7 @@ struct BadInput : std::runtime_error {
 };
 
 // An argument as shown in a message: printable ASCII, the rest as \xNN, at most 80 characters.
-std::string shown(const std::string& s) {
-    static const char* const kHex = "0123456789abcdef";
-    std::string o;
-    size_t k = 0;
-    for (; k < s.size() && k < 80; ++k) {
-        const unsigned char c = static_cast<unsigned char>(s[k]);
-        if (c >= 0x20 && c < 0x7f) {
-            o += char(c);
-        } else {
-            o += "\\x";
-            o += kHex[c >> 4];
-            o += kHex[c & 15];
-        }
-    }
-    if (k < s.size()) o += "...(" + std::to_string(s.size()) + " bytes)";
-    return o;
-}
+std::string shown(const std::string& s) { return mcsim::shown_text(s, false); }
 
 int parse_int(const std::string& opt, const char* s, int lo, int hi) {
     char* end = nullptr;
