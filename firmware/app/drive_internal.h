@@ -1,12 +1,15 @@
-/* Private interface between the drive's files (drive.c: ISR pipeline; drive_config.c: the
- * configuration; startup.c: sequencing, protection, offset calibration and the initial-position
- * steps). Not part of the public API. */
+/* Private interface between the drive's files (drive.c: API and ISR pipeline; drive_config.c: the
+ * configuration, background side; drive_blocks.c: applying it to the blocks; startup.c:
+ * sequencing, protection, offset calibration and the initial-position steps). Calls go
+ * drive.c -> startup.c -> drive_blocks.c, never back. Not part of the public API. */
 #ifndef MC_DRIVE_INTERNAL_H
 #define MC_DRIVE_INTERNAL_H
 #include "mc/drive.h"
 
 /* Every block configured from a built configuration (copies only). */
 void mc_drive_apply(mc_drive_t *d, const mc_drive_built_t *b);
+/* A new configuration while running: gains and limits, no state reset. */
+void mc_drive_retune(mc_drive_t *d, const mc_drive_built_t *b);
 /* The blocks' running state back to their start, from the configurations they hold. */
 void mc_drive_init_blocks(mc_drive_t *d);
 /* Rising enable edge: every block and history reset, offsets to be measured again. */

@@ -120,7 +120,12 @@ int cmd_bench(int argc, char** argv)
         } else if (a == "--repeat" && k + 1 < argc) {
             repeat = std::atoi(argv[++k]);
         } else if (a == "--integrator" && k + 1 < argc) {
-            integrator = argv[++k];  // validated with the scenario's other keys
+            integrator = argv[++k];
+            if (integrator != "taylor" && integrator != "hermite" && integrator != "rk4") {
+                std::fprintf(stderr, "mcsim bench: --integrator '%s': expected taylor, hermite or rk4 (ripple was removed)\n%s",
+                             mcsim::message_text(integrator).c_str(), kUsage);
+                return 2;
+            }
         } else {
             std::fprintf(stderr, "mcsim bench: unexpected argument '%s'\n%s", a.c_str(), kUsage);
             return 2;

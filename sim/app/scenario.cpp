@@ -305,7 +305,21 @@ static void store(const std::string& origin, const KeySpec& s, const toml::node&
     case KeyType::Enum: {
         auto v = n.as_string();
         if (!v) fail(origin, key, shown, std::string("wrong type: expected a string; ") + range_text(s));
-        const std::string val = v->get();
+        std::string val = v->get();
+        // Choices that were removed: a scenario written for them keeps running, with one line.
+        struct Deprecated {
+            const char *key, *old_choice, *now, *why;
+        };
+        static const Deprecated kDeprecated[] = {
+            {"inverter.integrator", "ripple", "taylor", "the ripple-moment integrator was removed, superseded by taylor"},
+        };
+        for (const Deprecated& d : kDeprecated) {
+            if (key == d.key && val == d.old_choice) {
+                std::fprintf(stderr, "mcsim: %s: key '%s' = \"%s\" is deprecated (%s): using \"%s\"\n",
+                             message_text(origin).c_str(), key.c_str(), d.old_choice, d.why, d.now);
+                val = d.now;
+            }
+        }
         const std::string choices = std::string("|") + s.choices + "|";
         if (val.empty() || choices.find("|" + val + "|") == std::string::npos)
             fail(origin, key, shown, "not a valid choice; " + range_text(s));

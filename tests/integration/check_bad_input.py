@@ -37,7 +37,7 @@ def cases(tmp):
         (["check", "/dev/zero"], ("/dev/zero", "not a regular file")),
         (["check", tmp], "is a directory"),
         (["check", GOOD, "--set", "x" * 100_000 + ".y=1"], "unknown key"),
-        (["run", GOOD, "--set", "inverter.integrator=\"ripple\""], ("inverter.integrator", "taylor|hermite|rk4")),
+        (["run", GOOD, "--set", "inverter.integrator=\"rippel\""], ("inverter.integrator", "taylor|hermite|rk4")),
         (["run", bad("unknown_key.toml")], "control.speed_ref_rmp"),
         (["run", bad("unknown_section.toml")], "controller"),
         (["run", bad("wrong_type.toml")], "scenario.duration_s"),
@@ -73,6 +73,11 @@ def main():
             why += f" ({len(r.stderr)} bytes of stderr)" if len(r.stderr) > MAX_STDERR else ""
             print(f"{'ok  ' if ok else 'FAIL'}: {shown} -> exit {r.returncode}{why}: {err.strip()[:400]}")
             failed += 0 if ok else 1
+    # a removed choice keeps a scenario running, with one deprecation line
+    r = subprocess.run([mcsim, "check", GOOD, "--set", "inverter.integrator=\"ripple\""], capture_output=True, text=True)
+    ok = r.returncode == 0 and "deprecated" in r.stderr and r.stderr.count("\n") == 1 and "taylor" in r.stderr
+    print(f"{'ok  ' if ok else 'FAIL'}: integrator \"ripple\" -> exit {r.returncode} {r.stderr.strip()}")
+    failed += 0 if ok else 1
     # and the good file with a valid --set passes validation
     r = subprocess.run([mcsim, "check", GOOD, "--set", "control.current_bw_hz=400"], capture_output=True, text=True)
     ok = r.returncode == 0
