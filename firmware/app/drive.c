@@ -277,11 +277,10 @@ void mc_drive_isr(mc_drive_t *d)
 
 void mc_drive_background(mc_drive_t *d)
 {
-    /* Slow work lives here, never in the ISR. For now: keep the telemetry's state in step with
-     * the sequencer, so a reader never sees a stale state. */
-    d->tm.state = d->seq.state;
-    d->tm.init_step = d->seq.step;
-    d->tm.faults = d->seq.faults;
+    /* Slow work lives here, never in the ISR: parameter changes arrive through
+     * mc_drive_param_write, the CANopen stack and the parameter store will run here. It never
+     * writes the ISR's state: the telemetry has one writer, the ISR. */
+    (void)d;
 }
 
 mc_state_t mc_drive_state(const mc_drive_t *d)
