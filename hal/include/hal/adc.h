@@ -3,6 +3,7 @@
  * offset calibration live in the firmware (mc drive), not in the port. */
 #ifndef HAL_ADC_H
 #define HAL_ADC_H
+#include <stdbool.h>
 #include <stdint.h>
 
 typedef struct hal_adc hal_adc_t;
@@ -10,6 +11,8 @@ typedef struct hal_adc hal_adc_t;
 typedef struct {
     uint16_t i[3];   /* phase a, b, c current channels [counts] */
     uint16_t vdc;    /* DC-link voltage channel [counts]        */
+    bool overrun;    /* the conversion-complete event fired again before the ISR acknowledged
+                        the last one: the previous ISR overran its period (set by the port) */
 } hal_adc_sample_t;
 
 /* Latest conversion of the current PWM period. */
