@@ -228,6 +228,18 @@ void mc_drive_isr(mc_drive_t *d)
     d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
     u_dq.d += d->tm.u_inj;
 
+    /* 7b. Plausibility: over-speed, loss of lock, current tracking, stall (protect.c); a fault
+     *     turns the outputs off before this period's duties are written. */
+    const uint32_t implausible = mc_protect_running(d, &ang, d->tm.omega_raw, i_ref, i_fb);
+    if (implausible != 0u) {
+        mc_drive_trip(d, implausible);
+        d->tm.state = d->seq.state;
+        d->tm.faults = d->seq.faults;
+        d->i_ab_prev = i_ab;
+        mc_drive_telbuf_write(&d->link->telem, &d->tm);
+        return;
+    }
+
     /* 8. Inverse Park at the middle of the period the voltage will act in, (k+1, k+2): the
      *    one-period update delay plus the half period of the average (sc_u, taken in step 5). */
     const mc_ab_t u_ab = mc_park_inv(u_dq, sc_u);

@@ -136,6 +136,27 @@ static void build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive
     b->notch_q = p->notch_q;
 }
 
+static uint32_t periods_of(float seconds, float ts)
+{
+    return seconds > 0.0f ? (uint32_t)(seconds / ts + 0.5f) : 0u;   /* bounded by the table */
+}
+
+static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
+{
+    const float el = RPM_TO_RAD_S * (float)p->pole_pairs;
+    b->overspeed = p->overspeed_rpm * el;
+    b->i_sum_tol = p->i_sum_tol;
+    b->i_sum_n = periods_of(p->i_sum_time, p->ts);
+    b->track_err = p->track_err;
+    b->track_n = periods_of(p->track_time, p->ts);
+    b->lock_tol = p->lock_tol;
+    b->lock_floor = p->lock_floor_rpm * el;
+    b->lock_n = b->inject ? periods_of(p->lock_time, p->ts) : 0u;   /* estimators only */
+    b->stall_speed = p->stall_rpm * el;
+    b->stall_torque = 0.9f * p->torque_max;
+    b->stall_n = periods_of(p->stall_time, p->ts);
+}
+
 bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err)
 {
     out->p = cfg->p;
@@ -169,6 +190,7 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     b->cal_samples = (uint32_t)p->offset_cal_samples;
     build_startup(p, &m, b);
     build_source(p, &m, b);
+    build_protection(p, b);
 
     mc_cc_cfg_from_bandwidth(&out->cc, p->cc_bw_hz, p->rs, p->ld, p->lq, p->psi_pm, p->ts);
     out->cc.decouple = p->cc_decouple != 0;

@@ -265,6 +265,28 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         }
         return bw;
     }
+    case MC_RULE_OVERSPEED: {
+        /* the highest speed the drive can reach: the voltage circle Vdc/sqrt3 over the flux left
+         * with the whole current limit in -d (psi_pm - Ld i_max); a machine whose characteristic
+         * current is inside the limit has none, then 3x the base speed psi_pm-limited. 20 % above */
+        const float u = p->vdc_nominal * 0.57735027f;
+        const float psi_left = p->psi_pm - p->ld * p->i_max;
+        const float psi = maxf(psi_left, p->psi_pm / 3.0f);
+        const float w_el = u / maxf(psi, 1e-6f);
+        return nice2(1.2f * w_el * 60.0f / (pi2 * (float)p->pole_pairs));
+    }
+    case MC_RULE_I_SUM: {
+        /* three measured channels of an isolated star sum to zero; noise and quantisation of
+         * three channels are a few counts, a stuck or drifted channel much more */
+        const float lsb = 2.0f * p->i_span / (float)((1L << p->adc_bits) - 1L);
+        return nice2(maxf(0.05f * p->i_rated, 8.0f * lsb));
+    }
+    case MC_RULE_TRACK:
+        return nice2(0.25f * p->i_rated);
+    case MC_RULE_LOCK_FLOOR:
+        return nice2(0.25f * p->n1_rpm);
+    case MC_RULE_STALL:
+        return nice2(0.05f * p->n1_rpm);
     case MC_RULE_SC_DEC:
         /* the speed loop at 1 kHz whatever f_s: at 2 kHz a decimation of 10 left it 200 Hz and a
          * 5 Hz bandwidth, too slow to hold an active load at standstill */

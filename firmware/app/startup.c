@@ -30,6 +30,7 @@ static void pipeline_reset(mc_drive_t *d, float theta)
     mc_biquad_reset(&d->notch_q, 0.0f);
     mc_lpf1_init(&d->step3_speed, 50.0f, d->blk.ts, 0.0f);
     d->step3_count = 0u;
+    mc_protect_reset(d);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
 }
 
@@ -70,12 +71,15 @@ static void protect(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i, floa
         rail = rail || raw->i[k] == 0u || (int32_t)raw->i[k] >= c->adc_max;
     }
     const bool over = rail || fabsf(i.a) > c->i_trip || fabsf(i.b) > c->i_trip || fabsf(i.c) > c->i_trip;
+    const uint32_t sensors = mc_protect_sensors(d, raw, i);
     if (over) {
         mc_drive_trip(d, MC_FAULT_OVERCURRENT);
     } else if (vdc > c->vdc_max) {
         mc_drive_trip(d, MC_FAULT_OVERVOLTAGE);
     } else if (vdc < c->vdc_min) {
         mc_drive_trip(d, MC_FAULT_UNDERVOLTAGE);
+    } else if (sensors != 0u) {
+        mc_drive_trip(d, sensors);
     }
 }
 

@@ -58,6 +58,12 @@ std::vector<std::string> fault_names(uint32_t f)
     if (f & MC_FAULT_INIT_POS) out.push_back("init_pos");
     if (f & MC_FAULT_TIMEOUT) out.push_back("timeout");
     if (f & MC_FAULT_NUMERIC) out.push_back("numeric");
+    if (f & MC_FAULT_OVERSPEED) out.push_back("overspeed");
+    if (f & MC_FAULT_CURRENT_SENSOR) out.push_back("current_sensor");
+    if (f & MC_FAULT_TRACKING) out.push_back("tracking");
+    if (f & MC_FAULT_LOSS_OF_LOCK) out.push_back("loss_of_lock");
+    if (f & MC_FAULT_STALL) out.push_back("stall");
+    if (f & MC_FAULT_OVERRUN) out.push_back("isr_overrun");
     return out;
 }
 

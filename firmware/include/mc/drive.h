@@ -106,6 +106,10 @@ typedef struct {
     uint32_t step3_hold;         /* [periods]                                                */
     bool  inject, three_step, ip1_pulse3, ip2_dvi;
     float f_notch, notch_q;
+    /* protection (protect.c): limits in SI, persistence in periods (0: detector off) */
+    float overspeed;             /* [rad/s el]                                               */
+    float i_sum_tol, track_err, lock_tol, lock_floor, stall_speed, stall_torque;
+    uint32_t i_sum_n, track_n, lock_n, stall_n;
     mc_seq_cfg_t seq;
     mc_angle_src_cfg_t src;
     mc_inj_cfg_t inj;
@@ -160,6 +164,10 @@ typedef struct {
     mc_biquad_t notch_d, notch_q;
     mc_phase_t phase;            /* the running phase program (Step I, II) and its workspace */
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
+    struct {                     /* the plausibility detectors' state (protect.c)            */
+        uint32_t i_sum_n, track_n, lock_n, stall_n;   /* periods the condition has held      */
+        mc_lpf1_t raw_speed, err_d, err_q;
+    } prot;
     uint32_t step3_count;
     mc_cc_t cc;
     mc_sc_t sc;

@@ -98,7 +98,19 @@ X(dvi_n,          "startup.dvi_n",         I32, "periods", 1,     16,     6,    
 X(step3_tol_rpm,  "startup.step3_speed_tol_rpm", F32, "rpm", 0.01f, 1000, 5,        STEP3_TOL, STARTUP, STANDSTILL, "", "Step III converged when the filtered speed estimate stays below this ... (default: the larger of 0.42 Hz electrical (the thesis motor's 5 rpm) and 5 x the estimator's expected speed noise).") \
 X(step3_hold,     "startup.step3_hold_s",  F32, "s",       1e-4f, 1,      0.005f,   NONE,    STARTUP, STANDSTILL, "", "... for this long (1.5 time constants of its 50 Hz low-pass).") \
 X(timeout_step12, "startup.timeout_step12_s", F32, "s",    1e-3f, 10,     0.02f,    T_STEP12, STARTUP, STANDSTILL, "", "Step I + II must finish within this, else FAULT (default: the larger of 20 ms and 200 periods).") \
-X(timeout_step3,  "startup.timeout_step3_s", F32, "s",     1e-3f, 60,     0.5f,     NONE,    STARTUP, STANDSTILL, "", "Step III must converge within this, else FAULT.")
+X(timeout_step3,  "startup.timeout_step3_s", F32, "s",     1e-3f, 60,     0.5f,     NONE,    STARTUP, STANDSTILL, "", "Step III must converge within this, else FAULT.") \
+/* ---- protection: plausibility and loss-of-lock detectors (firmware/app/protect.c); a time of 0 \
+ *      switches a detector off ---- */ \
+X(overspeed_rpm,  "protection.overspeed_rpm", F32, "rpm",  1,     1e5f,   1900,     OVERSPEED, PROTECTION, RUNTIME, "", "Over-speed trip on the filtered speed estimate (default: 1.2 x the highest speed the current limit can field-weaken to at the nominal DC link, (Vdc/sqrt3) / (psi_pm - Ld i_max)).") \
+X(i_sum_tol,      "protection.i_sum_tol_a", F32, "A",      1e-3f, 10000,  0.66f,    I_SUM,   PROTECTION, STANDSTILL, "", "Current-sensor plausibility: |i_a + i_b + i_c| above this (default: the larger of 5 % of rated and 8 ADC counts) ...") \
+X(i_sum_time,     "protection.i_sum_time_s", F32, "s",     0,     1,      0.002f,   NONE,    PROTECTION, STANDSTILL, "", "... for this long: current-sensor fault (a stuck channel, an offset drifted beyond calibration).") \
+X(track_err,      "protection.tracking_err_a", F32, "A",   1e-3f, 10000,  3.3f,     TRACK,   PROTECTION, STANDSTILL, "", "Current-tracking plausibility: |i_ref - i_dq| (feedback, low-passed) above this while the voltage is not limited (default: 25 % of rated) ...") \
+X(track_time,     "protection.tracking_time_s", F32, "s",  0,     1,      0.02f,    NONE,    PROTECTION, STANDSTILL, "", "... for this long: tracking fault (an open phase, a wrong angle, a lost encoder).") \
+X(lock_tol,       "protection.lock_speed_tol", F32, "1",   0.05f, 10,     0.5f,     NONE,    PROTECTION, STANDSTILL, "", "Loss of lock: the estimator's raw speed (low-passed) differs from the filtered speed by more than this share of it ...") \
+X(lock_floor_rpm, "protection.lock_speed_floor_rpm", F32, "rpm", 0.1f, 1e4f, 100, LOCK_FLOOR, PROTECTION, STANDSTILL, "", "... plus this (default: a quarter of injection.n1_rpm: below it the raw speed is mostly noise) ...") \
+X(lock_time,      "protection.lock_time_s", F32, "s",      0,     1,      0.02f,    NONE,    PROTECTION, STANDSTILL, "", "... for this long: loss-of-lock fault (sensorless only).") \
+X(stall_rpm,      "protection.stall_speed_rpm", F32, "rpm", 0.1f, 1e4f,   20,       STALL,   PROTECTION, STANDSTILL, "", "Stall (speed mode): |speed estimate| below this (default: 5 % of injection.n1_rpm) while the speed reference is above it and the speed loop asks for at least 90 % of its torque limit ...") \
+X(stall_time,     "protection.stall_time_s", F32, "s",     0,     10,     0.3f,     NONE,    PROTECTION, STANDSTILL, "", "... for this long: stall fault.")
 /* clang-format on */
 
 #endif

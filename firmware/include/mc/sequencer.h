@@ -24,6 +24,12 @@ typedef enum { MC_INIT_NONE = 0, MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3 } m
 #define MC_FAULT_INIT_POS      (1u << 5)   /* an initial-position step failed               */
 #define MC_FAULT_TIMEOUT       (1u << 6)   /* a state waited longer than its timeout        */
 #define MC_FAULT_NUMERIC       (1u << 7)   /* a non-finite value reached the modulator      */
+#define MC_FAULT_OVERSPEED     (1u << 8)   /* filtered speed estimate above the limit       */
+#define MC_FAULT_CURRENT_SENSOR (1u << 9)  /* the three phase currents do not sum to zero   */
+#define MC_FAULT_TRACKING      (1u << 10)  /* the current does not follow its reference     */
+#define MC_FAULT_LOSS_OF_LOCK  (1u << 11)  /* estimator raw speed and filtered speed disagree */
+#define MC_FAULT_STALL         (1u << 12)  /* no speed at the torque limit                  */
+#define MC_FAULT_OVERRUN       (1u << 13)  /* the ISR overran its period (port flag)        */
 
 typedef struct {
     float ts;               /* [s] */

@@ -636,6 +636,120 @@ static void test_param_write_rule_follows(void **st)
     assert_float_equal(r.d.p.i_max, 10.0f, 1e-6f);
 }
 
+
+/* ------------------------------------------------------------------- plausibility detectors */
+
+/* Periods until the drive leaves RUN (n at most); -1 if it does not. */
+static int periods_to_fault(rig_t *r, int n, bool plant)
+{
+    for (int k = 1; k <= n; ++k) {
+        if (plant) {
+            run_plant(r, 1);
+        } else {
+            run(r, 1);
+            assert_duties_sane(r);
+        }
+        if (mc_drive_state(&r->d) != MC_STATE_RUN) {
+            return k;
+        }
+    }
+    return -1;
+}
+
+static void assert_fault(const rig_t *r, uint32_t reason)
+{
+    assert_int_equal(mc_drive_state(&r->d), MC_STATE_FAULT);
+    assert_int_equal(mc_drive_faults(&r->d), reason);
+    assert_false(hal_pwm_enabled(&r->pwm));
+}
+
+/* The port's overrun flag trips in the period it is seen. */
+static void test_protect_overrun(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    r.adc.sample.overrun = true;
+    assert_int_equal(periods_to_fault(&r, 5, false), 1);
+    assert_fault(&r, MC_FAULT_OVERRUN);
+}
+
+/* A channel whose reading drifts away (the three no longer sum to zero) trips after exactly the
+ * persistence (protection.i_sum_time_s), and not before. */
+static void test_protect_current_sum(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    const int n = (int)lrintf(r.d.p.i_sum_time / r.d.p.ts);
+    /* just inside the tolerance: never */
+    r.adc.sample.i[2] = (uint16_t)(r.adc.sample.i[2] + (uint16_t)(0.8f * r.d.p.i_sum_tol / r.d.blk.amps_per_count));
+    assert_int_equal(periods_to_fault(&r, 10 * n, false), -1);
+    /* beyond it */
+    r.adc.sample.i[2] = counts(&r.d, 1.5f * r.d.p.i_sum_tol);
+    assert_int_equal(periods_to_fault(&r, 10 * n, false), n);
+    assert_fault(&r, MC_FAULT_CURRENT_SENSOR);
+}
+
+/* No current flows (an open circuit) while 5 A are asked for: the tracking detector trips after
+ * its low-pass (20 Hz) reaches the threshold plus the persistence. */
+static void test_protect_tracking(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 5.0f);
+    /* the error low-passed at 20 Hz crosses 3.3 A of 5 A after ~8.6 ms, then 20 ms persistence */
+    const int k = periods_to_fault(&r, 1000, false);
+    print_message("tracking fault after %d periods (%.1f ms)\n", k, (double)k * 0.1);
+    assert_true(k >= 250 && k <= 320);
+    assert_fault(&r, MC_FAULT_TRACKING);
+}
+
+/* Speed mode with the rotor held (the encoder does not move): the speed loop saturates at its
+ * torque limit, the current follows, the speed stays zero: stall after protection.stall_time_s. */
+static void test_protect_stall(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_running(&r);
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_SPEED, .speed_ref = 100.0f * MC_2PI / 60.0f};
+    mc_drive_command(&r.d, &c);
+    const int k = periods_to_fault(&r, 10000, true);
+    print_message("stall fault after %d periods (%.1f ms)\n", k, (double)k * 0.1);
+    assert_fault(&r, MC_FAULT_STALL);
+    const int n = (int)lrintf(r.d.p.stall_time / r.d.p.ts);
+    assert_true(k >= n && k <= n + 300);   /* + the speed PI winding up to its limit */
+}
+
+/* The encoder reports 2500 rpm (the limit derived for the thesis motor: 2000 rpm): over-speed as
+ * soon as the encoder's speed filter passes the limit. */
+static void test_protect_overspeed(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    assert_float_equal(r.d.p.overspeed_rpm, 2000.0f, 0.0f);
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    const uint32_t step = 80000u * 2500u / 60u / 10000u;   /* counts per period at 2500 rpm */
+    int k = 1;
+    for (; k <= 1000 && mc_drive_state(&r.d) == MC_STATE_RUN; ++k) {
+        r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+        run(&r, 1);
+    }
+    print_message("over-speed fault after %d periods (%.1f ms)\n", k - 1, (double)(k - 1) * 0.1);
+    assert_fault(&r, MC_FAULT_OVERSPEED);
+    assert_true(k - 1 <= 100);   /* the encoder PLL (150 Hz) settles within 10 ms */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -658,6 +772,11 @@ int main(void)
         cmocka_unit_test(test_param_write_init_refused),
         cmocka_unit_test(test_param_write_standstill_idle),
         cmocka_unit_test(test_param_write_rule_follows),
+        cmocka_unit_test(test_protect_overrun),
+        cmocka_unit_test(test_protect_current_sum),
+        cmocka_unit_test(test_protect_tracking),
+        cmocka_unit_test(test_protect_stall),
+        cmocka_unit_test(test_protect_overspeed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

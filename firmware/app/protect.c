@@ -1,0 +1,68 @@
+/* Plausibility and loss-of-lock detectors, cheap enough for the ISR (a few compares and three
+ * first-order low-passes). Each turns a condition that persists for its time (in periods, from
+ * the parameter table; 0: off) into a fault with its reason; the drive's trip then turns the
+ * outputs off in the same period. Detection time = persistence + the filters' settling. */
+#include <math.h>
+#include "drive_internal.h"
+
+/* A condition held for n periods in a row (n = 0: never). */
+static bool persists(uint32_t *count, bool cond, uint32_t n)
+{
+    *count = cond ? *count + 1u : 0u;
+    return n > 0u && *count >= n;
+}
+
+void mc_protect_reset(mc_drive_t *d)
+{
+    const float ts = d->blk.ts;
+    d->prot.i_sum_n = d->prot.track_n = d->prot.lock_n = d->prot.stall_n = 0u;
+    /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistence */
+    mc_lpf1_init(&d->prot.raw_speed, 20.0f, ts, 0.0f);
+    mc_lpf1_init(&d->prot.err_d, 20.0f, ts, 0.0f);
+    mc_lpf1_init(&d->prot.err_q, 20.0f, ts, 0.0f);
+}
+
+uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i)
+{
+    const mc_drive_blk_t *b = &d->blk;
+    if (raw->overrun) {
+        return MC_FAULT_OVERRUN;   /* the samples of this period are not the ones of its start */
+    }
+    /* an isolated star: the three measured currents sum to zero up to noise; a stuck channel,
+     * an offset drifted after calibration or a lost channel does not */
+    const float sum = i.a + i.b + i.c;
+    if (persists(&d->prot.i_sum_n, !(fabsf(sum) <= b->i_sum_tol), b->i_sum_n)) {
+        return MC_FAULT_CURRENT_SENSOR;
+    }
+    return 0u;
+}
+
+uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb)
+{
+    const mc_drive_blk_t *b = &d->blk;
+    if (!(fabsf(ang->omega) <= b->overspeed)) {
+        return MC_FAULT_OVERSPEED;   /* also a NaN speed */
+    }
+    /* (a) the estimator's raw speed against the filtered one: a lock on the wrong solution shows
+     * as a raw speed of the wrong sign or size while the PLL keeps its speed (thesis Fig. 6.9) */
+    const float w_raw = mc_lpf1_step(&d->prot.raw_speed, omega_raw);
+    const float lock_band = b->lock_tol * fabsf(ang->omega) + b->lock_floor;
+    if (persists(&d->prot.lock_n, !(fabsf(w_raw - ang->omega) <= lock_band), b->lock_n)) {
+        return MC_FAULT_LOSS_OF_LOCK;
+    }
+    /* (c) the current does not follow its reference (an open phase, a wrong angle, a lost
+     * encoder): the low-passed error, whatever the voltage limit does */
+    const float ed = mc_lpf1_step(&d->prot.err_d, i_ref.d - i_fb.d);
+    const float eq = mc_lpf1_step(&d->prot.err_q, i_ref.q - i_fb.q);
+    if (persists(&d->prot.track_n, !(ed * ed + eq * eq <= b->track_err * b->track_err), b->track_n)) {
+        return MC_FAULT_TRACKING;
+    }
+    /* (d) speed mode: the speed loop asks for (nearly) all its torque and the rotor does not turn */
+    const bool stall = d->cmd.mode == MC_MODE_SPEED &&
+                       fabsf(d->cmd.speed_ref) * (float)b->pole_pairs > b->stall_speed &&
+                       fabsf(ang->omega) < b->stall_speed && fabsf(d->tm.torque_ref) >= b->stall_torque;
+    if (persists(&d->prot.stall_n, stall, b->stall_n)) {
+        return MC_FAULT_STALL;
+    }
+    return 0u;
+}
