@@ -111,6 +111,9 @@ void Metrics::add_startup(const Sample& s)
         th0_ = s.theta_e_unwrapped;
     }
     if (!std::isfinite(t_enable_)) return;
+    constexpr int kFault = 3;
+    if (s.state == kFault && !std::isfinite(t_fault_)) t_fault_ = s.t;
+    if (s.state == kRun && !std::isfinite(t_first_run_)) t_first_run_ = s.t;
     // the rotor must not turn against the intended direction (electrical degrees)
     reverse_max_ = std::max(reverse_max_, -s.direction * (s.theta_e_unwrapped - th0_) * 180.0 / kPiM);
     if (s.state == kInit && !was_init_) t_init_ = s.t;
@@ -217,6 +220,10 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
     os << "  \"newton_iter_max\": " << json_number(iter_max_ >= 0 ? iter_max_ : NAN) << ",\n";
     for (const auto& [k, v] : extra) os << "  " << json_string(k) << ": " << v << ",\n";
     os << "  \"final_state\": " << json_string(final_state) << ",\n";
+    // when the drive first went to FAULT, and how long after it first ran (the detection time
+    // of a fault that appears at the start of RUN)
+    os << "  \"fault_time_s\": " << json_number(t_fault_) << ",\n";
+    os << "  \"fault_after_run_s\": " << json_number(t_fault_ - t_first_run_) << ",\n";
     os << "  \"faults\": [";
     for (size_t k = 0; k < faults.size(); ++k) os << (k ? ", " : "") << json_string(faults[k]);
     os << "],\n";

@@ -54,6 +54,8 @@ private:
     double e0_ = NAN, t90_ = NAN, t10_ = NAN;   // rise time of the settle signal's error
     // startup
     double t_enable_ = NAN, t_init_ = NAN, t_step3_ = NAN, t_run_ = NAN, t_last_bad_ = NAN;
+    double t_fault_ = NAN;   // first period in FAULT
+    double t_first_run_ = NAN;   // first period in RUN
     double step12_err_ = NAN, step1_err_ = NAN, init_err_ = NAN;
     double post_sum_ = 0, post_n_ = 0;   // mean error over the 20 ms after the hand-over
     double th0_ = NAN, reverse_max_ = 0;

@@ -21,6 +21,9 @@ OPS = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge,
 def lookup(metrics, path):
     node = metrics
     for part in path.split("."):
+        if isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            node = node[int(part)]   # faults.0: the first fault reason
+            continue
         if not isinstance(node, dict) or part not in node:
             raise KeyError(path)
         node = node[part]
