@@ -82,6 +82,16 @@ std::unique_ptr<FluxModel> make_plant_model(const Scenario& sc, const MachinePar
 struct Resolved {
     MachineParams mp;
     double vdc, ts, inertia, friction, i_span, vdc_span;
+    Profile vdc_profile;               // inverter.vdc_v (constant: the preset's nominal)
+    double vdc_ripple, vdc_ripple_hz;  // inverter.vdc_ripple_v (harsh: derived), _hz
+    // the DC link at time t: the profile plus the ripple, >= 0
+    double vdc_at(double t) const
+    {
+        double v = vdc_profile.at(t);
+        if (vdc_ripple != 0.0) v += vdc_ripple * std::sin(2.0 * kPi * vdc_ripple_hz * t);
+        return v > 0.0 ? v : 0.0;
+    }
+    bool vdc_varies() const { return !vdc_profile.constant() || vdc_ripple != 0.0; }
 };
 
 Resolved resolve(const Scenario& sc)
@@ -93,7 +103,15 @@ Resolved resolve(const Scenario& sc)
         throw ScenarioError(sc.origin() + ": key 'machine.preset' = \"" + message_text(sc.s("machine.preset")) + "\": " + message_text(e.what(), 400, false));
     }
     auto opt = [&](const char* k, double def) { return sc.has(k) ? sc.f(k) : def; };
-    r.vdc = opt("inverter.vdc_v", r.mp.vdc_nominal);
+    // the DC link: a profile; the firmware's nominal (and the sensor span's default) is its t = 0 value
+    if (sc.has("inverter.vdc_v")) r.vdc_profile = sc.profile("inverter.vdc_v");
+    else r.vdc_profile.pts.push_back({0.0, r.mp.vdc_nominal});
+    r.vdc = r.vdc_profile.at(0.0);
+    if (!(r.vdc >= 1.0))
+        throw ScenarioError(sc.origin() + ": key 'inverter.vdc_v' = " + json_number(r.vdc) +
+                            " at t = 0: the DC link must start at 1 V or more (the firmware's nominal DC link is that value)");
+    r.vdc_ripple = opt("inverter.vdc_ripple_v", 0.02 * r.vdc);  // not given: harsh (2 % of nominal)
+    r.vdc_ripple_hz = sc.f("inverter.vdc_ripple_hz");
     // the preset's sampling frequency (the drive gets the same value through control.ts_s)
     r.ts = opt("control.ts_s", 1.0 / r.mp.f_sample);
     r.inertia = opt("mechanics.inertia_kgm2", r.mp.inertia);
@@ -157,6 +175,7 @@ PlantConfig plant_config(const Scenario& sc, const Resolved& r)
     pc.machine = mp;
     pc.inverter.mode = sc.s("inverter.mode") == "averaged" ? InverterConfig::Mode::Averaged : InverterConfig::Mode::Switching;
     pc.inverter.vdc = r.vdc;
+    if (r.vdc_varies()) pc.vdc_profile = [r](double t) { return r.vdc_at(t); };
     pc.inverter.t_dead = sc.f("inverter.dead_time_s");
     pc.inverter.v_device = sc.f("inverter.device_drop_v");
     const std::string& mech = sc.s("mechanics.mode");
@@ -192,10 +211,21 @@ Sensors make_sensors(const Scenario& sc, const Resolved& r)
     }
     ac.vdc_full_scale = r.vdc_span;
     ac.vdc_noise_rel = sc.f("sensors.vdc_noise_rel");
+    ac.delay_s = sc.f("sensors.adc_delay_s");
     EncoderConfig ec;
     ec.lines = static_cast<int>(sc.i("sensors.encoder_lines"));
     ec.offset_rad = sc.f("sensors.encoder_offset_deg") * kPi / 180.0;
-    return Sensors(ac, ec, static_cast<uint64_t>(sc.i("scenario.seed")));
+    Sensors sensors(ac, ec, static_cast<uint64_t>(sc.i("scenario.seed")));
+    SensorFaults sf;
+    sf.i_stuck_phase = static_cast<int>(sc.i("faults.i_stuck_phase"));
+    sf.i_stuck_from_s = sc.f("faults.i_stuck_from_s");
+    sf.i_stuck_a = sc.f("faults.i_stuck_a");
+    const auto drift = sc.f3("faults.i_offset_drift_a_per_s");
+    for (int k = 0; k < 3; ++k) sf.i_offset_drift_a_per_s[k] = drift[k];
+    sf.i_offset_drift_from_s = sc.f("faults.i_offset_drift_from_s");
+    sf.encoder_loss_from_s = sc.f("faults.encoder_loss_from_s");
+    sensors.set_faults(sf);
+    return sensors;
 }
 
 // The drive's configuration: the firmware's parameter table, filled from the preset, the
@@ -355,6 +385,12 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     const bool is_dyno = mech == "dyno", is_inertia = mech == "inertia", is_locked = mech == "locked";
     const Profile load = sc.profile("mechanics.load_torque_nm");
     const Profile dyno = sc.profile("mechanics.dyno_speed_rpm");
+    // plant-side and timing faults (the sensor faults live in `sensors`)
+    const int open_phase = static_cast<int>(sc.i("faults.open_phase"));
+    const double open_from = sc.f("faults.open_phase_from_s");
+    const double overrun_from = sc.f("faults.isr_overrun_from_s");
+    const long overrun_every = sc.i("faults.isr_overrun_every");
+    const long overrun_k0 = overrun_from >= 0.0 ? static_cast<long>(std::ceil(overrun_from / r.ts - 1e-9)) : -1;
 
     double isr_ns = 0, plant_ns = 0;
     long timed = 0;
@@ -363,9 +399,12 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         const double t = k * r.ts;
         // Period boundary: the duties of the last ISR take effect; the ADC and QEP sample.
         hal_host_pwm_latch(&pwm);
-        const AdcSample as = sensors.sample_adc(plant);
+        const AdcSample as = sensors.sample_adc(plant, r.vdc_at(t), r.ts, {pwm.active[0], pwm.active[1], pwm.active[2]},
+                                                pwm.enabled);
         for (int j = 0; j < 3; ++j) adc.sample.i[j] = as.i[j];
         adc.sample.vdc = as.vdc;
+        adc.sample.overrun = overrun_k0 >= 0 && k >= overrun_k0 &&
+                             (k == overrun_k0 || (overrun_every > 0 && (k - overrun_k0) % overrun_every == 0));
         const QepSample qs = sensors.sample_qep(plant);
         qep.sample.count = qs.count;
         qep.sample.index_seen = qs.index_seen;
@@ -413,6 +452,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         metrics.add(smp);
         if (trace.wants(k)) trace.row(t, plant, tm, smp, is_inertia ? load.at(t) : NAN, p, estimator);
 
+        // An open-phase fault takes effect here (the sample at t still saw the current).
+        if (open_phase >= 0 && plant.open_phase() < 0 && t >= open_from) plant.set_open_phase(open_phase);
         // The inverter applies the latched duties over (t, t + Ts).
         std::chrono::steady_clock::time_point p0;
         if (time_it) p0 = std::chrono::steady_clock::now();

@@ -26,8 +26,8 @@ const std::vector<KeySpec>& scenario_schema()
     {"scenario.description", KeyType::String, "\"\"", nullptr, 0, 0, "", "", "What the scenario reproduces."},
     {"scenario.duration_s", KeyType::Float, "1.0", nullptr, 1e-3, 600, "s", "", "Simulated time."},
     {"scenario.seed", KeyType::Int, "1", nullptr, 0, 2147483647, "", "", "Seed of the sensor noise."},
-    {"scenario.profile", KeyType::Enum, "\"realistic\"", nullptr, 0, 0, "", "realistic|ideal",
-     "Realism profile: sets the defaults of the inverter and sensor keys (see the table's ideal column)."},
+    {"scenario.profile", KeyType::Enum, "\"realistic\"", nullptr, 0, 0, "", "realistic|ideal|harsh",
+     "Realism profile: sets the defaults of the inverter and sensor keys (the table's profile column): ideal for debugging, harsh for robustness (long dead time, device drop, gain errors, more noise, ADC delay, DC-link ripple)."},
 
     {"machine.preset", KeyType::String, "\"sun2016-ipm-5kw\"", nullptr, 0, 0, "", "", "Preset name (presets/NAME.toml) or path."},
     {"machine.model", KeyType::Enum, "\"analytic\"", nullptr, 0, 0, "", "analytic|linear|table",
@@ -35,19 +35,22 @@ const std::vector<KeySpec>& scenario_schema()
     {"machine.table_points", KeyType::Int, "41", nullptr, 5, 401, "", "", "Grid points per axis of the table model."},
 
     {"inverter.mode", KeyType::Enum, "\"switching\"", "\"averaged\"", 0, 0, "", "switching|averaged", "Switching instants with dead time, or period averages."},
-    {"inverter.vdc_v", KeyType::Float, "", nullptr, 1, 2000, "V", "", "DC-link voltage (default: the preset's nominal)."},
-    {"inverter.dead_time_s", KeyType::Float, "0.5e-6", "0.0", 0, 10e-6, "s", "", "Dead time per commutation."},
-    {"inverter.device_drop_v", KeyType::Float, "0.0", nullptr, 0, 10, "V", "", "Device on-state drop."},
+    {"inverter.vdc_v", KeyType::Profile, "", nullptr, 0, 2000, "V", "", "DC-link voltage (default: the preset's nominal); a profile: sag, surge, loss (to ~0). The plant holds its value at each period's middle over the period; the firmware's nominal DC link and the Vdc sensor span follow its value at t = 0 (at least 1 V)."},
+    {"inverter.vdc_ripple_v", KeyType::Float, "0.0", nullptr, 0, 1000, "V", "", "DC-link ripple amplitude, added to inverter.vdc_v as a sine (harsh default: 2 % of inverter.vdc_v at t = 0).", nullptr, ""},
+    {"inverter.vdc_ripple_hz", KeyType::Float, "300.0", nullptr, 0, 100000, "Hz", "", "DC-link ripple frequency (300 Hz: a six-pulse rectifier on 50 Hz mains)."},
+    {"inverter.dead_time_s", KeyType::Float, "0.5e-6", "0.0", 0, 10e-6, "s", "", "Dead time per commutation.", nullptr, "2e-6"},
+    {"inverter.device_drop_v", KeyType::Float, "0.0", nullptr, 0, 10, "V", "", "Device on-state drop.", nullptr, "1.0"},
     {"inverter.integrator", KeyType::Enum, "\"taylor\"", nullptr, 0, 0, "", "taylor|hermite|rk4",
      "Plant integration (docs/plant.md): taylor: the period in one pass with the current map expanded to second order about mid-period, exact at the period end (tables go edge by edge with Hermite); hermite: one model evaluation per switching interval (the most exact); classical RK4 (reference)."},
 
     {"sensors.adc_bits", KeyType::Int, "12", "16", 8, 16, "bit", "", "Current/voltage ADC resolution."},
     {"sensors.i_full_scale_a", KeyType::Float, "", nullptr, 0.1, 10000, "A", "", "Current ADC span is -fs..+fs (default: a sensor sized for the motor, 1.875 x rated peak rounded up to 1-1.2-1.5-2-2.5-3-4-5-6-8: 25 A on sun2016-ipm-5kw, 300 A on brodatzki-35kw)."},
-    {"sensors.i_noise_rms_a", KeyType::Float, "0.02", "0.0", 0, 10, "A", "", "White noise on each current sample."},
-    {"sensors.i_gain_err", KeyType::Float3, "[0.0, 0.0, 0.0]", nullptr, -0.5, 0.5, "1", "", "Relative gain error per phase."},
+    {"sensors.i_noise_rms_a", KeyType::Float, "0.02", "0.0", 0, 10, "A", "", "White noise on each current sample.", nullptr, "0.05"},
+    {"sensors.i_gain_err", KeyType::Float3, "[0.0, 0.0, 0.0]", nullptr, -0.5, 0.5, "1", "", "Relative gain error per phase.", nullptr, "[0.01, -0.01, 0.005]"},
     {"sensors.i_offset_err_a", KeyType::Float3, "[0.0, 0.0, 0.0]", nullptr, -10, 10, "A", "", "Offset error per phase (removed by the firmware's calibration)."},
     {"sensors.vdc_full_scale_v", KeyType::Float, "", nullptr, 1, 5000, "V", "", "Vdc ADC span 0..fs (default: 1.6 x inverter.vdc_v rounded up alike: 500 V at 300 V, 400 V at 250 V)."},
     {"sensors.vdc_noise_rel", KeyType::Float, "0.005", "0.0", 0, 0.2, "1", "", "Vdc noise, rms relative to the value."},
+    {"sensors.adc_delay_s", KeyType::Float, "0.0", nullptr, 0, 20e-6, "s", "", "Conversion delay: the currents are sampled this long after the PWM centre (first-order extrapolation along the voltage the latched duties apply, docs/plant.md).", nullptr, "2e-6"},
     {"sensors.encoder_lines", KeyType::Int, "20000", nullptr, 1, 1000000, "lines/rev", "", "Quadrature encoder lines (4 counts each); 20000 = the thesis' 80000 counts."},
     {"sensors.encoder_offset_deg", KeyType::Float, "0.0", nullptr, -360, 360, "deg (mech)", "", "Mechanical angle where the counter reads 0 and the index sits."},
 
@@ -74,6 +77,18 @@ const std::vector<KeySpec>& scenario_schema()
     {"estimator.l_scale", KeyType::Float, "1.0", nullptr, 0.1, 10, "1", "", "Estimator's Ld, Lq (and flux-map inductances) / true."},
     {"estimator.map_points", KeyType::Int, "41", nullptr, 5, 41, "", "", "Flux-map grid points per axis."},
     {"estimator.map_span_a", KeyType::Float, "", nullptr, 0.1, 5000, "A", "", "Flux map covers +-span on both axes (default: 1.5 x rated peak)."},
+
+    {"faults.i_stuck_phase", KeyType::Int, "-1", nullptr, -1, 2, "", "", "Current channel (0 a, 1 b, 2 c) that sticks from faults.i_stuck_from_s on; -1 none."},
+    {"faults.i_stuck_from_s", KeyType::Float, "0.0", nullptr, 0, 600, "s", "", "Time the current channel sticks."},
+    {"faults.i_stuck_a", KeyType::Float, "0.0", nullptr, -10000, 10000, "A", "", "What the stuck channel reads from then on (nominal scaling, no gain, offset or noise; clamped to the ADC span)."},
+    {"faults.i_offset_drift_a_per_s", KeyType::Float3, "[0.0, 0.0, 0.0]", nullptr, -1000, 1000, "A/s", "", "Per phase: the current channel's offset drifts linearly at this rate from faults.i_offset_drift_from_s on (added to sensors.i_offset_err_a)."},
+    {"faults.i_offset_drift_from_s", KeyType::Float, "0.0", nullptr, 0, 600, "s", "", "Time the offset drift starts."},
+    {"faults.open_phase", KeyType::Int, "-1", nullptr, -1, 2, "", "", "Phase (0 a, 1 b, 2 c) disconnected between inverter and machine from faults.open_phase_from_s on: its terminal floats, its current is 0, the other two carry i and -i (docs/plant.md); -1 none."},
+    {"faults.open_phase_from_s", KeyType::Float, "0.0", nullptr, 0, 600, "s", "", "Time the phase opens (a current it carries then is cut at once)."},
+    {"faults.encoder_loss_from_s", KeyType::Float, "-1.0", nullptr, -1, 600, "s", "", "From this time the encoder counter freezes at its last count (no counts, no index); < 0: never."},
+    {"faults.isr_overrun_from_s", KeyType::Float, "-1.0", nullptr, -1, 600, "s", "", "The ADC sample's overrun flag (the previous ISR overran its period) is set in the first period starting at or after this time; < 0: never."},
+    {"faults.isr_overrun_every", KeyType::Int, "0", nullptr, 0, 1000000, "periods", "", "After that first one, set the overrun flag again every N periods (0: only once)."},
+
     {"output.decimation", KeyType::Int, "10", nullptr, 1, 1000000, "periods", "", "Write one trace row every N periods."},
     {"output.trace", KeyType::Bool, "true", nullptr, 0, 0, "", "", "Write trace.csv."},
 
@@ -409,7 +424,7 @@ static void walk(const std::string& origin, const toml::table& root, std::map<st
     for (auto&& [sec, node] : root) {
         const std::string sname = std::string(sec.str());
         auto t = node.as_table();
-        if (!t) fail(origin, sname, node_text(node), "unknown top-level key; keys live in sections [scenario], [machine], [inverter], [sensors], [mechanics], [control], [output], [metrics]");
+        if (!t) fail(origin, sname, node_text(node), "unknown top-level key; keys live in sections [scenario], [machine], [inverter], [sensors], [mechanics], [control], [faults], [output], [metrics]");
         for (auto&& [k, v] : *t) {
             const std::string full = sname + "." + std::string(k.str());
             if (!find_spec(full)) fail(origin, full, node_text(v), "unknown key (see `mcsim keys` for the list)");
@@ -463,10 +478,11 @@ Scenario Scenario::from_string(const std::string& text, const std::string& origi
     walk(origin, root, leaves);
 
     // profile first: it selects the defaults of the other keys
-    bool ideal = false;
+    bool ideal = false, harsh = false;
     if (auto it = leaves.find("scenario.profile"); it != leaves.end()) {
         store(origin, *find_spec("scenario.profile"), *it->second, sc.num_, sc.str_, sc.prof_, sc.f3_);
         ideal = sc.str_["scenario.profile"] == "ideal";
+        harsh = sc.str_["scenario.profile"] == "harsh";
     }
     for (const auto& spec : scenario_schema()) {
         const std::string key = spec.key;
@@ -478,7 +494,7 @@ Scenario Scenario::from_string(const std::string& text, const std::string& origi
             store(origin, spec, *it->second, sc.num_, sc.str_, sc.prof_, sc.f3_);
             continue;
         }
-        const char* def = (ideal && spec.def_ideal) ? spec.def_ideal : spec.def;
+        const char* def = (ideal && spec.def_ideal) ? spec.def_ideal : (harsh && spec.def_harsh) ? spec.def_harsh : spec.def;
         if (!def || !def[0]) continue;  // derived from the preset by the runner
         toml::table d = toml::parse(std::string("v = ") + def);
         store("(default)", spec, *d.get("v"), sc.num_, sc.str_, sc.prof_, sc.f3_);
@@ -552,7 +568,7 @@ std::vector<double> Scenario::f3(const std::string& key) const
 std::string schema_markdown()
 {
     std::ostringstream os;
-    os << "| key | type | default | ideal profile | range / choices | unit | meaning |\n";
+    os << "| key | type | default | profiles ideal; harsh | range / choices | unit | meaning |\n";
     os << "|---|---|---|---|---|---|---|\n";
     for (const auto& s : scenario_schema()) {
         std::string range;
@@ -580,7 +596,10 @@ std::string schema_markdown()
         for (size_t p = 0; (p = range_esc.find('|', p)) != std::string::npos; p += 2) range_esc.replace(p, 1, "\\|");
         std::string unit = s.unit;
         for (size_t p = 0; (p = unit.find('|', p)) != std::string::npos; p += 2) unit.replace(p, 1, "\\|");
-        os << "| `" << s.key << "` | " << tn << " | `" << def << "` | " << (s.def_ideal ? std::string("`") + s.def_ideal + "`" : "") << " | "
+        std::string prof;
+        if (s.def_ideal) prof = std::string("ideal `") + s.def_ideal + "`";
+        if (s.def_harsh) prof += std::string(prof.empty() ? "" : "; ") + "harsh `" + (s.def_harsh[0] ? s.def_harsh : "(derived)") + "`";
+        os << "| `" << s.key << "` | " << tn << " | `" << def << "` | " << prof << " | "
            << range_esc << " | " << unit << " | " << s.doc << " |\n";
     }
     return os.str();

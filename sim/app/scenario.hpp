@@ -27,6 +27,8 @@ struct KeySpec {
     const char* choices;      // Enum: "a|b|c"
     const char* doc;
     const char* shown_default = nullptr;  // docs: the default as shown, when def is "" (derived)
+    const char* def_harsh = nullptr;      // default under scenario.profile = "harsh" (nullptr = def;
+                                          // "" = derived by the runner, see doc)
 };
 
 const std::vector<KeySpec>& scenario_schema();

@@ -63,6 +63,10 @@ struct Plant::Impl {
     double th = 0, w = 0;
     bool floating = false;
     bool latched[3] = {false, false, false};
+    // Open-phase fault: the disconnected phase (-1 none) and its stationary-frame direction
+    // (i_x = e_x . i_ab).
+    int open = -1;
+    Vec2 e_open = Vec2::Zero();
 
     Vec2 psi0 = Vec2::Zero();
     double w_init = 0;  // W(psi) at the last reset
@@ -122,6 +126,7 @@ struct Plant::Impl {
         } else {
             ud = c * u_ab.x() + s * u_ab.y();
             uq = -s * u_ab.x() + c * u_ab.y();
+            if (open >= 0) open_phase_voltage(x, ii, c, s, we, &ud, &uq);
             dx.pd = ud - rs * ii.x() + we * x.pq;
             dx.pq = uq - rs * ii.y() - we * x.pd;
         }
@@ -133,6 +138,43 @@ struct Plant::Impl {
         dx.mech = te * x.w;
         dx.ud = ud;
         dx.uq = uq;
+    }
+
+    // Open phase: the terminal voltage's component along the open phase's direction e (rotor
+    // frame e_r) is not the inverter's but whatever keeps e_r . i = 0: from
+    // d/dt (e_r . i) = -w_e n_r . i + e_r . G (u_n n_r + lambda e_r - Rs i - w_e J psi) = 0,
+    // n_r = J e_r, u_n = n_r . u (set by the two connected phases only). The constraint drifts
+    // by the integration error; project_open() removes that at the period end.
+    void open_phase_voltage(const St& x, const Vec2& ii, double c, double s, double we, double* ud,
+                            double* uq) const {
+        const Vec2 er(c * e_open.x() + s * e_open.y(), -s * e_open.x() + c * e_open.y());
+        const Vec2 nr(-er.y(), er.x());
+        const double un = nr.x() * *ud + nr.y() * *uq;
+        const Mat2 g = model->di_dpsi(Vec2(x.pd, x.pq));
+        const Vec2 b(-rs * ii.x() + we * x.pq, -rs * ii.y() - we * x.pd);
+        const double den = er.dot(g * er);
+        const double lam = den > 0.0 ? (we * nr.dot(ii) - er.dot(g * (un * nr + b))) / den : 0.0;
+        *ud = un * nr.x() + lam * er.x();
+        *uq = un * nr.y() + lam * er.y();
+    }
+
+    // Open phase: move psi along e_r (Newton on e_r . current(psi) = 0) so that the open phase's
+    // current is 0 to round-off; returns the change of the three-phase magnetic energy [J].
+    double project_open() {
+        if (open < 0 || floating) return 0.0;
+        const double c = std::cos(p * th), s = std::sin(p * th);
+        const Vec2 er(c * e_open.x() + s * e_open.y(), -s * e_open.x() + c * e_open.y());
+        const double w0 = model->energy(psi);
+        for (int it = 0; it < 30; ++it) {
+            const double r = er.dot(i);
+            if (std::fabs(r) <= 1e-13 * (1.0 + i.norm())) break;
+            const double den = er.dot(model->di_dpsi(psi) * er);
+            if (!(den > 0.0)) break;
+            psi -= er * (r / den);
+            i = model->current(psi);
+        }
+        g_valid = false;
+        return 1.5 * (model->energy(psi) - w0);
     }
 
     Vec2 current_of(double pd, double pq) const {
@@ -306,12 +348,13 @@ struct Plant::Impl {
         // Taylor: no energy ledger and no device drop on that path (docs/plant.md); otherwise
         // (and for tables) the period goes edge by edge.
         if (cfg.integrator == PlantConfig::Integrator::Taylor && taylor_ok && !cfg.energy_ledger &&
-            inv.v_device == 0.0) {
+            inv.v_device == 0.0 && open < 0) {
             taylor_period(t0, Ts, duty);
             return;
         }
-        // Hermite by default; classical RK4 on request (the independent reference of the tests).
-        const bool rk4 = cfg.integrator == PlantConfig::Integrator::Rk4;
+        // Hermite by default; classical RK4 on request (the independent reference of the tests)
+        // and with an open phase (its constraint lives in deriv()).
+        const bool rk4 = cfg.integrator == PlantConfig::Integrator::Rk4 || open >= 0;
         if (rk4) {
             g_dq = model->di_dpsi(psi);
             g_valid = false;
@@ -495,6 +538,7 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
     if (!(Ts > 0.0)) throw std::invalid_argument("Plant::step_period: Ts must be > 0");
     Impl& m = *impl_;
     const double t0 = m.t;
+    if (m.cfg.vdc_profile) m.cfg.inverter.vdc = std::max(0.0, m.cfg.vdc_profile(t0 + 0.5 * Ts));
     const double w_start = m.mech.begin_period(t0, Ts, m.w);
     if (m.mech.speed_imposed()) m.w = w_start;
     m.th_base = m.th_step = m.th;
@@ -515,6 +559,7 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
         m.i = m.model->current(m.psi);
     }
     if (outputs_enabled) m.latched[0] = m.latched[1] = m.latched[2] = false;
+    if (m.open >= 0) m.latched[m.open] = true;  // disabled periods: that phase is open anyway
 
     m.cs_end_valid = false;
     if (!outputs_enabled) {
@@ -526,6 +571,7 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
 
     m.t = t0 + Ts;
     if (m.mech.speed_imposed()) m.w = m.mech.omega_end();
+    x.ein += m.project_open();
     const double inv_ts = 1.0 / Ts;
     m.u_dq_avg = Vec2(x.ud, x.uq) * inv_ts;
     m.u_ab_avg *= inv_ts;
@@ -533,7 +579,7 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
     m.ledger.electrical_in += x.ein;
     m.ledger.copper_loss += x.cu;
     m.ledger.mech_out += x.mech;
-    if (m.cfg.energy_ledger || !outputs_enabled || m.cfg.integrator == PlantConfig::Integrator::Rk4)
+    if (m.cfg.energy_ledger || !outputs_enabled || m.cfg.integrator == PlantConfig::Integrator::Rk4 || m.open >= 0)
         m.ledger.magnetic = 1.5 * (m.model->energy(m.psi) - m.w_init);
 }
 
@@ -588,5 +634,62 @@ const EnergyLedger& Plant::energy() const { return impl_->ledger; }
 const PlantConfig& Plant::config() const { return impl_->cfg; }
 const FluxModel& Plant::model() const { return *impl_->model; }
 void Plant::set_vdc(double vdc) { impl_->cfg.inverter.vdc = vdc; }
+
+void Plant::set_open_phase(int phase) {
+    Impl& m = *impl_;
+    if (phase < -1 || phase > 2) throw std::invalid_argument("Plant::set_open_phase: phase must be -1..2");
+    m.open = phase;
+    if (phase < 0) return;
+    const double a = phase * (2.0 * kPi / 3.0);
+    m.e_open = Vec2(std::cos(a), std::sin(a));
+    m.cs_end_valid = false;
+    const double dw = m.project_open();  // the snap: the released energy goes into the break
+    m.ledger.electrical_in += dw;
+    m.ledger.magnetic = 1.5 * (m.model->energy(m.psi) - m.w_init);
+}
+
+int Plant::open_phase() const { return impl_->open; }
+
+std::array<double, 3> Plant::i_abc_ahead(double delta, double Ts, const std::array<double, 3>& duty,
+                                         bool outputs_enabled) const {
+    const Impl& m = *impl_;
+    if (!(delta > 0.0) || !outputs_enabled || m.floating) return i_abc();
+    const InverterConfig& inv = m.cfg.inverter;
+    const double c = std::cos(m.p * m.th), s = std::sin(m.p * m.th);
+    auto rot = [c, s](const Vec2& v) { return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y()); };
+    const Vec2 i_ab = rot(m.i), psi_ab = rot(m.psi);
+    const std::array<double, 3> i0 = inverse_clarke(i_ab);
+    // Voltage-time integral of each phase over [0, delta]: low, high from the (dead-time delayed)
+    // rise to the (delayed) fall, as the sequencer decides with the current at the boundary.
+    const double half = 0.5 * inv.vdc, td = inv.t_dead > 0.0 ? inv.t_dead : 0.0;
+    std::array<double, 3> vt{};
+    for (int k = 0; k < 3; ++k) {
+        const double d = std::max(0.0, std::min(1.0, duty[k]));
+        double high = 0.0;
+        if (d >= 1.0) {
+            high = delta;
+        } else if (d > 0.0) {
+            double rise = 0.5 * (1.0 - d) * Ts, fall = 0.5 * (1.0 + d) * Ts;
+            if (i0[k] > inv.i_zero_band) rise += td;
+            if (i0[k] < -inv.i_zero_band) fall = std::min(fall + td, Ts);
+            if (rise < fall) high = std::max(0.0, std::min(delta, fall) - rise);
+        }
+        vt[k] = -half * delta + 2.0 * half * high - device_drop(i0[k], inv) * delta;
+    }
+    const Mat2 g = m.model->di_dpsi(m.psi);
+    Mat2 r;
+    r << c, -s, s, c;
+    const Mat2 a = r * g * r.transpose();
+    const double we = m.p * m.w;
+    const Vec2 j_i(-i_ab.y(), i_ab.x()), j_psi(-psi_ab.y(), psi_ab.x());
+    Vec2 di = a * (clarke_phase_voltages(vt) - delta * m.rs * i_ab) + delta * we * (j_i - a * j_psi);
+    if (m.open >= 0) {  // the open phase's terminal voltage keeps its current at 0
+        const double den = m.e_open.dot(a * m.e_open);
+        if (den > 0.0) di -= (a * m.e_open) * (m.e_open.dot(di) / den);
+    }
+    std::array<double, 3> out = inverse_clarke(i_ab + di);
+    if (m.open >= 0) out[m.open] = 0.0;
+    return out;
+}
 
 }  // namespace mcsim

@@ -38,22 +38,47 @@ double Sensors::amps_per_count() const { return amps_per_count_; }
 double Sensors::offset_counts() const { return offset_counts_; }
 double Sensors::volts_per_count() const { return volts_per_count_; }
 
-AdcSample Sensors::sample_adc(const Plant& p) {
+AdcSample Sensors::sample_adc(const Plant& p) { return sample_adc(p.i_abc(), p.config().inverter.vdc, p.time()); }
+
+AdcSample Sensors::sample_adc(const Plant& p, double vdc, double Ts, const std::array<double, 3>& duty,
+                              bool outputs_enabled) {
+    const std::array<double, 3> i =
+        adc_.delay_s > 0.0 ? p.i_abc_ahead(adc_.delay_s, Ts, duty, outputs_enabled) : p.i_abc();
+    return sample_adc(i, vdc, p.time());
+}
+
+AdcSample Sensors::sample_adc(const std::array<double, 3>& i, double vdc, double t) {
     AdcSample s{};
     const double max_count = max_count_;
-    const auto i = p.i_abc();
     const double inv_apc = 1.0 / amps_per_count_, mid = offset_counts_;
-    // Draw order is fixed (a, b, c, vdc) so a seed reproduces a run exactly.
+    const SensorFaults& f = faults_;
+    const double drift_t = t > f.i_offset_drift_from_s ? t - f.i_offset_drift_from_s : 0.0;
+    const int stuck = f.i_stuck_phase >= 0 && t >= f.i_stuck_from_s ? f.i_stuck_phase : -1;
+    // Draw order is fixed (a, b, c, vdc) so a seed reproduces a run exactly (also with faults:
+    // a stuck channel still draws its noise).
     for (int k = 0; k < 3; ++k) {
-        const double meas = i[k] * (1.0 + adc_.gain_err[k]) + adc_.offset_err[k] + adc_.i_noise_rms * n01_();
+        double meas = i[k] * (1.0 + adc_.gain_err[k]) + adc_.offset_err[k] + adc_.i_noise_rms * n01_();
+        if (f.i_offset_drift_a_per_s[k] != 0.0) meas += f.i_offset_drift_a_per_s[k] * drift_t;
+        if (k == stuck) meas = f.i_stuck_a;
         s.i[k] = to_counts(meas * inv_apc + mid, max_count);
     }
-    const double vdc = p.config().inverter.vdc;
     s.vdc = to_counts(vdc * (1.0 + adc_.vdc_noise_rel * n01_()) / volts_per_count_, max_count);
     return s;
 }
 
 QepSample Sensors::sample_qep(const Plant& p) {
+    if (faults_.encoder_loss_from_s >= 0.0 && p.time() >= faults_.encoder_loss_from_s) {
+        // The counter stops: the last sample before the loss, or (lost from the start) the
+        // position at the first sample.
+        if (!qep_frozen_ && !have_prev_) {
+            qep_frozen_ = true;
+            faults_.encoder_loss_from_s = -1.0;  // take this one sample normally
+            qep_last_ = sample_qep(p);
+            faults_.encoder_loss_from_s = p.time();
+        }
+        qep_frozen_ = true;
+        return qep_last_;
+    }
     const double n = 4.0 * enc_.lines;
     double rev = (p.theta_m() - enc_.offset_rad) / kTwoPi;
     // A diverged plant (NaN or inf angle): the counter holds its last position (a quadrature
@@ -75,7 +100,8 @@ QepSample Sensors::sample_qep(const Plant& p) {
     }
     have_prev_ = true;
     prev_rev_ = rev;
-    return QepSample{static_cast<uint32_t>(c), index_seen_, index_count_};
+    qep_last_ = QepSample{static_cast<uint32_t>(c), index_seen_, index_count_};
+    return qep_last_;
 }
 
 }  // namespace mcsim

@@ -60,6 +60,10 @@ struct PlantConfig {
     // (fewer integration splits, same outcome); false decides every edge at its instant (the
     // tests' reference for that claim).
     bool predecide_edges = true;
+    // DC-link voltage over time [V] (optional): evaluated at each period's middle, clamped to
+    // >= 0 and held over the period (inverter.vdc then reads the last period's value). Empty:
+    // inverter.vdc stays as set (constructor, set_vdc).
+    std::function<double(double)> vdc_profile;
 };
 
 // Energy ledger since construction [J]; all three-phase (1.5 factor applied).
@@ -97,6 +101,18 @@ public:
     const PlantConfig& config() const;
     const FluxModel& model() const;
     void set_vdc(double vdc);
+    // Open-phase fault (docs/plant.md "Open phase"): phase 0..2 disconnected between inverter
+    // and machine from now on (its terminal floats, its current is 0; the other two carry i and
+    // -i), -1 reconnects none. Opening a phase that carries current snaps its current to 0 (the
+    // magnetic energy released is booked as electrical input, as at the floating snap).
+    void set_open_phase(int phase);
+    int open_phase() const;
+    // Phase currents a short time delta after the period boundary (the ADC's conversion delay),
+    // to first order: i + delta di/dt with the voltage-time integral over [t, t + delta] of the
+    // pattern the duties will switch (rising edges with dead time, device drop), the model's
+    // Jacobian at the present state and the back-EMF term; outputs disabled or floating: i_abc().
+    std::array<double, 3> i_abc_ahead(double delta, double Ts, const std::array<double, 3>& duty,
+                                      bool outputs_enabled) const;
 
 private:
     struct Impl;

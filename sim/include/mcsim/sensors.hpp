@@ -65,6 +65,25 @@ struct AdcConfig {
     double offset_err[3] = {0, 0, 0}; // [A], per phase
     double vdc_full_scale = 500.0;  // [V] counts span 0..fs
     double vdc_noise_rel = 0.005;   // rms relative to the value
+    // Conversion delay: the currents are sampled this long after the period boundary (the PWM
+    // centre), through Plant::i_abc_ahead (first order in the delay). 0: at the boundary.
+    double delay_s = 0.0;
+};
+
+// Injected sensor faults (scenario keys faults.*; times from the start of the run, plant time).
+struct SensorFaults {
+    // Current channel stuck: from i_stuck_from_s on, channel i_stuck_phase (0..2; -1 none) reads
+    // i_stuck_a, converted with the nominal scale (no gain, offset or noise; clamped to the rails).
+    int i_stuck_phase = -1;
+    double i_stuck_from_s = 0.0;
+    double i_stuck_a = 0.0;
+    // Offset drift: from i_offset_drift_from_s on, channel k's offset grows by
+    // i_offset_drift_a_per_s[k] * (t - from) [A] on top of AdcConfig::offset_err.
+    double i_offset_drift_a_per_s[3] = {0, 0, 0};
+    double i_offset_drift_from_s = 0.0;
+    // Encoder loss: from encoder_loss_from_s on (< 0: never) the counter no longer counts: every
+    // sample repeats the last one taken before that time (no new index either).
+    double encoder_loss_from_s = -1.0;
 };
 
 struct EncoderConfig {
@@ -81,8 +100,17 @@ struct QepSample { uint32_t count; bool index_seen; uint32_t index_count; };
 class Sensors {
 public:
     Sensors(const AdcConfig& adc, const EncoderConfig& enc, uint64_t seed);
+    // At the plant's boundary: the currents p.i_abc(), Vdc = p.config().inverter.vdc, no delay.
     AdcSample sample_adc(const Plant& p);
+    // The runner's: Vdc given (the DC link's value at this instant), the currents AdcConfig::delay_s
+    // after the boundary of a period of length Ts that the duties (latched now) will switch.
+    AdcSample sample_adc(const Plant& p, double vdc, double Ts, const std::array<double, 3>& duty,
+                         bool outputs_enabled);
+    // The conversion itself: true phase currents, Vdc and the time t (for the faults).
+    AdcSample sample_adc(const std::array<double, 3>& i_abc, double vdc, double t);
     QepSample sample_qep(const Plant& p);
+    void set_faults(const SensorFaults& f) { faults_ = f; }
+    const SensorFaults& faults() const { return faults_; }
     // Phase-current counts: round(i_meas/(2 fs) * (2^bits - 1) + 2^(bits-1)), clamped, where
     // i_meas = i (1 + gain_err) + offset_err + noise; Vdc counts: round(v (1 + rel noise)/fs *
     // (2^bits - 1)). Call right after Plant::step_period: the plant time is then the period
@@ -98,6 +126,9 @@ public:
 private:
     AdcConfig adc_;
     EncoderConfig enc_;
+    SensorFaults faults_;
+    bool qep_frozen_ = false;
+    QepSample qep_last_{0, false, 0};
     NormalRng n01_;
     double max_count_ = 0, amps_per_count_ = 0, offset_counts_ = 0, volts_per_count_ = 0;
     bool index_seen_ = false;
