@@ -230,7 +230,7 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 7b. Plausibility: over-speed, loss of lock, current tracking, stall (protect.c); a fault
      *     turns the outputs off before this period's duties are written. */
-    const uint32_t implausible = mc_protect_running(d, &ang, d->tm.omega_raw, i_ref, i_fb);
+    const uint32_t implausible = mc_protect_running(d, &ang, d->tm.omega_raw, i_ref, i_fb, d->cc.u);
     if (implausible != 0u) {
         mc_drive_trip(d, implausible);
         d->tm.state = d->seq.state;

@@ -155,6 +155,13 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     b->stall_speed = p->stall_rpm * el;
     b->stall_torque = 0.9f * p->torque_max;
     b->stall_n = periods_of(p->stall_time, p->ts);
+    b->resid_v = p->resid_v;
+    b->resid_w_coef = 0.5f * p->lq * p->i_max;
+    b->rs = p->rs;
+    b->ld = p->ld;
+    b->lq = p->lq;
+    b->psi_pm = p->psi_pm;
+    b->resid_n = periods_of(p->resid_time, p->ts);
 }
 
 bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err)

@@ -23,7 +23,8 @@ void mc_drive_trip(mc_drive_t *d, uint32_t reason);
  * whenever the outputs are on; the running checks in RUN (and Step III) after current control. */
 void mc_protect_reset(mc_drive_t *d);
 uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i);
-uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb);
+uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb,
+                            mc_dq_t u_dq);
 /* Step III convergence test, after the pipeline ran; hands over to RUN. */
 void mc_drive_step3_check(mc_drive_t *d, float omega_hat);
 

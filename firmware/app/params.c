@@ -266,14 +266,15 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         return bw;
     }
     case MC_RULE_OVERSPEED: {
-        /* the highest speed the drive can reach: the voltage circle Vdc/sqrt3 over the flux left
-         * with the whole current limit in -d (psi_pm - Ld i_max); a machine whose characteristic
-         * current is inside the limit has none, then 3x the base speed psi_pm-limited. 20 % above */
+        /* the highest speed the drive can control: the voltage circle Vdc/sqrt3 over the flux
+         * left with the whole current limit in -d (psi_pm - Ld i_max). Beyond it the current
+         * runs away (the thesis motor driven past ~1690 rpm tripped on over-current), so the
+         * limit is that speed itself; a machine whose characteristic current is inside the limit
+         * has none: then 3x the base speed */
         const float u = p->vdc_nominal * 0.57735027f;
-        const float psi_left = p->psi_pm - p->ld * p->i_max;
-        const float psi = maxf(psi_left, p->psi_pm / 3.0f);
+        const float psi = maxf(p->psi_pm - p->ld * p->i_max, p->psi_pm / 3.0f);
         const float w_el = u / maxf(psi, 1e-6f);
-        return nice2(1.2f * w_el * 60.0f / (pi2 * (float)p->pole_pairs));
+        return roundf(w_el * 60.0f / (pi2 * (float)p->pole_pairs));
     }
     case MC_RULE_I_SUM: {
         /* three measured channels of an isolated star sum to zero; noise and quantisation of
@@ -283,6 +284,10 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
     }
     case MC_RULE_TRACK:
         return nice2(0.25f * p->i_rated);
+    case MC_RULE_RESID:
+        /* a tenth of the voltage circle: dead time, device drops and resistance errors stay
+         * far below it; a frozen angle shows the whole back-EMF psi_pm w */
+        return nice2(0.1f * p->vdc_nominal * 0.57735027f);
     case MC_RULE_LOCK_FLOOR:
         return nice2(0.25f * p->n1_rpm);
     case MC_RULE_STALL:

@@ -15,11 +15,12 @@ static bool persists(uint32_t *count, bool cond, uint32_t n)
 void mc_protect_reset(mc_drive_t *d)
 {
     const float ts = d->blk.ts;
-    d->prot.i_sum_n = d->prot.track_n = d->prot.lock_n = d->prot.stall_n = 0u;
+    d->prot.i_sum_n = d->prot.track_n = d->prot.lock_n = d->prot.stall_n = d->prot.resid_n = 0u;
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistence */
     mc_lpf1_init(&d->prot.raw_speed, 20.0f, ts, 0.0f);
     mc_lpf1_init(&d->prot.err_d, 20.0f, ts, 0.0f);
     mc_lpf1_init(&d->prot.err_q, 20.0f, ts, 0.0f);
+    mc_lpf1_init(&d->prot.resid2, 20.0f, ts, 0.0f);
 }
 
 uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i)
@@ -37,7 +38,8 @@ uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t
     return 0u;
 }
 
-uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb)
+uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb,
+                            mc_dq_t u_dq)
 {
     const mc_drive_blk_t *b = &d->blk;
     if (!(fabsf(ang->omega) <= b->overspeed)) {
@@ -50,12 +52,26 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
     if (persists(&d->prot.lock_n, !(fabsf(w_raw - ang->omega) <= lock_band), b->lock_n)) {
         return MC_FAULT_LOSS_OF_LOCK;
     }
-    /* (c) the current does not follow its reference (an open phase, a wrong angle, a lost
-     * encoder): the low-passed error, whatever the voltage limit does */
+    /* (c) the current does not follow its reference (a wrong angle, a missing phase at
+     * standstill): the error vector low-passed, so that the ringing of a large step (which
+     * averages out) does not count, a lasting offset does */
     const float ed = mc_lpf1_step(&d->prot.err_d, i_ref.d - i_fb.d);
     const float eq = mc_lpf1_step(&d->prot.err_q, i_ref.q - i_fb.q);
     if (persists(&d->prot.track_n, !(ed * ed + eq * eq <= b->track_err * b->track_err), b->track_n)) {
         return MC_FAULT_TRACKING;
+    }
+    /* (b) the voltage the current loop needs against the steady-state model with the angle
+     * source's speed (5.1) without the L di/dt term, which the low-pass averages out: a frozen
+     * encoder or an estimate on the wrong solution leaves the back-EMF unexplained. The
+     * threshold grows with speed by half of w Lq i_max: the controller's model is small-signal
+     * and saturation lowers the real flux */
+    const float w = ang->omega;
+    const float rd = u_dq.d - b->rs * i_fb.d + w * b->lq * i_fb.q;
+    const float rq = u_dq.q - b->rs * i_fb.q - w * (b->ld * i_fb.d + b->psi_pm);
+    const float r2 = mc_lpf1_step(&d->prot.resid2, rd * rd + rq * rq);
+    const float r_max = b->resid_v + b->resid_w_coef * fabsf(w);
+    if (persists(&d->prot.resid_n, !(r2 <= r_max * r_max), b->resid_n)) {
+        return MC_FAULT_VOLTAGE_MODEL;
     }
     /* (d) speed mode: the speed loop asks for (nearly) all its torque and the rotor does not turn */
     const bool stall = d->cmd.mode == MC_MODE_SPEED &&

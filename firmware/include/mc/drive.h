@@ -109,7 +109,9 @@ typedef struct {
     /* protection (protect.c): limits in SI, persistence in periods (0: detector off) */
     float overspeed;             /* [rad/s el]                                               */
     float i_sum_tol, track_err, lock_tol, lock_floor, stall_speed, stall_torque;
-    uint32_t i_sum_n, track_n, lock_n, stall_n;
+    float resid_v, resid_w_coef;  /* [V], [V s/rad]: threshold resid_v + resid_w_coef |w|   */
+    float rs, ld, lq, psi_pm;     /* the controller's model for the residual                  */
+    uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;
     mc_seq_cfg_t seq;
     mc_angle_src_cfg_t src;
     mc_inj_cfg_t inj;
@@ -165,8 +167,8 @@ typedef struct {
     mc_phase_t phase;            /* the running phase program (Step I, II) and its workspace */
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
     struct {                     /* the plausibility detectors' state (protect.c)            */
-        uint32_t i_sum_n, track_n, lock_n, stall_n;   /* periods the condition has held      */
-        mc_lpf1_t raw_speed, err_d, err_q;
+        uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;   /* periods the condition held  */
+        mc_lpf1_t raw_speed, err_d, err_q, resid2;   /* low-passed raw speed, errors          */
     } prot;
     uint32_t step3_count;
     mc_cc_t cc;
