@@ -157,10 +157,6 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     b->stall_n = periods_of(p->stall_time, p->ts);
     b->resid_v = p->resid_v;
     b->resid_w_coef = 0.5f * p->lq * p->i_max;
-    b->rs = p->rs;
-    b->ld = p->ld;
-    b->lq = p->lq;
-    b->psi_pm = p->psi_pm;
     b->resid_n = periods_of(p->resid_time, p->ts);
 }
 

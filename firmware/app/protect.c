@@ -12,15 +12,20 @@ static bool persists(uint32_t *count, bool cond, uint32_t n)
     return n > 0u && *count >= n;
 }
 
+/* y += k (x - y): the first-order low-pass all the detectors' averages share */
+static float avg(float *y, float x, float k)
+{
+    *y += k * (x - *y);
+    return *y;
+}
+
 void mc_protect_reset(mc_drive_t *d)
 {
-    const float ts = d->blk.ts;
     d->prot.i_sum_n = d->prot.track_n = d->prot.lock_n = d->prot.stall_n = d->prot.resid_n = 0u;
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistence */
-    mc_lpf1_init(&d->prot.raw_speed, 20.0f, ts, 0.0f);
-    mc_lpf1_init(&d->prot.err_d, 20.0f, ts, 0.0f);
-    mc_lpf1_init(&d->prot.err_q, 20.0f, ts, 0.0f);
-    mc_lpf1_init(&d->prot.resid2, 20.0f, ts, 0.0f);
+    d->prot.k = 1.0f - expf(-MC_2PI * 20.0f * d->blk.ts);
+    d->prot.w_raw = d->prot.err_d = d->prot.err_q = 0.0f;
+    d->prot.u_d = d->prot.u_q = d->prot.i_d = d->prot.i_q = d->prot.w = 0.0f;
 }
 
 uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i)
@@ -47,7 +52,8 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
     }
     /* (a) the estimator's raw speed against the filtered one: a lock on the wrong solution shows
      * as a raw speed of the wrong sign or size while the PLL keeps its speed (thesis Fig. 6.9) */
-    const float w_raw = mc_lpf1_step(&d->prot.raw_speed, omega_raw);
+    const float k = d->prot.k;
+    const float w_raw = avg(&d->prot.w_raw, omega_raw, k);
     const float lock_band = b->lock_tol * fabsf(ang->omega) + b->lock_floor;
     if (persists(&d->prot.lock_n, !(fabsf(w_raw - ang->omega) <= lock_band), b->lock_n)) {
         return MC_FAULT_LOSS_OF_LOCK;
@@ -55,22 +61,24 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
     /* (c) the current does not follow its reference (a wrong angle, a missing phase at
      * standstill): the error vector low-passed, so that the ringing of a large step (which
      * averages out) does not count, a lasting offset does */
-    const float ed = mc_lpf1_step(&d->prot.err_d, i_ref.d - i_fb.d);
-    const float eq = mc_lpf1_step(&d->prot.err_q, i_ref.q - i_fb.q);
+    const float ed = avg(&d->prot.err_d, i_ref.d - i_fb.d, k);
+    const float eq = avg(&d->prot.err_q, i_ref.q - i_fb.q, k);
     if (persists(&d->prot.track_n, !(ed * ed + eq * eq <= b->track_err * b->track_err), b->track_n)) {
         return MC_FAULT_TRACKING;
     }
-    /* (b) the voltage the current loop needs against the steady-state model with the angle
-     * source's speed (5.1) without the L di/dt term, which the low-pass averages out: a frozen
-     * encoder or an estimate on the wrong solution leaves the back-EMF unexplained. The
-     * threshold grows with speed by half of w Lq i_max: the controller's model is small-signal
-     * and saturation lowers the real flux */
-    const float w = ang->omega;
-    const float rd = u_dq.d - b->rs * i_fb.d + w * b->lq * i_fb.q;
-    const float rq = u_dq.q - b->rs * i_fb.q - w * (b->ld * i_fb.d + b->psi_pm);
-    const float r2 = mc_lpf1_step(&d->prot.resid2, rd * rd + rq * rq);
+    /* (b) the voltage the current loop needs against the steady-state model (5.1) with the
+     * angle source's speed, all low-passed first: the L di/dt term and any oscillation of the
+     * speed estimate average out, while a frozen encoder, an estimate on the wrong solution or an
+     * open phase leave a lasting part of the back-EMF unexplained. The threshold grows with speed
+     * by half of w Lq i_max: the controller's model is small-signal, saturation lowers the flux */
+    const float ud = avg(&d->prot.u_d, u_dq.d, k), uq = avg(&d->prot.u_q, u_dq.q, k);
+    const float id = avg(&d->prot.i_d, i_fb.d, k), iq = avg(&d->prot.i_q, i_fb.q, k);
+    const float w = avg(&d->prot.w, ang->omega, k);
+    const mc_params_t *p = &d->p;
+    const float rd = ud - p->rs * id + w * p->lq * iq;
+    const float rq = uq - p->rs * iq - w * (p->ld * id + p->psi_pm);
     const float r_max = b->resid_v + b->resid_w_coef * fabsf(w);
-    if (persists(&d->prot.resid_n, !(r2 <= r_max * r_max), b->resid_n)) {
+    if (persists(&d->prot.resid_n, !(rd * rd + rq * rq <= r_max * r_max), b->resid_n)) {
         return MC_FAULT_VOLTAGE_MODEL;
     }
     /* (d) speed mode: the speed loop asks for (nearly) all its torque and the rotor does not turn */

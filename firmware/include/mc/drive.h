@@ -110,7 +110,6 @@ typedef struct {
     float overspeed;             /* [rad/s el]                                               */
     float i_sum_tol, track_err, lock_tol, lock_floor, stall_speed, stall_torque;
     float resid_v, resid_w_coef;  /* [V], [V s/rad]: threshold resid_v + resid_w_coef |w|   */
-    float rs, ld, lq, psi_pm;     /* the controller's model for the residual                  */
     uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;
     mc_seq_cfg_t seq;
     mc_angle_src_cfg_t src;
@@ -168,7 +167,9 @@ typedef struct {
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
     struct {                     /* the plausibility detectors' state (protect.c)            */
         uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;   /* periods the condition held  */
-        mc_lpf1_t raw_speed, err_d, err_q, resid2;   /* low-passed raw speed, errors          */
+        float k;                 /* one 20 Hz first-order low-pass for all averages below     */
+        float w_raw, err_d, err_q;            /* raw speed, current error                    */
+        float u_d, u_q, i_d, i_q, w;          /* voltage, current, speed for the residual    */
     } prot;
     uint32_t step3_count;
     mc_cc_t cc;
