@@ -9,6 +9,7 @@
 #include <fstream>
 #include <memory>
 #include <stdexcept>
+#include <vector>
 
 #include "drive_setup.hpp"
 #include "metrics.hpp"
@@ -124,8 +125,17 @@ Resolved resolve(const Scenario& sc)
 
 // The estimator's flux map: the plant's magnetics tabulated on a regular grid, as an offline
 // identification would deliver it (the KIT identifier will replace this later).
+//
+// Mismatch (estimator.cross_scale = c, applied first): each flux splits into its self part, the
+// cut along its own axis, and its cross-saturation part, what the other axis' current adds,
+//   psi_d(i_d, i_q) = psi_d(i_d, 0) + c [psi_d(i_d, i_q) - psi_d(i_d, 0)]
+//   psi_q(i_d, i_q) = psi_q(0, i_q) + c [psi_q(i_d, i_q) - psi_q(0, i_q)]
+// (the cuts are the plant's flux at the node's i_d, resp. i_q; c = 0: no cross-saturation at all,
+// and d psi_d / d i_q, d psi_q / d i_d both scale with c, so the map stays reciprocal). Then
+// (estimator.psi_scale, l_scale) the magnet part psi_d(0, 0) scales with psi_scale and the
+// current-dependent rest psi - psi(0, 0) with l_scale. c = 1 takes the nodes as tabulated.
 std::unique_ptr<mc_flux_map_t> make_estimator_map(const FluxModel& m, int n, double span, double l_scale,
-                                                  double psi_scale)
+                                                  double psi_scale, double cross_scale)
 {
     const GridAxis axis{-span, span, n};
     const FluxMapTable t = tabulate_flux_map(m, axis, axis);
@@ -135,9 +145,20 @@ std::unique_ptr<mc_flux_map_t> make_estimator_map(const FluxModel& m, int n, dou
     map->id0 = map->iq0 = static_cast<float>(-span);
     map->did = map->diq = static_cast<float>(axis.step());
     const Vec2 psi0 = m.flux(Vec2::Zero());
+    std::vector<Vec2> cut_d, cut_q;  // psi(i_d, 0), psi(0, i_q) at the grid's currents
+    if (cross_scale != 1.0) {
+        for (int k = 0; k < n; ++k) {
+            cut_d.push_back(m.flux(Vec2(axis.at(k), 0.0)));
+            cut_q.push_back(m.flux(Vec2(0.0, axis.at(k))));
+        }
+    }
     for (int a = 0; a < n; ++a) {
         for (int b = 0; b < n; ++b) {
-            const Vec2 psi = t.node(a, b);
+            Vec2 psi = t.node(a, b);
+            if (cross_scale != 1.0) {
+                psi.x() = cut_d[a].x() + cross_scale * (psi.x() - cut_d[a].x());
+                psi.y() = cut_q[b].y() + cross_scale * (psi.y() - cut_q[b].y());
+            }
             // mismatch: the magnet part scales with psi_scale, the current-dependent part with l_scale
             map->psi_d[a * n + b] = static_cast<float>(psi_scale * psi0.x() + l_scale * (psi.x() - psi0.x()));
             map->psi_q[a * n + b] = static_cast<float>(l_scale * (psi.y() - psi0.y()));
@@ -249,7 +270,8 @@ DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& m
         const double span = sc.has("estimator.map_span_a") ? sc.f("estimator.map_span_a") : 1.5 * mp.i_rated_peak;
         try {
             ds.est_map = make_estimator_map(magnetics, static_cast<int>(sc.i("estimator.map_points")), span,
-                                            sc.f("estimator.l_scale"), sc.f("estimator.psi_scale"));
+                                            sc.f("estimator.l_scale"), sc.f("estimator.psi_scale"),
+                                            sc.f("estimator.cross_scale"));
         } catch (const std::exception& e) {
             throw ScenarioError(sc.origin() + ": key 'estimator.map_span_a' = " + json_number(span) +
                                 ": the plant's magnetics cannot be tabulated over this span (" + e.what() + ")");

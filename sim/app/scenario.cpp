@@ -75,6 +75,7 @@ const std::vector<KeySpec>& scenario_schema()
     {"estimator.rs_scale", KeyType::Float, "1.0", nullptr, 0.1, 10, "1", "", "Estimator's Rs / true (parameter-mismatch tests)."},
     {"estimator.psi_scale", KeyType::Float, "1.0", nullptr, 0.1, 10, "1", "", "Estimator's psi_pm / true."},
     {"estimator.l_scale", KeyType::Float, "1.0", nullptr, 0.1, 10, "1", "", "Estimator's Ld, Lq (and flux-map inductances) / true."},
+    {"estimator.cross_scale", KeyType::Float, "1.0", nullptr, 0.1, 10, "1", "", "Estimator's flux-map cross-saturation / true: scales the part of psi_d that depends on i_q and of psi_q that depends on i_d (flux-map model only)."},
     {"estimator.map_points", KeyType::Int, "41", nullptr, 5, 41, "", "", "Flux-map grid points per axis."},
     {"estimator.map_span_a", KeyType::Float, "", nullptr, 0.1, 5000, "A", "", "Flux map covers +-span on both axes (default: 1.5 x rated peak)."},
 

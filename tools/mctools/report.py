@@ -689,6 +689,23 @@ def run_sweeps(scen_dir: Path, out_dir: Path, mcsim: str, jobs: int) -> tuple[st
     return "".join(parts), failed
 
 
+# Sections other commands write into the same document (`mctools sweep envelope --doc`), between
+# their markers: a report keeps them instead of dropping them.
+KEPT_MARKERS = (("<!-- envelope:begin -->", "<!-- envelope:end -->"),)
+
+
+def kept_blocks(doc_path: Path) -> str:
+    if not doc_path.exists():
+        return ""
+    text = doc_path.read_text(encoding="utf-8")
+    out = ""
+    for begin, end in KEPT_MARKERS:
+        a, b = text.find(begin), text.find(end)
+        if a >= 0 and b > a:
+            out += "\n" + text[a:b + len(end)] + "\n"
+    return out
+
+
 def report(args) -> int:
     scen_dir = Path(args.scenarios)
     out_dir = Path(args.out)
@@ -746,6 +763,7 @@ def report(args) -> int:
     if not args.only and not getattr(args, "no_sweeps", False):
         sweep_md, sweep_failures = run_sweeps(scen_dir, out_dir, mcsim, args.jobs)
         doc += sweep_md
+    doc = doc.rstrip("\n") + "\n" + kept_blocks(doc_path)
     doc_path.parent.mkdir(parents=True, exist_ok=True)
     doc_path.write_text(doc, encoding="utf-8")
 

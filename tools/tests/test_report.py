@@ -318,3 +318,14 @@ def test_range_bound():
     assert parse_bound("in [-1, 1]").holds(-0.5) and not parse_bound("in [-1, 1]").holds(-5)
     with pytest.raises(ValueError):
         parse_bound("in [7, 3]")
+
+
+def test_report_keeps_the_envelope_block(tmp_path):
+    """A report rewrites docs/results.md but keeps what `sweep envelope --doc` wrote there."""
+    from mctools.report import kept_blocks
+    doc = tmp_path / "results.md"
+    doc.write_text("old table\n<!-- envelope:begin -->\n## Envelope\n| a |\n<!-- envelope:end -->\ntail\n")
+    kept = kept_blocks(doc)
+    assert "## Envelope" in kept and kept.strip().startswith("<!-- envelope:begin -->")
+    assert "old table" not in kept and "tail" not in kept
+    assert kept_blocks(tmp_path / "missing.md") == ""
