@@ -661,6 +661,15 @@ static int periods_to_fault(rig_t *r, int n, bool plant)
     return -1;
 }
 
+/* The plant-less rig enabled in current mode with zero references, through the calibration. */
+static void rig_enabled(rig_t *r)
+{
+    rig_init(r);
+    command(r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(r, (int)r->d.p.offset_cal_samples + 5);
+    assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
+}
+
 static void assert_fault(const rig_t *r, uint32_t reason)
 {
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_FAULT);
@@ -673,9 +682,7 @@ static void test_protect_overrun(void **st)
 {
     (void)st;
     static rig_t r;
-    rig_init(&r);
-    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    rig_enabled(&r);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     r.adc.sample.overrun = true;
     assert_int_equal(periods_to_fault(&r, 5, false), 1);
@@ -688,9 +695,7 @@ static void test_protect_current_sum(void **st)
 {
     (void)st;
     static rig_t r;
-    rig_init(&r);
-    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    rig_enabled(&r);
     const int n = (int)lrintf(r.d.p.i_sum_time / r.d.p.ts);
     /* just inside the tolerance: never */
     r.adc.sample.i[2] = (uint16_t)(r.adc.sample.i[2] + (uint16_t)(0.8f * r.d.p.i_sum_tol / r.d.blk.amps_per_count));
@@ -707,9 +712,7 @@ static void test_protect_tracking(void **st)
 {
     (void)st;
     static rig_t r;
-    rig_init(&r);
-    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    rig_enabled(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 5.0f);
     /* the error low-passed at 20 Hz crosses 3.3 A of 5 A after ~8.6 ms, then 20 ms persistence */
     const int k = periods_to_fault(&r, 1000, false);
