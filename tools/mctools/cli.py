@@ -88,6 +88,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="skip the PNGs (tests that only need the bounds)")
     p.add_argument("--no-sweeps", action="store_true",
                    help="skip the sweeps of <scenarios>/sweeps.toml (they run unless --only)")
+    p.add_argument("--profiles", metavar="NAME[,NAME]", default=None,
+                   help="realism profiles (scenario.profile): realistic (default; the bounds are "
+                        "for it) plus others to report beside it, e.g. realistic,harsh: one "
+                        "run per check on the scenario's own seed, a column per model, never "
+                        "judged")
     p.set_defaults(func=_cmd_report)
 
     from mctools.fit_adq import add_parser as add_fit_adq

@@ -37,6 +37,12 @@ REGEN_SCRIPT = "bash scripts/report.sh"
 DASH = "—"
 PASS_MARK = "✓"
 FAIL_MARK = "✗ **FAIL**"
+# Realism profiles (scenario.profile, docs/simulator.md). The bounds are for BASE_PROFILE; the
+# others `--profiles` adds are reported beside it (one run per check key, the scenario's own seed,
+# no trace), never judged: a value outside the bound only gets OUTSIDE_MARK.
+PROFILES = ("realistic", "ideal", "harsh")
+BASE_PROFILE = "realistic"
+OUTSIDE_MARK = "⚠ outside bound"
 
 
 class ReportInputError(Exception):
@@ -278,6 +284,7 @@ class Run:
     model: str
     dir: Path
     seed: int | None = None  # scenario.seed of a percentile run (None: the scenario's own)
+    profile: str = BASE_PROFILE  # scenario.profile; another than the base is set explicitly
     exit_code: int | None = None
     seconds: float = 0.0
     metrics: dict | None = None
@@ -287,12 +294,15 @@ class Run:
     @property
     def label(self) -> str:
         return " ".join([self.scenario, *self.sets, self.model]
-                        + ([f"seed={self.seed}"] if self.seed is not None else []))
+                        + ([f"seed={self.seed}"] if self.seed is not None else [])
+                        + ([f"profile={self.profile}"] if self.profile != BASE_PROFILE else []))
 
     @property
     def extra_sets(self) -> tuple[str, ...]:
-        # percentile runs: only metrics.json is read, so no trace (the fprintf is a third of a
-        # long run)
+        # percentile and other-profile runs: only metrics.json is read, so no trace (the fprintf
+        # is a third of a long run)
+        if self.profile != BASE_PROFILE:
+            return ("output.trace=false", profile_set(self.profile))
         if self.seed is None:
             return ()
         return ("output.trace=false", f"scenario.seed={self.seed}")
@@ -305,6 +315,28 @@ class Run:
 def model_set(model: str) -> str:
     # mcsim reads --set values as TOML, so the string needs its quotes inside the argument.
     return f'estimator.model="{model}"'
+
+
+def profile_set(profile: str) -> str:
+    return f'scenario.profile="{profile}"'
+
+
+def parse_profiles(text: str | None) -> tuple[str, ...]:
+    """--profiles "realistic,harsh": the base profile (the one the bounds are for) first, then the
+    reported ones in the order given."""
+    if text is None:
+        return (BASE_PROFILE,)
+    names = [s.strip() for s in text.split(",") if s.strip()]
+    unknown = [n for n in names if n not in PROFILES]
+    if unknown or not names:
+        raise ReportInputError(f"--profiles: unknown profile(s) {', '.join(unknown) or '(none)'}"
+                               f" (known: {', '.join(PROFILES)})")
+    if BASE_PROFILE not in names:
+        raise ReportInputError(f"--profiles must include {BASE_PROFILE}: the bounds are judged "
+                               f"on it, the others are reported beside it")
+    if len(set(names)) != len(names):
+        raise ReportInputError(f"--profiles: duplicate profile in {text!r}")
+    return (BASE_PROFILE, *(n for n in names if n != BASE_PROFILE))
 
 
 def _sanitise(s: str) -> str:
@@ -460,6 +492,7 @@ def _md(s: str) -> str:
 class Cell:
     text: str
     failed: bool = False  # the bound for this model does not hold
+    outside: bool = False  # a reported profile's value is outside the bound (never a failure)
     value: str = ""  # the text without the pass/fail mark, for messages
 
 
@@ -516,6 +549,23 @@ def evaluate(check: Check, model: str, run: Run | None, seed_runs: list | None =
     return Cell(f"{text} {FAIL_MARK}{cal}", failed=True, value=text)
 
 
+def evaluate_profile(check: Check, model: str, run: Run | None) -> Cell:
+    """A reported (not judged) cell of another realism profile: the value of its single run,
+    marked with OUTSIDE_MARK when it is outside the check's bound (a bound over seeds is compared
+    with this one value). `failed` stays False: such a value never fails the report; the mark is
+    in `outside`, for the summary."""
+    if model not in check.models or run is None:
+        return Cell(DASH)
+    bound = check.bounds.get(model)
+    if not run.ok:
+        return Cell(run.error, value=run.error, outside=bound is not None)
+    v = lookup(run.metrics, check.metric)
+    text = "— (absent)" if v is _MISSING else fmt_value(v, check.metric)
+    if bound is None or bound.holds(None if v is _MISSING else v):
+        return Cell(text, value=text)
+    return Cell(f"{text} {OUTSIDE_MARK}", value=text, outside=True)
+
+
 def _link(path: Path, doc_dir: Path) -> str:
     return Path(os.path.relpath(path, doc_dir)).as_posix()
 
@@ -536,6 +586,9 @@ def regen_command(args) -> str:
            "--doc", args.doc]
     if args.only:
         cmd += ["--only", args.only]
+    profiles = parse_profiles(getattr(args, "profiles", None))
+    if len(profiles) > 1:
+        cmd += ["--profiles", ",".join(profiles)]
     return " ".join(cmd)
 
 
@@ -545,9 +598,15 @@ def cell(c: Check, m: str, runs: dict, seed_runs: dict | None = None) -> Cell:
     return evaluate(c, m, runs.get(key), seeds[: c.seeds] if seeds and c.seeds else None)
 
 
+def profile_cell(c: Check, m: str, profile_runs: dict, profile: str) -> Cell:
+    return evaluate_profile(c, m, profile_runs.get((profile, c.scenario, c.sets, m)))
+
+
 def build_doc(checks, runs: dict, args, scen_dir: Path, doc_path: Path,
-              seed_runs: dict | None = None) -> str:
+              seed_runs: dict | None = None, profile_runs: dict | None = None) -> str:
     doc_dir = doc_path.parent.resolve()
+    profile_runs = profile_runs or {}
+    others = parse_profiles(getattr(args, "profiles", None))[1:]
     lines = ["# Thesis comparison: results", ""]
     lines.append(f"Generated by `{regen_command(args)}` from `{_link(scen_dir / 'expected.toml', doc_dir)}`; "
                  f"regenerate all of it with `{REGEN_SCRIPT}`. Do not edit by hand: every number "
@@ -578,13 +637,36 @@ def build_doc(checks, runs: dict, args, scen_dir: Path, doc_path: Path,
         "metric, on all local cores or with `--scheduler ADDRESS` on a Dask distributed cluster "
         "(`tools/README.md`).",
         "",
-        "| figure | quantity | thesis | " + " | ".join(MODEL_TITLES[m] for m in MODELS) + " | bound |",
-        "|---|---|---|" + "---|" * len(MODELS) + "---|",
+    ]
+    if others:
+        names = ", ".join(f"`{p}`" for p in others)
+        lines += [
+            f"Realism profiles: the bounds, the percentile runs and every number outside the "
+            f"*{', '.join(others)}* column(s) are for the default profile "
+            f"(`scenario.profile = \"{BASE_PROFILE}\"`). The *{', '.join(others)}* column(s) "
+            f"repeat each check's runs with `--set scenario.profile=\"...\"` ({names}; "
+            f"`docs/simulator.md`, \"Realism profiles\") on the scenario's own seed only "
+            f"(`scenario.seed` = 1 for every thesis scenario; no percentile runs, to keep the "
+            f"time down, and no trace or plots). They are reported, not judged: a value outside "
+            f"the check's bound is marked {OUTSIDE_MARK} (for a bound over seeds, the single "
+            f"run is compared with it) but never fails the report.",
+            "",
+        ]
+    head, rule = [], []
+    for m in MODELS:
+        head.append(MODEL_TITLES[m])
+        head += [f"{MODEL_TITLES[m]}, {p}" for p in others]
+    lines += [
+        "| figure | quantity | thesis | " + " | ".join(head) + " | bound |",
+        "|---|---|---|" + "---|" * len(head) + "---|",
     ]
     for c in checks:
         fig = c.scenario + (" (" + ", ".join(f"`{_md(s)}`" for s in c.sets) + ")" if c.sets else "")
         quantity = f"{_md(c.what)} (`{_md(c.metric)}`)"
-        cells = [cell(c, m, runs, seed_runs).text for m in MODELS]
+        cells = []
+        for m in MODELS:
+            cells.append(cell(c, m, runs, seed_runs).text)
+            cells += [profile_cell(c, m, profile_runs, p).text for p in others]
         bound = "; ".join(f"{m} `{b}`" + (" (calibration)" if m in c.calibration else "")
                           for m, b in c.bounds.items()) or DASH
         if c.seeds and c.bounds:
@@ -721,6 +803,7 @@ def report(args) -> int:
             raise ReportInputError(f"--only: no check uses scenario(s) {', '.join(unknown) or '(none)'}"
                                    f" (known: {', '.join(sorted(known))})")
         checks = [c for c in checks if c.scenario in wanted]
+    profiles = parse_profiles(getattr(args, "profiles", None))
     mcsim = find_mcsim(args.mcsim)
 
     keys = list(dict.fromkeys(k for c in checks for k in c.run_keys()))
@@ -737,7 +820,12 @@ def report(args) -> int:
                     n_seeds[k] = max(n_seeds.get(k, 0), c.seeds)
     seed_runs = {k: [Run(k[0], k[1], k[2], runs[k].dir / "seeds" / f"seed_{s:04d}", seed=s)
                      for s in range(1, n + 1)] for k, n in n_seeds.items()}
-    all_runs = list(runs.values()) + [r for rs in seed_runs.values() for r in rs]
+    # other realism profiles: each run key once more, the scenario's own seed, no trace, into
+    # <run>/profile_<name>/; reported beside the base profile, not judged
+    profile_runs = {(p, *k): Run(k[0], k[1], k[2], runs[k].dir / f"profile_{p}", profile=p)
+                    for p in profiles[1:] for k in keys}
+    judged_runs = list(runs.values()) + [r for rs in seed_runs.values() for r in rs]
+    all_runs = judged_runs + list(profile_runs.values())
 
     # Simulations run in worker threads (each just waits on its mcsim process); the plots are
     # drawn here in the main thread, one at a time, because matplotlib is not thread-safe.
@@ -751,14 +839,15 @@ def report(args) -> int:
             if run.seed is None or not run.ok or done == len(all_runs):
                 print(f"[{done}/{len(all_runs)}] {run.label} ... {status}{run.seconds:.1f} s",
                       flush=True)
-            if run.seed is None and run.ok and not getattr(args, "no_plots", False):
+            if run.seed is None and run.profile == BASE_PROFILE and run.ok \
+                    and not getattr(args, "no_plots", False):
                 render_plots(run, titles[run.scenario], args.dpi)
             elif run.exit_code not in (0, None):
                 log = run.dir / "mcsim.log"
                 for ln in log.read_text(encoding="utf-8", errors="replace").splitlines()[-5:]:
                     print(f"    {ln}", file=sys.stderr)
 
-    doc = build_doc(checks, runs, args, scen_dir, doc_path, seed_runs)
+    doc = build_doc(checks, runs, args, scen_dir, doc_path, seed_runs, profile_runs)
     sweep_failures = []
     if not args.only and not getattr(args, "no_sweeps", False):
         sweep_md, sweep_failures = run_sweeps(scen_dir, out_dir, mcsim, args.jobs)
@@ -778,7 +867,7 @@ def report(args) -> int:
                           f"(bound {b}{', calibration' if m in c.calibration else ''})"
                           for m, b in c.bounds.items()),
               file=sys.stderr)
-    run_failures = [r for r in all_runs if not r.ok]
+    run_failures = [r for r in judged_runs if not r.ok]
     print(f"wrote {doc_path}")
     print(f"report: {len(checks)} checks, {n_bounds} with bounds, {len(failed)} failed")
     bounds = [(c, m) for c in checks for m in c.bounds]
@@ -789,8 +878,20 @@ def report(args) -> int:
               f"over seeds, {sum(1 for c, m in ev_pct if not cell(c, m, runs, seed_runs).failed)} "
               f"of them hold), {len(bounds) - len(ev)} calibration targets")
     if run_failures:
-        print(f"report: {len(run_failures)} of {len(all_runs)} runs failed: "
+        print(f"report: {len(run_failures)} of {len(judged_runs)} runs failed: "
               + ", ".join(r.label for r in run_failures))
+    for p in profiles[1:]:
+        # reported, never counted in the exit status
+        outside = [(c, m) for c, m in bounds if profile_cell(c, m, profile_runs, p).outside]
+        print(f"report: profile {p} (reported, not judged): {len(outside)} of {len(bounds)} "
+              f"bounded values outside the {BASE_PROFILE} bound"
+              + "".join(f"\n  check {c.index} ({c.scenario}{' ' + ' '.join(c.sets) if c.sets else ''}"
+                        f", {c.metric}) {m}: {profile_cell(c, m, profile_runs, p).value} "
+                        f"(bound {c.bounds[m]})" for c, m in outside))
+        failed_p = [r for r in profile_runs.values() if r.profile == p and not r.ok]
+        if failed_p:
+            print(f"report: profile {p}: {len(failed_p)} of {len(keys)} runs failed (reported, "
+                  f"not counted): " + ", ".join(r.label for r in failed_p))
     if sweep_failures:
         print(f"report: sweeps failed: {', '.join(sweep_failures)}")
     return 1 if failed or run_failures or sweep_failures else 0

@@ -329,3 +329,72 @@ def test_report_keeps_the_envelope_block(tmp_path):
     assert "## Envelope" in kept and kept.strip().startswith("<!-- envelope:begin -->")
     assert "old table" not in kept and "tail" not in kept
     assert kept_blocks(tmp_path / "missing.md") == ""
+
+
+HARSH_BODY = FAKE_BODY.replace(
+    'err = (1.234 if model == "fluxmap" else 7.891) * scale',
+    'err = (1.234 if model == "fluxmap" else 7.891) * scale'
+    ' * (1.5 if sets.get("scenario.profile") == \'"harsh"\' else 1.0)')
+
+
+def test_profiles_harsh_is_run_with_the_profile_and_never_fails(tmp_path):
+    """--profiles realistic,harsh: one more run per check key with scenario.profile="harsh"
+    (scenario's own seed, no trace, no percentile runs); its column is reported, a value outside
+    the bound is marked but does not fail the report."""
+    _, scen = make_setup(tmp_path)
+    fake = write_fake_mcsim(tmp_path / "fake_mcsim_harsh.py", HARSH_BODY)
+    # check 1's fluxmap bound holds on every realistic seed (1.23) but not under harsh (1.85)
+    expected = EXPECTED.replace('bound = { fluxmap = "abs <= 2" }',
+                                'bound = { fluxmap = "abs <= 1.5" }\nseeds = 10', 1)
+    (scen / "expected.toml").write_text(textwrap.dedent(expected))
+    rc, out, err = run_report(tmp_path, fake, scen, "--only", "alpha", "--jobs", "2",
+                              "--profiles", "realistic,harsh")
+    assert rc == 1, out + err  # check 2 fails in the realistic profile, as without --profiles
+    assert "report: 3 checks, 2 with bounds, 1 failed" in out
+    assert "FAIL check 2" in err and "FAIL check 1" not in err
+
+    harsh = json.loads((tmp_path / "out" / "alpha__fluxmap" / "profile_harsh"
+                        / "argv.json").read_text())
+    assert 'scenario.profile="harsh"' in harsh and "output.trace=false" in harsh
+    assert not any(a.startswith("scenario.seed") for a in harsh)  # the scenario's own seed
+    assert not (tmp_path / "out" / "alpha__fluxmap" / "profile_harsh" / "seeds").exists()
+    assert not (tmp_path / "out" / "alpha__fluxmap" / "profile_harsh" / "plots").exists()
+    base = json.loads((tmp_path / "out" / "alpha__fluxmap" / "argv.json").read_text())
+    assert not any(a.startswith("scenario.profile") for a in base)
+    for s in range(1, 11):  # percentile runs only for the realistic profile
+        seed = json.loads((tmp_path / "out" / "alpha__fluxmap" / "seeds" / f"seed_{s:04d}"
+                           / "argv.json").read_text())
+        assert not any(a.startswith("scenario.profile") for a in seed)
+
+    doc = (tmp_path / "docs" / "results.md").read_text(encoding="utf-8")
+    assert ("| figure | quantity | thesis | ours, constant parameters | "
+            "ours, constant parameters, harsh | ours, flux map | ours, flux map, harsh | bound |"
+            in doc)
+    assert "--profiles realistic,harsh" in doc and "not judged" in doc
+    rows = table_rows(doc)
+    assert [len(r) for r in rows] == [8, 8, 8]
+    assert rows[0][3:5] == ["7.89°", "11.8°"]  # const: no bound, no mark
+    assert rows[0][5].endswith("✓")
+    assert rows[0][6] == "1.85° ⚠ outside bound"
+    assert rows[1][5] == "2.47° ✗ **FAIL**"   # realistic: judged
+    assert rows[1][6] == "3.70° ⚠ outside bound"  # harsh: only marked
+    assert rows[2][4:7] == ["—", "0.0456 s", "0.0456 s"]
+    assert "report: profile harsh (reported, not judged): 2 of 2 bounded values outside" in out
+
+
+def test_profiles_harsh_alone_does_not_fail(tmp_path):
+    _, scen = make_setup(tmp_path)
+    fake = write_fake_mcsim(tmp_path / "fake_mcsim_harsh.py", HARSH_BODY)
+    expected = EXPECTED.replace('bound = { fluxmap = "<= 2" }', 'bound = { fluxmap = "<= 3" }')
+    (scen / "expected.toml").write_text(textwrap.dedent(expected))
+    rc, out, err = run_report(tmp_path, fake, scen, "--only", "alpha", "--no-plots",
+                              "--profiles", "harsh,realistic")
+    assert rc == 0, out + err  # realistic passes; harsh 3.70 > 3 is only marked
+    assert "3.70° ⚠ outside bound" in (tmp_path / "docs" / "results.md").read_text()
+
+
+@pytest.mark.parametrize("profiles", ["harsh", "realistic,bogus", "", "realistic,harsh,harsh"])
+def test_bad_profiles_exit_2(tmp_path, profiles):
+    fake, scen = make_setup(tmp_path)
+    rc, _, err = run_report(tmp_path, fake, scen, "--profiles", profiles)
+    assert rc == 2 and "--profiles" in err
