@@ -24,7 +24,7 @@ void mc_protect_reset(mc_drive_t *d)
     d->prot.i_sum_n = d->prot.track_n = d->prot.lock_n = d->prot.stall_n = d->prot.resid_n = 0u;
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistence */
     d->prot.k = 1.0f - expf(-MC_2PI * 20.0f * d->blk.ts);
-    d->prot.w_raw = d->prot.err_d = d->prot.err_q = 0.0f;
+    d->prot.w_raw = d->prot.err_d = d->prot.err_q = d->prot.w_dev2 = 0.0f;
     d->prot.u_d = d->prot.u_q = d->prot.i_d = d->prot.i_q = d->prot.w = 0.0f;
 }
 
@@ -55,7 +55,14 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
     const float k = d->prot.k;
     const float w_raw = avg(&d->prot.w_raw, omega_raw, k);
     const float lock_band = b->lock_tol * fabsf(ang->omega) + b->lock_floor;
-    if (persists(&d->prot.lock_n, !(fabsf(w_raw - ang->omega) <= lock_band), b->lock_n)) {
+    /* ... or the filtered speed itself swinging about its 20 Hz average by more than the floor
+     * (rms): an estimator whose speed error feeds back through the speed and current loops
+     * (a model error, see docs/protection.md) oscillates like this for a while before it loses
+     * the angle */
+    const float dev = ang->omega - d->prot.w;
+    const float dev2 = avg(&d->prot.w_dev2, dev * dev, k);
+    const bool swing = b->lock_n > 0u && dev2 > b->lock_floor * b->lock_floor;
+    if (persists(&d->prot.lock_n, swing || !(fabsf(w_raw - ang->omega) <= lock_band), b->lock_n)) {
         return MC_FAULT_LOSS_OF_LOCK;
     }
     /* (c) the current does not follow its reference (a wrong angle, a missing phase at

@@ -169,6 +169,7 @@ typedef struct {
         uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;   /* periods the condition held  */
         float k;                 /* one 20 Hz first-order low-pass for all averages below     */
         float w_raw, err_d, err_q;            /* raw speed, current error                    */
+        float w_dev2;                         /* mean square of the speed's swing about w    */
         float u_d, u_q, i_d, i_q, w;          /* voltage, current, speed for the residual    */
     } prot;
     uint32_t step3_count;
