@@ -6,6 +6,16 @@
 #include "mc/transforms.h"
 #include "drive_internal.h"
 
+/* The telemetry, published as one consistent record; its state fields are the sequencer's, set
+ * here only. */
+static void publish(mc_drive_t *d)
+{
+    d->tm.state = d->seq.state;
+    d->tm.init_step = d->seq.step;
+    d->tm.faults = d->seq.faults;
+    mc_drive_telbuf_write(&d->link->telem, &d->tm);
+}
+
 /* A command is taken whole or not at all: every number finite, the mode known. The validator of
  * the command buffer (mc/handover.h): it runs in the ISR on the published slot. */
 static uint32_t check_command(const void *cmd, void *ctx)
@@ -39,11 +49,11 @@ bool mc_drive_init(mc_drive_t *d, mc_drive_link_t *link, const mc_drive_cfg_t *c
     /* the configuration is built in the link's first slot: the active one from now on */
     mc_drive_built_t *b = &link->cfg.slot[0];
     if (!mc_drive_build(cfg, b, &d->cfg_err)) {
+        *b = (mc_drive_built_t){0};   /* the ISR scales its telemetry with it: zeros, not garbage */
+        d->cfg = b;
         mc_drive_cfgbuf_init(&link->cfg, 0);
         mc_seq_fault(&d->seq, MC_FAULT_CONFIG);
-        d->tm.state = d->seq.state;
-        d->tm.faults = d->seq.faults;
-        mc_drive_telbuf_write(&link->telem, &d->tm);
+        publish(d);
         return false;
     }
     mc_drive_cfgbuf_init(&link->cfg, 0);
@@ -52,7 +62,7 @@ bool mc_drive_init(mc_drive_t *d, mc_drive_link_t *link, const mc_drive_cfg_t *c
     for (int k = 0; k < 3; ++k) {
         d->offset[k] = b->blk.offset_nominal;
     }
-    mc_drive_telbuf_write(&link->telem, &d->tm);
+    publish(d);
     return true;
 }
 
@@ -68,7 +78,7 @@ const mc_param_err_t *mc_drive_config_error(const mc_drive_t *d)
 
 const mc_params_t *mc_drive_params(const mc_drive_t *d)
 {
-    return &d->p;
+    return &d->cfg->p;
 }
 
 void mc_drive_command(mc_drive_t *d, const mc_drive_cmd_t *cmd)
@@ -135,7 +145,7 @@ static mc_dq_t slew(mc_drive_t *d, mc_dq_t target)
 {
     const float dd = target.d - d->i_ref_prev.d;
     const float dq = target.q - d->i_ref_prev.q;
-    const float step = d->blk.i_slew * d->blk.ts;
+    const float step = d->cfg->blk.i_slew * d->cfg->blk.ts;
     const float len2 = dd * dd + dq * dq;
     /* Most periods the reference moves far less than a step: the squared length with a 0.1 %
      * margin (far above rounding) settles that without the square root; only near or above
@@ -157,9 +167,9 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
     switch (d->cmd.mode) {
     case MC_MODE_CURRENT:
         d->tm.torque_ref = 0.0f;
-        return slew(d, mc_limit_current_circle(d->cmd.i_ref, d->blk.i_ref_max));
+        return slew(d, mc_limit_current_circle(d->cmd.i_ref, d->cfg->blk.i_ref_max));
     case MC_MODE_SPEED:
-        torque = mc_sc_step(&d->sc, d->cmd.speed_ref, omega / (float)d->blk.pole_pairs);
+        torque = mc_sc_step(&d->sc, d->cmd.speed_ref, omega / (float)d->cfg->blk.pole_pairs);
         break;
     case MC_MODE_TORQUE:
     default:
@@ -172,7 +182,7 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
 
 void mc_drive_isr(mc_drive_t *d)
 {
-    const mc_drive_blk_t *c = &d->blk;
+    const mc_drive_blk_t *c = &d->cfg->blk;
     take_command(d);
     take_config(d);
 
@@ -196,7 +206,7 @@ void mc_drive_isr(mc_drive_t *d)
      *    Only RUN and Step III continue into the control pipeline. */
     if (!mc_drive_startup(d, &raw, i_abc, i_ab, vdc)) {
         d->i_ab_prev = i_ab;
-        mc_drive_telbuf_write(&d->link->telem, &d->tm);
+        publish(d);
         return;
     }
 
@@ -233,10 +243,8 @@ void mc_drive_isr(mc_drive_t *d)
     const uint32_t implausible = mc_protect_running(d, &ang, d->tm.omega_raw, i_ref, i_fb, d->cc.u);
     if (implausible != 0u) {
         mc_drive_trip(d, implausible);
-        d->tm.state = d->seq.state;
-        d->tm.faults = d->seq.faults;
         d->i_ab_prev = i_ab;
-        mc_drive_telbuf_write(&d->link->telem, &d->tm);
+        publish(d);
         return;
     }
 
@@ -255,9 +263,7 @@ void mc_drive_isr(mc_drive_t *d)
     if (!(isfinite(duty.a) && isfinite(duty.b) && isfinite(duty.c))) {
         /* never a NaN to the PWM: whatever produced it, the outputs go off with the reason */
         mc_drive_trip(d, MC_FAULT_NUMERIC);
-        d->tm.state = d->seq.state;
-        d->tm.faults = d->seq.faults;
-        mc_drive_telbuf_write(&d->link->telem, &d->tm);
+        publish(d);
         return;
     }
     hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
@@ -284,7 +290,7 @@ void mc_drive_isr(mc_drive_t *d)
     }
 
     /* 12. The telemetry, published as one consistent record. */
-    mc_drive_telbuf_write(&d->link->telem, &d->tm);
+    publish(d);
 }
 
 void mc_drive_background(mc_drive_t *d)

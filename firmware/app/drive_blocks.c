@@ -7,8 +7,7 @@
  * outputs are off). Copies only: the derivation happened in mc_drive_build. */
 void mc_drive_apply(mc_drive_t *d, const mc_drive_built_t *b)
 {
-    d->p = b->p;
-    d->blk = b->blk;
+    d->cfg = b;
     d->src = mc_angle_src_get(b->p.angle_src);
     mc_cc_init(&d->cc, &b->cc);
     mc_sc_init(&d->sc, &b->sc);
@@ -24,27 +23,26 @@ void mc_drive_apply(mc_drive_t *d, const mc_drive_built_t *b)
  * configurations they hold, no derivation. */
 void mc_drive_init_blocks(mc_drive_t *d)
 {
-    const mc_drive_blk_t *b = &d->blk;
+    const mc_drive_blk_t *b = &d->cfg->blk;
     const mc_cc_cfg_t cc = d->cc.cfg;
     mc_cc_init(&d->cc, &cc);
     const mc_sc_cfg_t sc = d->sc.cfg;
     mc_sc_init(&d->sc, &sc);
     d->tref.mtpa_valid = false;
     d->tref.fw_active = false;
-    mc_lpf1_init(&d->step3_speed, 50.0f, b->ts, 0.0f);
+    d->step3_speed = b->step3_lpf;   /* filters as built in the background, their state at rest */
     d->src->init(&d->src_state, &b->src);
     mc_inj_init(&d->inj, &b->inj);
-    mc_biquad_init_notch(&d->notch_d, b->f_notch, b->notch_q, b->ts);
-    mc_biquad_init_notch(&d->notch_q, b->f_notch, b->notch_q, b->ts);
+    d->notch_d = b->notch;
+    d->notch_q = b->notch;
 }
 
-/* While running: only RUNTIME parameters can have changed; gains and limits change, the
- * controllers' integrators, outputs and counters stay. */
+/* While running: only RUNTIME parameters (and the rules that follow them) can have changed; the
+ * blocks that keep a copy of their configuration get the new gains and limits, the controllers'
+ * integrators, outputs and counters stay. */
 void mc_drive_retune(mc_drive_t *d, const mc_drive_built_t *b)
 {
-    d->p = b->p;
-    d->blk.i_ref_max = b->blk.i_ref_max;
-    d->blk.i_slew = b->blk.i_slew;
+    d->cfg = b;   /* limits, slew, protection: read from it from now on */
     d->inj.cfg.v1 = b->blk.inj.v1;
     d->inj.cfg.omega_n1 = b->blk.inj.omega_n1;
     const float integ_d = d->cc.pi_d.integ, integ_q = d->cc.pi_q.integ;

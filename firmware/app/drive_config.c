@@ -11,16 +11,6 @@ void mc_drive_cfg_default(mc_drive_cfg_t *cfg)
     cfg->est = (mc_est_model_t){.rs = NAN, .ld = NAN, .lq = NAN, .psi_pm = NAN, .map = 0};
 }
 
-static bool model_err(mc_param_err_t *err, int param, float value, const char *text)
-{
-    if (err != 0) {
-        *err = (mc_param_err_t){.kind = MC_PERR_MODEL, .param = param, .param2 = -1, .value = value,
-                                .value2 = 0.0f, .min = mc_param_table[param].min, .max = mc_param_table[param].max,
-                                .text = text};
-    }
-    return false;
-}
-
 static float or_motor(float v, float motor)
 {
     return isnan(v) ? motor : v;
@@ -38,26 +28,26 @@ static bool check_model(const mc_params_t *p, const mc_est_model_t *in, mc_est_m
     for (int k = 0; k < 4; ++k) {
         const mc_param_info_t *e = &mc_param_table[vals[k].id];
         if (!isfinite(vals[k].v) || vals[k].v < e->min || vals[k].v > e->max) {
-            return model_err(err, vals[k].id, vals[k].v, "the estimator model's value is out of the motor entry's range");
+            return mc_param_fail(err, MC_PERR_MODEL, vals[k].id, vals[k].v, "the estimator model's value is out of the motor entry's range");
         }
     }
     const mc_flux_map_t *map = m->map;
     if (map == 0) {
-        return need_map ? model_err(err, MC_PARAM_est_model, 0.0f, "this configuration needs the estimator's flux map")
+        return need_map ? mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_est_model, 0.0f, "this configuration needs the estimator's flux map")
                         : true;
     }
     if (map->n_d < 2 || map->n_d > MC_FLUX_MAP_MAX || map->n_q < 2 || map->n_q > MC_FLUX_MAP_MAX) {
-        return model_err(err, MC_PARAM_est_model, (float)(map->n_d < 2 || map->n_d > MC_FLUX_MAP_MAX ? map->n_d : map->n_q),
+        return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_est_model, (float)(map->n_d < 2 || map->n_d > MC_FLUX_MAP_MAX ? map->n_d : map->n_q),
                          "flux map grid points per axis must be 2..41");
     }
     if (!isfinite(map->id0) || !isfinite(map->iq0) || !(map->did > 0.0f) || !(map->diq > 0.0f) ||
         !isfinite(map->did) || !isfinite(map->diq)) {
-        return model_err(err, MC_PARAM_est_model, map->did, "flux map grid origin and steps must be finite, steps > 0");
+        return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_est_model, map->did, "flux map grid origin and steps must be finite, steps > 0");
     }
     for (int k = 0; k < map->n_d * map->n_q; ++k) {
         if (!isfinite(map->psi_d[k]) || !isfinite(map->psi_q[k]) || fabsf(map->psi_d[k]) > 100.0f ||
             fabsf(map->psi_q[k]) > 100.0f) {
-            return model_err(err, MC_PARAM_est_model, map->psi_d[k], "flux map values must be finite and below 100 Wb");
+            return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_est_model, map->psi_d[k], "flux map values must be finite and below 100 Wb");
         }
     }
     return true;
@@ -103,6 +93,7 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
                             .timeout_step12 = p->timeout_step12, .timeout_step3 = p->timeout_step3};
     b->step3_speed_tol = p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
     b->step3_hold = (uint32_t)(p->step3_hold / p->ts + 0.5f);
+    mc_lpf1_init(&b->step3_lpf, 50.0f, p->ts, 0.0f);
 }
 
 static void build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
@@ -132,8 +123,8 @@ static void build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive
     b->inject = mc_angle_src_get(p->angle_src)->needs_injection && p->inj_kind != (int32_t)MC_INJ_OFF;
     b->inj = (mc_inj_cfg_t){.kind = (mc_inj_kind_t)p->inj_kind, .v1 = p->inj_v1, .f_hz = p->inj_f_hz,
                             .omega_n1 = s->omega_n1, .ts = p->ts};
-    b->f_notch = p->inj_f_hz < 0.45f / p->ts ? p->inj_f_hz : 0.45f / p->ts;
-    b->notch_q = p->notch_q;
+    const float f_notch = p->inj_f_hz < 0.45f / p->ts ? p->inj_f_hz : 0.45f / p->ts;
+    mc_biquad_init_notch(&b->notch, f_notch, p->notch_q, p->ts);
 }
 
 static uint32_t periods_of(float seconds, float ts)
@@ -145,6 +136,8 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
 {
     const float el = RPM_TO_RAD_S * (float)p->pole_pairs;
     b->overspeed = p->overspeed_rpm * el;
+    /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */
+    b->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
     b->i_sum_tol = p->i_sum_tol;
     b->i_sum_n = periods_of(p->i_sum_time, p->ts);
     b->track_err = p->track_err;
@@ -208,36 +201,25 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     return true;
 }
 
-static bool write_err(mc_param_err_t *err, mc_param_err_kind_t kind, int id, float value, const char *text)
-{
-    if (err != 0) {
-        *err = (mc_param_err_t){.kind = kind, .param = id, .param2 = -1, .value = value, .value2 = 0.0f,
-                                .min = id >= 0 && id < (int)MC_PARAM_COUNT ? mc_param_table[id].min : 0.0f,
-                                .max = id >= 0 && id < (int)MC_PARAM_COUNT ? mc_param_table[id].max : 0.0f,
-                                .text = text};
-    }
-    return false;
-}
-
 /* Background side of a parameter change: the whole configuration is derived and validated again
  * from the newest one with this one value changed, into the spare slot of the link; the ISR swaps
  * it in at its next period (take_config in drive.c). */
 bool mc_drive_param_write(mc_drive_t *d, int id, float value, mc_param_err_t *err)
 {
     if (id < 0 || id >= (int)MC_PARAM_COUNT) {
-        return write_err(err, MC_PERR_UNKNOWN, id, value, "no such parameter");
+        return mc_param_fail(err, MC_PERR_UNKNOWN, id, value, "no such parameter");
     }
     if ((mc_drive_faults(d) & MC_FAULT_CONFIG) != 0u) {
-        return write_err(err, MC_PERR_ACCESS, id, value, "the configuration was refused at init: init again");
+        return mc_param_fail(err, MC_PERR_ACCESS, id, value, "the configuration was refused at init: init again");
     }
     const mc_state_t st = mc_drive_state(d);
     const bool outputs_off = st == MC_STATE_IDLE || st == MC_STATE_FAULT;
     switch ((mc_param_access_t)mc_param_table[id].access) {
     case MC_PA_INIT:
-        return write_err(err, MC_PERR_ACCESS, id, value, "only at init");
+        return mc_param_fail(err, MC_PERR_ACCESS, id, value, "only at init");
     case MC_PA_STANDSTILL:
         if (!outputs_off) {
-            return write_err(err, MC_PERR_ACCESS, id, value, "only while the outputs are off");
+            return mc_param_fail(err, MC_PERR_ACCESS, id, value, "only while the outputs are off");
         }
         break;
     case MC_PA_RUNTIME:
@@ -246,7 +228,7 @@ bool mc_drive_param_write(mc_drive_t *d, int id, float value, mc_param_err_t *er
     }
     mc_drive_built_t *slot = mc_drive_cfgbuf_begin(&d->link->cfg);
     if (slot == 0) {
-        return write_err(err, MC_PERR_BUSY, id, value, "the previous change is not taken yet: retry");
+        return mc_param_fail(err, MC_PERR_BUSY, id, value, "the previous change is not taken yet: retry");
     }
     mc_drive_cfg_t cfg = {.p = mc_drive_cfgbuf_latest(&d->link->cfg)->p, .est = d->est};
     if (!mc_param_set(&cfg.p, id, value, err) || !mc_drive_build(&cfg, slot, err)) {

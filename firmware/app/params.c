@@ -75,14 +75,14 @@ void mc_param_set_auto(mc_params_t *p, int id, bool on)
     p->auto_mask[id / 32] = on ? (p->auto_mask[id / 32] | bit) : (p->auto_mask[id / 32] & ~bit);
 }
 
-static void set_err(mc_param_err_t *err, mc_param_err_kind_t kind, int id, float value, const char *text)
+bool mc_param_fail(mc_param_err_t *err, mc_param_err_kind_t kind, int id, float value, const char *text)
 {
-    if (err == NULL) {
-        return;
+    if (err != NULL) {
+        *err = (mc_param_err_t){.kind = kind, .param = id, .param2 = -1, .value = value, .value2 = 0.0f,
+                                .min = valid_id(id) ? mc_param_table[id].min : 0.0f,
+                                .max = valid_id(id) ? mc_param_table[id].max : 0.0f, .text = text};
     }
-    *err = (mc_param_err_t){.kind = kind, .param = id, .param2 = -1, .value = value, .value2 = 0.0f,
-                            .min = valid_id(id) ? mc_param_table[id].min : 0.0f,
-                            .max = valid_id(id) ? mc_param_table[id].max : 0.0f, .text = text};
+    return false;
 }
 
 /* Stores without any check (defaults and derived values come from the table itself). */
@@ -98,18 +98,15 @@ static void store(mc_params_t *p, int id, float v)
 bool mc_param_set(mc_params_t *p, int id, float value, mc_param_err_t *err)
 {
     if (!valid_id(id)) {
-        set_err(err, MC_PERR_UNKNOWN, id, value, "no such parameter");
-        return false;
+        return mc_param_fail(err, MC_PERR_UNKNOWN, id, value, "no such parameter");
     }
     if (mc_param_table[id].type != MC_PT_F32) {
         /* converting a NaN, an infinity or anything outside int32 to int32_t is undefined */
         if (!isfinite(value) || fabsf(value) > 2.0e9f) {
-            set_err(err, MC_PERR_NOT_FINITE, id, value, "not a finite integer");
-            return false;
+            return mc_param_fail(err, MC_PERR_NOT_FINITE, id, value, "not a finite integer");
         }
         if (floorf(value) != value) {
-            set_err(err, MC_PERR_NOT_INTEGER, id, value, "must be a whole number");
-            return false;
+            return mc_param_fail(err, MC_PERR_NOT_INTEGER, id, value, "must be a whole number");
         }
     }
     store(p, id, value);
@@ -141,13 +138,11 @@ static int choice_index(const char *choices, const char *choice)
 bool mc_param_set_choice(mc_params_t *p, int id, const char *choice, mc_param_err_t *err)
 {
     if (!valid_id(id) || mc_param_table[id].type != MC_PT_ENUM || choice == NULL) {
-        set_err(err, MC_PERR_UNKNOWN, id, 0.0f, "not a choice parameter");
-        return false;
+        return mc_param_fail(err, MC_PERR_UNKNOWN, id, 0.0f, "not a choice parameter");
     }
     const int k = choice_index(mc_param_table[id].choices, choice);
     if (k < 0) {
-        set_err(err, MC_PERR_RANGE, id, 0.0f, "not one of the choices");
-        return false;
+        return mc_param_fail(err, MC_PERR_RANGE, id, 0.0f, "not one of the choices");
     }
     return mc_param_set(p, id, (float)k, err);
 }
@@ -416,12 +411,10 @@ bool mc_params_validate(const mc_params_t *p, mc_param_err_t *err)
         const mc_param_info_t *e = &mc_param_table[k];
         const float v = mc_param_get(p, k);
         if (!isfinite(v)) {
-            set_err(err, MC_PERR_NOT_FINITE, k, v, "not a finite number");
-            return false;
+            return mc_param_fail(err, MC_PERR_NOT_FINITE, k, v, "not a finite number");
         }
         if (v < e->min || v > e->max) {
-            set_err(err, MC_PERR_RANGE, k, v, "out of range");
-            return false;
+            return mc_param_fail(err, MC_PERR_RANGE, k, v, "out of range");
         }
     }
     const float fs = 1.0f / p->ts;

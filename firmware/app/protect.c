@@ -22,15 +22,13 @@ static float avg(float *y, float x, float k)
 void mc_protect_reset(mc_drive_t *d)
 {
     d->prot.i_sum_n = d->prot.track_n = d->prot.lock_n = d->prot.stall_n = d->prot.resid_n = 0u;
-    /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistence */
-    d->prot.k = 1.0f - expf(-MC_2PI * 20.0f * d->blk.ts);
     d->prot.w_raw = d->prot.err_d = d->prot.err_q = d->prot.w_dev2 = 0.0f;
     d->prot.u_d = d->prot.u_q = d->prot.i_d = d->prot.i_q = d->prot.w = 0.0f;
 }
 
 uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i)
 {
-    const mc_drive_blk_t *b = &d->blk;
+    const mc_drive_blk_t *b = &d->cfg->blk;
     if (raw->overrun) {
         return MC_FAULT_OVERRUN;   /* the samples of this period are not the ones of its start */
     }
@@ -46,13 +44,13 @@ uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t
 uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb,
                             mc_dq_t u_dq)
 {
-    const mc_drive_blk_t *b = &d->blk;
+    const mc_drive_blk_t *b = &d->cfg->blk;
     if (!(fabsf(ang->omega) <= b->overspeed)) {
         return MC_FAULT_OVERSPEED;   /* also a NaN speed */
     }
     /* (a) the estimator's raw speed against the filtered one: a lock on the wrong solution shows
      * as a raw speed of the wrong sign or size while the PLL keeps its speed (thesis Fig. 6.9) */
-    const float k = d->prot.k;
+    const float k = b->avg_k;
     const float w_raw = avg(&d->prot.w_raw, omega_raw, k);
     const float lock_band = b->lock_tol * fabsf(ang->omega) + b->lock_floor;
     /* ... or the filtered speed itself swinging about its 20 Hz average by more than the floor
@@ -81,7 +79,7 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
     const float ud = avg(&d->prot.u_d, u_dq.d, k), uq = avg(&d->prot.u_q, u_dq.q, k);
     const float id = avg(&d->prot.i_d, i_fb.d, k), iq = avg(&d->prot.i_q, i_fb.q, k);
     const float w = avg(&d->prot.w, ang->omega, k);
-    const mc_params_t *p = &d->p;
+    const mc_params_t *p = &d->cfg->p;
     const float rd = ud - p->rs * id + w * p->lq * iq;
     const float rq = uq - p->rs * iq - w * (p->ld * id + p->psi_pm);
     const float r_max = b->resid_v + b->resid_w_coef * fabsf(w);

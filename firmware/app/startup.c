@@ -28,7 +28,7 @@ static void pipeline_reset(mc_drive_t *d, float theta)
     mc_cc_reset(&d->cc);
     mc_biquad_reset(&d->notch_d, 0.0f);
     mc_biquad_reset(&d->notch_q, 0.0f);
-    mc_lpf1_init(&d->step3_speed, 50.0f, d->blk.ts, 0.0f);
+    d->step3_speed = d->cfg->blk.step3_lpf;   /* coefficients built in the background, state at rest */
     d->step3_count = 0u;
     mc_protect_reset(d);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
@@ -63,7 +63,7 @@ static void write_duties(mc_drive_t *d, mc_abc_t duty, float vdc)
 
 static void protect(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i, float vdc)
 {
-    const mc_drive_blk_t *c = &d->blk;
+    const mc_drive_blk_t *c = &d->cfg->blk;
     /* any phase above the trip level, or a sample at an ADC rail: a clipped channel says only
      * that the current is beyond the span, which the configuration keeps above the trip level */
     bool rail = false;
@@ -101,12 +101,12 @@ static const program_slot_t step2_programs[] = {
 
 static bool begin_program(mc_drive_t *d, const program_slot_t *slot, float theta_in)
 {
-    return mc_phase_begin(&d->phase, slot->prog, (const char *)&d->blk + slot->cfg_offset, theta_in);
+    return mc_phase_begin(&d->phase, slot->prog, (const char *)&d->cfg->blk + slot->cfg_offset, theta_in);
 }
 
 static bool begin_step1(mc_drive_t *d)
 {
-    return begin_program(d, &step1_programs[d->blk.ip1_pulse3 ? 1 : 0], 0.0f);
+    return begin_program(d, &step1_programs[d->cfg->blk.ip1_pulse3 ? 1 : 0], 0.0f);
 }
 
 /* Average the current channels with the outputs off; the offsets must be plausible. */
@@ -115,12 +115,12 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     for (int k = 0; k < 3; ++k) {
         d->cal_sum[k] += (float)raw->i[k];
     }
-    if (++d->cal_count < d->blk.cal_samples) {
+    if (++d->cal_count < d->cfg->blk.cal_samples) {
         return;
     }
     for (int k = 0; k < 3; ++k) {
         const float off = d->cal_sum[k] / (float)d->cal_count;
-        if (!(fabsf(off - d->blk.offset_nominal) <= d->blk.offset_tol)) {
+        if (!(fabsf(off - d->cfg->blk.offset_nominal) <= d->cfg->blk.offset_tol)) {
             mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
             return;
         }
@@ -150,7 +150,7 @@ static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     mc_phase_result(&d->phase, &res);
     if (d->seq.step == MC_INIT_STEP1) {
         d->tm.theta1 = res.theta;
-        if (!begin_program(d, &step2_programs[d->blk.ip2_dvi ? 1 : 0], res.theta)) {
+        if (!begin_program(d, &step2_programs[d->cfg->blk.ip2_dvi ? 1 : 0], res.theta)) {
             return MC_IP_FAILED;
         }
         mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
@@ -199,9 +199,6 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
     if (d->seq.state == MC_STATE_FAULT && hal_pwm_enabled(d->hal.pwm)) {
         outputs_off(d);   /* a timeout raised by the tick */
     }
-    d->tm.state = d->seq.state;
-    d->tm.init_step = d->seq.step;
-    d->tm.faults = d->seq.faults;
     return d->seq.state == MC_STATE_RUN ||
            (d->seq.state == MC_STATE_INIT_POS && d->seq.step == MC_INIT_STEP3 && s0 == MC_STATE_INIT_POS &&
             d->seq.ticks > 1u);
@@ -213,11 +210,9 @@ void mc_drive_step3_check(mc_drive_t *d, float omega_hat)
      * at rest in Step III) stays below the tolerance for step3_hold, and Step III lasted at
      * least twice that (the estimate starts at rest too). */
     const float w = mc_lpf1_step(&d->step3_speed, fabsf(omega_hat));
-    d->step3_count = w < d->blk.step3_speed_tol ? d->step3_count + 1u : 0u;
-    const uint32_t hold = d->blk.step3_hold;
+    d->step3_count = w < d->cfg->blk.step3_speed_tol ? d->step3_count + 1u : 0u;
+    const uint32_t hold = d->cfg->blk.step3_hold;
     if (d->step3_count >= hold && d->seq.ticks >= 2u * hold) {
         mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
-        d->tm.state = d->seq.state;
-        d->tm.init_step = d->seq.step;
     }
 }

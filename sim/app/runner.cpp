@@ -367,9 +367,7 @@ private:
 void check_scenario(const Scenario& sc)
 {
     const Resolved r = resolve(sc);
-    const PlantConfig pc = plant_config(sc, r);
     const std::unique_ptr<FluxModel> magnetics = make_plant_model(sc, r.mp);
-    (void)pc;
     drive_setup(sc, r, *magnetics);
 }
 

@@ -105,7 +105,9 @@ typedef struct {
     float step3_speed_tol;       /* [rad/s el]                                               */
     uint32_t step3_hold;         /* [periods]                                                */
     bool  inject, three_step, ip1_pulse3, ip2_dvi;
-    float f_notch, notch_q;
+    mc_biquad_t notch;           /* at the injection frequency, state at rest                 */
+    mc_lpf1_t step3_lpf;         /* Step III's |omega_hat| low-pass (50 Hz), state at rest     */
+    float avg_k;                 /* the detectors' 20 Hz first-order low-pass coefficient      */
     /* protection (protect.c): limits in SI, persistence in periods (0: detector off) */
     float overspeed;             /* [rad/s el]                                               */
     float i_sum_tol, track_err, lock_tol, lock_floor, stall_speed, stall_torque;
@@ -146,9 +148,10 @@ typedef struct {
 } mc_drive_link_t;
 
 typedef struct {
-    mc_params_t p;               /* the resolved parameters in force          */
+    /* The configuration in force: the link's active slot (the ISR takes a new one at a period
+     * boundary; the background never writes the active slot), so no copy is kept here. */
+    const mc_drive_built_t *cfg;
     mc_est_model_t est;          /* the estimator's model as given            */
-    mc_drive_blk_t blk;
     mc_param_err_t cfg_err;      /* why mc_drive_init refused the configuration */
     mc_drive_hal_t hal;
     mc_drive_link_t *link;       /* the caller's mailbox (commands, telemetry, configuration) */
@@ -167,8 +170,7 @@ typedef struct {
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
     struct {                     /* the plausibility detectors' state (protect.c)            */
         uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;   /* periods the condition held  */
-        float k;                 /* one 20 Hz first-order low-pass for all averages below     */
-        float w_raw, err_d, err_q;            /* raw speed, current error                    */
+        float w_raw, err_d, err_q;            /* averages (blk.avg_k): raw speed, current error */
         float w_dev2;                         /* mean square of the speed's swing about w    */
         float u_d, u_q, i_d, i_q, w;          /* voltage, current, speed for the residual    */
     } prot;

@@ -89,6 +89,9 @@ typedef struct {
     const char *text;        /* static text, e.g. "must be below hw.i_span_a / 1.1"       */
 } mc_param_err_t;
 
+/* Fill err (may be NULL) with kind, parameter id (its table range as min/max), value and a static
+ * text; returns false, so that a check can `return mc_param_fail(...)`. */
+bool mc_param_fail(mc_param_err_t *err, mc_param_err_kind_t kind, int id, float value, const char *text);
 /* Name of a group (for docs and tools). */
 const char *mc_param_group_name(mc_param_group_t g);
 /* Id of "group.key", or -1. */

@@ -93,9 +93,9 @@ static void rig_init(rig_t *r, const char *source)
     assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_est_model, "const", NULL));   /* no map */
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     for (int k = 0; k < 3; ++k) {
-        r->adc.sample.i[k] = (uint16_t)r->d.blk.offset_nominal;   /* zero current */
+        r->adc.sample.i[k] = (uint16_t)r->d.cfg->blk.offset_nominal;   /* zero current */
     }
-    r->adc.sample.vdc = (uint16_t)lrintf(300.0f / r->d.blk.volts_per_count);
+    r->adc.sample.vdc = (uint16_t)lrintf(300.0f / r->d.cfg->blk.volts_per_count);
 }
 
 static void run(rig_t *r, int n)
@@ -112,7 +112,7 @@ static void enable(rig_t *r, float theta_init)
     const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = {0.0f, 1.0f},
                               .theta_init = theta_init};
     mc_drive_command(&r->d, &c);
-    run(r, (int)r->d.p.offset_cal_samples + 1);
+    run(r, (int)r->d.cfg->p.offset_cal_samples + 1);
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
 }
 
@@ -163,8 +163,8 @@ static void test_drive_runs_with_held_angle(void **st)
     test_hold_omega = 0.0f;
     rig_init(&r, "test_hold");
     assert_ptr_equal(r.d.src, &mc_angle_src_test_hold);
-    assert_int_equal(r.d.p.inj_kind, 1);   /* sine: would inject with an estimator */
-    assert_false(r.d.blk.inject);
+    assert_int_equal(r.d.cfg->p.inj_kind, 1);   /* sine: would inject with an estimator */
+    assert_false(r.d.cfg->blk.inject);
     const float held = 1.234f;
     enable(&r, held);
     for (int k = 0; k < 200; ++k) {
@@ -203,7 +203,7 @@ static void test_drive_follows_ramp(void **st)
         assert_true(tm->u_inj == 0.0f);
         assert_true(tm->theta >= -MC_PI && tm->theta < MC_PI);
         const float step = mc_wrap_pi(tm->theta - prev);
-        assert_float_equal(step, 300.0f * r.d.p.ts, 1e-5f);
+        assert_float_equal(step, 300.0f * r.d.cfg->p.ts, 1e-5f);
         wraps += tm->theta < prev ? 1 : 0;
         prev = tm->theta;
     }
@@ -217,7 +217,7 @@ static void test_estimator_source_injects(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r, "unop");
-    assert_true(r.d.blk.inject);
+    assert_true(r.d.cfg->blk.inject);
     enable(&r, 0.0f);
     float peak = 0.0f;
     for (int k = 0; k < 20; ++k) {

@@ -23,7 +23,7 @@ typedef struct {
 /* ADC counts for a phase current with the drive's scaling (default 12 bit over +-25 A). */
 static uint16_t counts(const mc_drive_t *d, float amps)
 {
-    return (uint16_t)lrintf(d->blk.offset_nominal + amps / d->blk.amps_per_count);
+    return (uint16_t)lrintf(d->cfg->blk.offset_nominal + amps / d->cfg->blk.amps_per_count);
 }
 
 static void set_inputs(rig_t *r, float ia, float ib, float vdc)
@@ -31,7 +31,7 @@ static void set_inputs(rig_t *r, float ia, float ib, float vdc)
     r->adc.sample.i[0] = counts(&r->d, ia);
     r->adc.sample.i[1] = counts(&r->d, ib);
     r->adc.sample.i[2] = counts(&r->d, -ia - ib);
-    r->adc.sample.vdc = (uint16_t)lrintf(vdc / r->d.blk.volts_per_count);
+    r->adc.sample.vdc = (uint16_t)lrintf(vdc / r->d.cfg->blk.volts_per_count);
 }
 
 static void rig_init(rig_t *r)
@@ -74,7 +74,7 @@ static void test_enable_calibrates_then_runs(void **st)
     /* offsets of +30 counts on phase a: the calibration must find and remove them */
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     r.adc.sample.i[0] = (uint16_t)(r.adc.sample.i[0] + 30u);
-    run(&r, (int)r.d.p.offset_cal_samples - 1);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples - 1);
     assert_int_equal(mc_drive_telemetry(&r.d)->state, MC_STATE_OFFSET_CAL);
     assert_false(hal_pwm_enabled(&r.pwm));
     run(&r, 1);
@@ -90,10 +90,10 @@ static void test_overcurrent_trips_and_latches(void **st)
     static rig_t r;
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 
-    set_inputs(&r, r.d.p.i_trip + 1.0f, 0.0f, 300.0f);
+    set_inputs(&r, r.d.cfg->p.i_trip + 1.0f, 0.0f, 300.0f);
     run(&r, 1);
     assert_int_equal(mc_drive_telemetry(&r.d)->state, MC_STATE_FAULT);
     assert_true(mc_drive_telemetry(&r.d)->faults & MC_FAULT_OVERCURRENT);
@@ -113,7 +113,7 @@ static void test_overcurrent_trips_and_latches(void **st)
     run(&r, 1);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
     assert_int_equal(mc_drive_faults(&r.d), 0u);
-    run(&r, (int)r.d.p.offset_cal_samples);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 }
 
@@ -123,15 +123,15 @@ static void test_dc_link_limits(void **st)
     static rig_t r;
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 2);
-    set_inputs(&r, 0.0f, 0.0f, r.d.p.vdc_max + 10.0f);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
+    set_inputs(&r, 0.0f, 0.0f, r.d.cfg->p.vdc_max + 10.0f);
     run(&r, 1);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERVOLTAGE);
 
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 2);
-    set_inputs(&r, 0.0f, 0.0f, r.d.p.vdc_min - 10.0f);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
+    set_inputs(&r, 0.0f, 0.0f, r.d.cfg->p.vdc_min - 10.0f);
     run(&r, 1);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_UNDERVOLTAGE);
     assert_false(hal_pwm_enabled(&r.pwm));
@@ -142,9 +142,9 @@ static void test_implausible_offset_faults(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    r.adc.sample.i[1] = (uint16_t)(r.adc.sample.i[1] + (uint16_t)(r.d.blk.offset_tol + 20.0f));
+    r.adc.sample.i[1] = (uint16_t)(r.adc.sample.i[1] + (uint16_t)(r.d.cfg->blk.offset_tol + 20.0f));
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 2);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_OFFSET_CAL);
     assert_false(hal_pwm_enabled(&r.pwm));
@@ -180,9 +180,9 @@ static void test_voltage_history_and_slew(void **st)
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 5.0f);
     /* the ISR that completes the calibration already runs the first control step */
-    run(&r, (int)r.d.p.offset_cal_samples);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
-    const float step = r.d.blk.i_slew * r.d.blk.ts;
+    const float step = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
     assert_float_equal(mc_drive_telemetry(&r.d)->i_ref.q, step, 1e-5f);
     const mc_ab_t u1 = mc_drive_telemetry(&r.d)->u_ab;
     run(&r, 1);
@@ -208,9 +208,9 @@ static void test_slew_step_boundary(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    const float step = r.d.blk.i_slew * r.d.blk.ts;
+    const float step = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
     command(&r, true, MC_MODE_CURRENT, 0.0f, 2.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 10);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 10);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     assert_true(mc_drive_telemetry(&r.d)->i_ref.q == 2.0f);
     /* moves in steps: within the margin, between margin and step, just beyond, far beyond */
@@ -285,7 +285,7 @@ static void test_nonfinite_command_refused(void **st)
     static rig_t r;
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.5f, 2.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 400);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 400);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     mc_drive_cmd_t good = {0};
     good = r.d.cmd;
@@ -358,7 +358,7 @@ static void test_adc_rail_trips(void **st)
     assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_span, 30.0f, NULL));
     assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_trip, 27.2f, NULL));
     assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
-    assert_int_equal(r.d.blk.adc_max, 4095);
+    assert_int_equal(r.d.cfg->blk.adc_max, 4095);
     const struct { int phase; int offset; uint16_t near, rail; } cases[] = {
         {0, +200, 4094u, 4095u},
         {1, -200, 1u, 0u},
@@ -372,28 +372,28 @@ static void test_adc_rail_trips(void **st)
         const uint16_t mid = r.adc.sample.i[ph];
         r.adc.sample.i[ph] = (uint16_t)(mid + cases[n].offset);
         command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-        run(&r, (int)r.d.p.offset_cal_samples + 5);
+        run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
         assert_float_equal(r.d.offset[ph], (float)(mid + cases[n].offset), 1e-3f);
 
         /* one count inside the rail: below the trip level, no trip */
         r.adc.sample.i[ph] = cases[n].near;
-        const float i_near = ((float)cases[n].near - r.d.offset[ph]) * r.d.blk.amps_per_count;
-        assert_true(fabsf(i_near) < r.d.blk.i_trip);
+        const float i_near = ((float)cases[n].near - r.d.offset[ph]) * r.d.cfg->blk.amps_per_count;
+        assert_true(fabsf(i_near) < r.d.cfg->blk.i_trip);
         run(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 
         /* at the rail: still below the trip level as a current, but it trips */
         r.adc.sample.i[ph] = cases[n].rail;
-        const float i_rail = ((float)cases[n].rail - r.d.offset[ph]) * r.d.blk.amps_per_count;
-        assert_true(fabsf(i_rail) < r.d.blk.i_trip);
+        const float i_rail = ((float)cases[n].rail - r.d.offset[ph]) * r.d.cfg->blk.amps_per_count;
+        assert_true(fabsf(i_rail) < r.d.cfg->blk.i_trip);
         run(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
         assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERCURRENT);
         assert_false(hal_pwm_enabled(&r.pwm));
         const float i_tm[3] = {r.d.tm.i_abc.a, r.d.tm.i_abc.b, r.d.tm.i_abc.c};
         assert_float_equal(i_tm[ph], i_rail, 1e-4f);
-        assert_true(fabsf(i_tm[ph]) < r.d.blk.i_trip);
+        assert_true(fabsf(i_tm[ph]) < r.d.cfg->blk.i_trip);
         assert_duties_sane(&r);
     }
 }
@@ -440,7 +440,7 @@ static void run_plant(rig_t *r, int n)
         r->adc.sample.i[0] = counts(&r->d, (float)ia);
         r->adc.sample.i[1] = counts(&r->d, (float)ib);
         r->adc.sample.i[2] = counts(&r->d, (float)(-ia - ib));
-        r->adc.sample.vdc = (uint16_t)lrintf(300.0f / r->d.blk.volts_per_count);
+        r->adc.sample.vdc = (uint16_t)lrintf(300.0f / r->d.cfg->blk.volts_per_count);
         mc_drive_isr(&r->d);
         assert_duties_sane(r);
         if (!r->pwm.enabled) {
@@ -466,7 +466,7 @@ static void rig_running(rig_t *r)
     r->cfg.p.resid_time = 0.02f;   /* the voltage-model detector back on: the plant is there */
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     command(r, true, MC_MODE_CURRENT, 1.0f, 3.0f);
-    run_plant(r, (int)r->d.p.offset_cal_samples + 400);
+    run_plant(r, (int)r->d.cfg->p.offset_cal_samples + 400);
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
     assert_float_equal(r->d.tm.i_dq.q, 3.0f, 0.1f);
     assert_float_equal(r->d.cc.pi_d.integ, (float)P_RS * 1.0f, 0.1f);   /* a state worth keeping */
@@ -479,7 +479,7 @@ static void assert_unchanged(rig_t *r, const mc_params_t *before)
     assert_false(mc_cfgswap_pending(&r->link.cfg.base));
     assert_memory_equal(&mc_drive_cfgbuf_latest(&r->link.cfg)->p, before, sizeof *before);
     run_plant(r, 1);
-    assert_memory_equal(&r->d.p, before, sizeof *before);
+    assert_memory_equal(&r->d.cfg->p, before, sizeof *before);
 }
 
 /* (a) A RUNTIME parameter while running: effective at the next period, not before; the current
@@ -493,17 +493,17 @@ static void test_param_write_runtime(void **st)
     mc_param_err_t err;
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 200.0f, &err));
     assert_true(r.d.cc.cfg.kp_d == kp_old);           /* not before the ISR */
-    assert_true(r.d.p.cc_bw_hz == 250.0f);
+    assert_true(r.d.cfg->p.cc_bw_hz == 250.0f);
     const float integ_d = r.d.cc.pi_d.integ, integ_q = r.d.cc.pi_q.integ;
     run_plant(&r, 1);
     mc_cc_cfg_t want;
-    mc_cc_cfg_from_bandwidth(&want, 200.0f, r.d.p.rs, r.d.p.ld, r.d.p.lq, r.d.p.psi_pm, r.d.p.ts);
-    assert_true(r.d.p.cc_bw_hz == 200.0f);
+    mc_cc_cfg_from_bandwidth(&want, 200.0f, r.d.cfg->p.rs, r.d.cfg->p.ld, r.d.cfg->p.lq, r.d.cfg->p.psi_pm, r.d.cfg->p.ts);
+    assert_true(r.d.cfg->p.cc_bw_hz == 200.0f);
     assert_float_equal(r.d.cc.cfg.kp_d, want.kp_d, 1e-6f);
     assert_float_equal(r.d.cc.cfg.ki_q, want.ki_q, 1e-6f);
     assert_true(r.d.cc.cfg.kp_d != kp_old);
     /* the rule-derived slew rate follows the bandwidth (nice2(0.5 x 13.29 A x 2 pi 200 Hz)) */
-    assert_float_equal(r.d.blk.i_slew, 8400.0f, 1e-2f);
+    assert_float_equal(r.d.cfg->blk.i_slew, 8400.0f, 1e-2f);
     /* integrators: the old value plus this period's ki ts e, not a reset */
     const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
     assert_false(r.d.cc.limited);
@@ -520,7 +520,7 @@ static void test_param_write_standstill_while_running(void **st)
     (void)st;
     static rig_t r;
     rig_running(&r);
-    const mc_params_t before = r.d.p;
+    const mc_params_t before = r.d.cfg->p;
     mc_param_err_t err;
     assert_false(mc_drive_param_write(&r.d, MC_PARAM_step3_tol_rpm, 7.0f, &err));
     assert_int_equal(err.kind, MC_PERR_ACCESS);
@@ -542,13 +542,13 @@ static void test_param_write_busy(void **st)
     assert_false(mc_drive_param_write(&r.d, MC_PARAM_i_headroom, 0.05f, &err));
     assert_int_equal(err.kind, MC_PERR_BUSY);
     run_plant(&r, 1);
-    assert_true(r.d.p.cc_bw_hz == 200.0f);
-    assert_true(r.d.p.i_headroom == 0.03f);
+    assert_true(r.d.cfg->p.cc_bw_hz == 200.0f);
+    assert_true(r.d.cfg->p.i_headroom == 0.03f);
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_headroom, 0.05f, &err));
     run_plant(&r, 1);
-    assert_true(r.d.p.i_headroom == 0.05f);
-    assert_true(r.d.p.cc_bw_hz == 200.0f);   /* built from the newest, not from the defaults */
-    assert_float_equal(r.d.blk.i_ref_max, r.d.p.i_max * 0.95f, 1e-5f);
+    assert_true(r.d.cfg->p.i_headroom == 0.05f);
+    assert_true(r.d.cfg->p.cc_bw_hz == 200.0f);   /* built from the newest, not from the defaults */
+    assert_float_equal(r.d.cfg->blk.i_ref_max, r.d.cfg->p.i_max * 0.95f, 1e-5f);
 }
 
 /* (d) Out of range (and non-finite, and a cross-check): refused, nothing changes. */
@@ -557,7 +557,7 @@ static void test_param_write_range(void **st)
     (void)st;
     static rig_t r;
     rig_running(&r);
-    const mc_params_t before = r.d.p;
+    const mc_params_t before = r.d.cfg->p;
     mc_param_err_t err;
     assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 5.0f, &err));
     assert_int_equal(err.kind, MC_PERR_RANGE);
@@ -584,14 +584,14 @@ static void test_param_write_init_refused(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    const mc_params_t before = r.d.p;
+    const mc_params_t before = r.d.cfg->p;
     mc_param_err_t err;
     assert_false(mc_drive_param_write(&r.d, MC_PARAM_ts, 2e-4f, &err));
     assert_int_equal(err.kind, MC_PERR_ACCESS);
     assert_int_equal(err.param, MC_PARAM_ts);
     assert_unchanged(&r, &before);
     rig_running(&r);
-    const mc_params_t before2 = r.d.p;
+    const mc_params_t before2 = r.d.cfg->p;
     assert_false(mc_drive_param_write(&r.d, MC_PARAM_ts, 2e-4f, &err));
     assert_int_equal(err.kind, MC_PERR_ACCESS);
     assert_unchanged(&r, &before2);
@@ -606,14 +606,14 @@ static void test_param_write_standstill_idle(void **st)
     run(&r, 3);
     mc_param_err_t err;
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_step3_tol_rpm, 7.0f, &err));
-    assert_true(r.d.p.step3_tol_rpm == 5.0f);
+    assert_true(r.d.cfg->p.step3_tol_rpm == 5.0f);
     run(&r, 1);
-    assert_true(r.d.p.step3_tol_rpm == 7.0f);
-    assert_float_equal(r.d.blk.step3_speed_tol, 7.0f * MC_2PI / 60.0f * 5.0f, 1e-4f);
-    assert_false(mc_param_is_auto(&r.d.p, MC_PARAM_step3_tol_rpm));
+    assert_true(r.d.cfg->p.step3_tol_rpm == 7.0f);
+    assert_float_equal(r.d.cfg->blk.step3_speed_tol, 7.0f * MC_2PI / 60.0f * 5.0f, 1e-4f);
+    assert_false(mc_param_is_auto(&r.d.cfg->p, MC_PARAM_step3_tol_rpm));
     /* and it runs with it */
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 2);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 }
 
@@ -623,22 +623,22 @@ static void test_param_write_rule_follows(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    assert_float_equal(r.d.p.i_trip, 1.5f * 13.29f, 1e-5f);
+    assert_float_equal(r.d.cfg->p.i_trip, 1.5f * 13.29f, 1e-5f);
     mc_param_err_t err;
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_rated, 12.0f, &err));
     run(&r, 1);
-    assert_true(r.d.p.i_rated == 12.0f);
-    assert_true(mc_param_is_auto(&r.d.p, MC_PARAM_i_trip));
-    assert_float_equal(r.d.p.i_trip, 18.0f, 1e-5f);
-    assert_float_equal(r.d.blk.i_trip, 18.0f, 1e-5f);
-    assert_float_equal(r.d.p.i_max, 12.0f, 1e-6f);   /* control.i_max_a follows too */
+    assert_true(r.d.cfg->p.i_rated == 12.0f);
+    assert_true(mc_param_is_auto(&r.d.cfg->p, MC_PARAM_i_trip));
+    assert_float_equal(r.d.cfg->p.i_trip, 18.0f, 1e-5f);
+    assert_float_equal(r.d.cfg->blk.i_trip, 18.0f, 1e-5f);
+    assert_float_equal(r.d.cfg->p.i_max, 12.0f, 1e-6f);   /* control.i_max_a follows too */
     /* a trip level set by the user stays where it was put */
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_trip, 16.0f, &err));
     run(&r, 1);
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_rated, 10.0f, &err));
     run(&r, 1);
-    assert_float_equal(r.d.p.i_trip, 16.0f, 0.0f);
-    assert_float_equal(r.d.p.i_max, 10.0f, 1e-6f);
+    assert_float_equal(r.d.cfg->p.i_trip, 16.0f, 0.0f);
+    assert_float_equal(r.d.cfg->p.i_max, 10.0f, 1e-6f);
 }
 
 
@@ -666,7 +666,7 @@ static void rig_enabled(rig_t *r)
 {
     rig_init(r);
     command(r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(r, (int)r->d.p.offset_cal_samples + 5);
+    run(r, (int)r->d.cfg->p.offset_cal_samples + 5);
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
 }
 
@@ -696,12 +696,12 @@ static void test_protect_current_sum(void **st)
     (void)st;
     static rig_t r;
     rig_enabled(&r);
-    const int n = (int)lrintf(r.d.p.i_sum_time / r.d.p.ts);
+    const int n = (int)lrintf(r.d.cfg->p.i_sum_time / r.d.cfg->p.ts);
     /* just inside the tolerance: never */
-    r.adc.sample.i[2] = (uint16_t)(r.adc.sample.i[2] + (uint16_t)(0.8f * r.d.p.i_sum_tol / r.d.blk.amps_per_count));
+    r.adc.sample.i[2] = (uint16_t)(r.adc.sample.i[2] + (uint16_t)(0.8f * r.d.cfg->p.i_sum_tol / r.d.cfg->blk.amps_per_count));
     assert_int_equal(periods_to_fault(&r, 10 * n, false), -1);
     /* beyond it */
-    r.adc.sample.i[2] = counts(&r.d, 1.5f * r.d.p.i_sum_tol);
+    r.adc.sample.i[2] = counts(&r.d, 1.5f * r.d.cfg->p.i_sum_tol);
     assert_int_equal(periods_to_fault(&r, 10 * n, false), n);
     assert_fault(&r, MC_FAULT_CURRENT_SENSOR);
 }
@@ -733,7 +733,7 @@ static void test_protect_stall(void **st)
     const int k = periods_to_fault(&r, 10000, true);
     print_message("stall fault after %d periods (%.1f ms)\n", k, (double)k * 0.1);
     assert_fault(&r, MC_FAULT_STALL);
-    const int n = (int)lrintf(r.d.p.stall_time / r.d.p.ts);
+    const int n = (int)lrintf(r.d.cfg->p.stall_time / r.d.cfg->p.ts);
     assert_true(k >= n && k <= n + 300);   /* + the speed PI winding up to its limit */
 }
 
@@ -744,9 +744,9 @@ static void test_protect_overspeed(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    assert_float_equal(r.d.p.overspeed_rpm, 1625.0f, 0.0f);
+    assert_float_equal(r.d.cfg->p.overspeed_rpm, 1625.0f, 0.0f);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.p.offset_cal_samples + 5);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
     const uint32_t step = 80000u * 2000u / 60u / 10000u;   /* counts per period at 2000 rpm */
     int k = 1;
     for (; k <= 1000 && mc_drive_state(&r.d) == MC_STATE_RUN; ++k) {

@@ -110,7 +110,7 @@ typedef struct {
 
 static uint16_t counts(const mc_drive_t *d, double amps)
 {
-    return (uint16_t)lrint(d->blk.offset_nominal + amps / d->blk.amps_per_count);
+    return (uint16_t)lrint(d->cfg->blk.offset_nominal + amps / d->cfg->blk.amps_per_count);
 }
 
 /* One PWM period of a salient RL machine at standstill with the latched duties (exact enough
@@ -143,7 +143,7 @@ static void sample(rig_t *r)
     r->adc.sample.i[0] = counts(&r->d, ia);
     r->adc.sample.i[1] = counts(&r->d, ib);
     r->adc.sample.i[2] = counts(&r->d, ic);
-    r->adc.sample.vdc = (uint16_t)lrint(300.0 / r->d.blk.volts_per_count);
+    r->adc.sample.vdc = (uint16_t)lrint(300.0 / r->d.cfg->blk.volts_per_count);
 }
 
 static void step(rig_t *r, int n)
