@@ -53,6 +53,34 @@ static bool check_model(const mc_params_t *p, const mc_est_model_t *in, mc_est_m
     return true;
 }
 
+/* periods, rounded up and bounded (the table bounds the inputs; the bound keeps a float beyond
+ * uint32_t out of the conversion) */
+static uint32_t periods_up(float x)
+{
+    return x < 1.0f ? 1u : (x > 1.0e6f ? 1000000u : (uint32_t)ceilf(x));
+}
+
+/* The catch (mc/catch.h) from the estimator's model: the time the back-EMF at the slowest speed
+ * that counts as turning takes to drive a current, i Lq / (psi_pm w_min), sets the probe (a
+ * quarter of catch_i_a), the longest pulse (1.5 x catch_i_a) and the longest gap (a 20 deg turn). */
+static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
+{
+    const float w_min = p->catch_min_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
+    const float t_per_a = m->lq / (m->psi_pm * w_min);   /* [s/A] at w_min */
+    const float rot = 0.35f;
+    b->fly = (mc_catch_cfg_t){.ts = p->ts, .ld = m->ld, .lq = m->lq, .psi_pm = m->psi_pm,
+                              .i_pulse = p->catch_i, .i_detect = 0.25f * p->catch_i, .i_rest = p->ip_i_rest,
+                              .rot_target = rot, .high_speed_share = 0.9f,
+                              .n_probe = periods_up(0.25f * p->catch_i * t_per_a / p->ts),
+                              .n_pulse_max = periods_up(1.5f * p->catch_i * t_per_a / p->ts),
+                              .n_gap_max = periods_up(rot / (w_min * p->ts))};
+    if (b->fly.n_gap_max < 2u) {
+        b->fly.n_gap_max = 2u;
+    }
+    b->seq.timeout_catch =
+        (float)(2u * b->fly.n_pulse_max + 2u * b->fly.n_gap_max + 10u) * p->ts;
+}
+
 static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
 {
     mc_initpos_cfg_default(&b->ip1);
@@ -91,6 +119,8 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     const float cal = 2.0f * (float)p->offset_cal_samples * p->ts;
     b->seq = (mc_seq_cfg_t){.ts = p->ts, .init_pos = b->three_step, .timeout_cal = cal > 0.1f ? cal : 0.1f,
                             .timeout_step12 = p->timeout_step12, .timeout_step3 = p->timeout_step3};
+    b->seq.catch_first = p->catch_on != 0 && !mc_angle_src_get(p->angle_src)->measures_angle;
+    build_catch(p, m, b);
     b->step3_speed_tol = p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
     b->step3_hold = (uint32_t)(p->step3_hold / p->ts + 0.5f);
     mc_lpf1_init(&b->step3_lpf, 50.0f, p->ts, 0.0f);

@@ -364,6 +364,14 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
     }
     case MC_RULE_T_STEP12:
         return maxf(0.02f, 200.0f * p->ts);
+    case MC_RULE_CATCH_I:
+        /* a current that reads the angle to a degree through the sensor noise and brakes little:
+         * a quarter of rated (the rotation it takes, i Lq / psi_pm, is 7 deg on the thesis motor) */
+        return nice2(0.25f * p->i_rated);
+    case MC_RULE_CATCH_MIN:
+        /* 2 Hz electrical: slower rotors move less than 25 deg during the standstill start's
+         * ~30 ms, which Step III and the estimator absorb; the probe to see it lasts ~2.5 ms */
+        return 120.0f / (float)p->pole_pairs;
     case MC_RULE_NONE:
     case MC_RULE_COUNT:
     default:

@@ -19,11 +19,15 @@ static float avg(float *y, float x, float k)
     return *y;
 }
 
-void mc_protect_reset(mc_drive_t *d)
+void mc_protect_reset(mc_drive_t *d, float omega)
 {
     d->prot.i_sum_n = d->prot.track_n = d->prot.lock_n = d->prot.stall_n = d->prot.resid_n = 0u;
-    d->prot.w_raw = d->prot.err_d = d->prot.err_q = d->prot.w_dev2 = 0.0f;
-    d->prot.u_d = d->prot.u_q = d->prot.i_d = d->prot.i_q = d->prot.w = 0.0f;
+    d->prot.err_d = d->prot.err_q = d->prot.w_dev2 = 0.0f;
+    /* the averages start where a steady state at the estimate's speed (a caught rotor) would
+     * have them: speeds at omega, the voltage at its back-EMF with no current */
+    d->prot.w_raw = d->prot.w = omega;
+    d->prot.u_d = d->prot.i_d = d->prot.i_q = 0.0f;
+    d->prot.u_q = omega * d->cfg->p.psi_pm;
 }
 
 uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i)

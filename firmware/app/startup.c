@@ -1,6 +1,8 @@
-/* The drive's startup: protection, offset calibration and the initial position (thesis ch. 5):
- * Step I pulse injection, Step II polarity detection, then Step III, which is the normal control
- * pipeline with zero current references and the injection on, until its convergence test holds.
+/* The drive's startup: protection, offset calibration, the flying-start catch (mc/catch.h: a
+ * turning rotor goes straight to RUN with its angle and speed) and the initial position (thesis
+ * ch. 5): Step I pulse injection, Step II polarity detection, then Step III, which is the normal
+ * control pipeline with zero current references and the injection on, until its convergence
+ * test holds.
  * The sequencer (mc/sequencer.h) owns the states, timeouts and fault reasons. */
 #include <math.h>
 #include <stddef.h>
@@ -20,17 +22,18 @@ void mc_drive_trip(mc_drive_t *d, uint32_t reason)
     mc_seq_fault(&d->seq, reason);
 }
 
-/* Reset of everything the estimator pipeline keeps between periods, with the estimate at theta. */
-static void pipeline_reset(mc_drive_t *d, float theta)
+/* Reset of everything the estimator pipeline keeps between periods, with the estimate at
+ * (theta, omega) for the sample the pipeline takes next. */
+static void pipeline_reset(mc_drive_t *d, float theta, float omega)
 {
-    d->src->reset(&d->src_state, theta, 0.0f);
+    d->src->reset(&d->src_state, theta, omega);
     mc_inj_reset(&d->inj);
     mc_cc_reset(&d->cc);
     mc_biquad_reset(&d->notch_d, 0.0f);
     mc_biquad_reset(&d->notch_q, 0.0f);
     d->step3_speed = d->cfg->blk.step3_lpf;   /* coefficients built in the background, state at rest */
     d->step3_count = 0u;
-    mc_protect_reset(d);
+    mc_protect_reset(d, omega);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
 }
 
@@ -40,7 +43,7 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
-    pipeline_reset(d, d->cmd.theta_init);
+    pipeline_reset(d, d->cmd.theta_init, 0.0f);
     d->i_ab_prev = (mc_ab_t){0.0f, 0.0f};
     d->u_hist[0] = d->u_hist[1] = (mc_ab_t){0.0f, 0.0f};
     d->tm.theta1 = d->tm.theta2 = 0.0f;
@@ -127,6 +130,15 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         d->offset[k] = off;
     }
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
+    if (d->seq.state == MC_STATE_INIT_POS && d->seq.step == MC_INIT_CATCH) {
+        /* the catch switches the outputs itself; V(000) latched for its first pulse */
+        if (!mc_phase_begin(&d->phase, &mc_phase_catch, &d->cfg->blk.fly, 0.0f)) {
+            mc_drive_trip(d, MC_FAULT_CONFIG);
+            return;
+        }
+        write_duties(d, (mc_abc_t){0.0f, 0.0f, 0.0f}, d->cfg->p.vdc_nominal);
+        return;
+    }
     const bool started = d->seq.state != MC_STATE_INIT_POS || begin_step1(d);
     if (d->seq.state == MC_STATE_INIT_POS && !started) {
         mc_drive_trip(d, MC_FAULT_CONFIG);
@@ -136,12 +148,55 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     hal_pwm_enable(d->hal.pwm, true);
 }
 
+/* The catch's period; at its end a turning rotor goes to RUN with the estimate set to the
+ * caught angle and speed, a standing one to Step I (or RUN with the given angle). */
+static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
+{
+    const mc_phase_in_t in = {.i_ab = i_ab, .vdc = vdc};
+    mc_phase_out_t out;
+    const mc_ip_status_t st = mc_phase_step(&d->phase, &in, &out);
+    hal_pwm_enable(d->hal.pwm, !out.off);
+    write_duties(d, out.duty, vdc);
+    if (st == MC_IP_RUNNING) {
+        return;
+    }
+    mc_phase_result_t res;
+    mc_phase_result(&d->phase, &res);
+    mc_phase_stop(&d->phase);
+    d->tm.theta1 = res.theta;
+    d->tm.c1 = res.c1;
+    d->tm.c2 = res.omega;
+    if (st == MC_IP_FAILED) {
+        mc_drive_trip(d, MC_FAULT_INIT_POS);   /* no sign for the speed, or (C.1) does not fit */
+        return;
+    }
+    if (res.moving) {
+        /* the pipeline runs from this sample on: the estimate is the caught one */
+        pipeline_reset(d, res.theta, res.omega);
+        mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
+        return;
+    }
+    mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
+    if (d->seq.state == MC_STATE_INIT_POS && !begin_step1(d)) {
+        mc_drive_trip(d, MC_FAULT_CONFIG);
+        return;
+    }
+    /* standing: the outputs stay off this period (the probe's small current decays through the
+     * diodes); Step I switches them on with its first call, RUN here */
+    if (d->seq.state == MC_STATE_RUN) {
+        hal_pwm_enable(d->hal.pwm, true);
+    }
+}
+
 /* Step I, then Step II on the same workspace; returns the program's status. */
 static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
 {
     const mc_phase_in_t in = {.i_ab = i_ab, .vdc = vdc};
     mc_phase_out_t out;
     const mc_ip_status_t st = mc_phase_step(&d->phase, &in, &out);
+    if (out.off == hal_pwm_enabled(d->hal.pwm)) {
+        hal_pwm_enable(d->hal.pwm, !out.off);
+    }
     write_duties(d, out.duty, vdc);
     if (st != MC_IP_DONE) {
         return st;
@@ -163,7 +218,7 @@ static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     mc_phase_stop(&d->phase);
     /* Step III continues from theta2 with the running-state estimator itself (no method switch
      * later): only its state is set here. */
-    pipeline_reset(d, res.theta);
+    pipeline_reset(d, res.theta, 0.0f);
     mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
     return st;
 }
@@ -179,7 +234,9 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
         offset_cal(d, raw);
         break;
     case MC_STATE_INIT_POS:
-        if (d->seq.step == MC_INIT_STEP1 || d->seq.step == MC_INIT_STEP2) {
+        if (d->seq.step == MC_INIT_CATCH) {
+            catch_step(d, i_ab, vdc);
+        } else if (d->seq.step == MC_INIT_STEP1 || d->seq.step == MC_INIT_STEP2) {
             if (pulse_steps(d, i_ab, vdc) == MC_IP_FAILED) {
                 mc_drive_trip(d, MC_FAULT_INIT_POS);
             }

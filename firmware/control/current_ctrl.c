@@ -72,7 +72,13 @@ mc_dq_t mc_cc_step(mc_cc_t *s, mc_dq_t i_ref, mc_dq_t i_meas, float omega_e, flo
 
     /* d axis first: it sets the flux (field weakening relies on it), q gets the rest of the
      * circle. Limits go into the PI so its conditional integration stops the wind-up. */
-    u.d = mc_pi_step_lim(&s->pi_d, i_ref.d - i_meas.d, ff_d, -u_max, u_max);
+    /* ... but not all of it: q keeps the share its back-EMF feed-forward needs (up to 95 % of
+     * the circle). Without that reserve, a braking q current at the voltage limit (a rotor caught
+     * above base speed) makes the decoupling -w Lq iq take the circle for d, q loses its
+     * back-EMF and iq runs away further. */
+    const float res_q = fminf(fabsf(ff_q), 0.95f * u_max);
+    const float ud_max = sqrtf(fmaxf(u_max * u_max - res_q * res_q, 0.0f));
+    u.d = mc_pi_step_lim(&s->pi_d, i_ref.d - i_meas.d, ff_d, -ud_max, ud_max);
     uq_max = u_max * u_max - u.d * u.d;
     uq_max = (uq_max > 0.0f) ? sqrtf(uq_max) : 0.0f;
     u.q = mc_pi_step_lim(&s->pi_q, i_ref.q - i_meas.q, ff_q, -uq_max, uq_max);

@@ -44,10 +44,18 @@ bool mc_seq_enable(mc_seq_t *s, bool on)
 void mc_seq_event(mc_seq_t *s, mc_seq_event_t ev)
 {
     if (s->state == MC_STATE_OFFSET_CAL && ev == MC_SEQ_CAL_DONE) {
-        if (s->cfg.init_pos) {
+        if (s->cfg.catch_first) {
+            enter(s, MC_STATE_INIT_POS, MC_INIT_CATCH, s->cfg.timeout_catch);
+        } else if (s->cfg.init_pos) {
             enter(s, MC_STATE_INIT_POS, MC_INIT_STEP1, s->cfg.timeout_step12);
         } else {
             enter(s, MC_STATE_RUN, MC_INIT_NONE, 0.0f);
+        }
+    } else if (s->state == MC_STATE_INIT_POS && s->step == MC_INIT_CATCH) {
+        if (ev == MC_SEQ_CAUGHT || (ev == MC_SEQ_STEP_DONE && !s->cfg.init_pos)) {
+            enter(s, MC_STATE_RUN, MC_INIT_NONE, 0.0f);
+        } else if (ev == MC_SEQ_STEP_DONE) {
+            enter(s, MC_STATE_INIT_POS, MC_INIT_STEP1, s->cfg.timeout_step12);
         }
     } else if (s->state == MC_STATE_INIT_POS && ev == MC_SEQ_STEP_DONE) {
         if (s->step == MC_INIT_STEP1) {

@@ -12,6 +12,7 @@ static void zero_out(mc_phase_out_t *out)
     out->duty.a = 0.0f;
     out->duty.b = 0.0f;
     out->duty.c = 0.0f;
+    out->off = false;
 }
 
 static void clear_result(mc_phase_result_t *r)
@@ -21,6 +22,8 @@ static void clear_result(mc_phase_result_t *r)
     r->flip = false;
     r->c1 = 0.0f;
     r->c2 = 0.0f;
+    r->omega = 0.0f;
+    r->moving = false;
     r->i_peak = 0.0f;
     r->calls = 0;
 }
@@ -161,6 +164,39 @@ static void dvi_result(const mc_phase_ws_t *ws, mc_phase_result_t *r)
 
 const mc_phase_program_t mc_phase_step2_dvi = {
     "step2_dvi", sizeof(mc_dvi_cfg_t), dvi_begin, dvi_step, dvi_result};
+
+/* ---- flying-start catch (C.1)-(C.3) ---- */
+
+static bool fly_begin(mc_phase_ws_t *ws, const void *cfg, float theta_in)
+{
+    (void)theta_in;
+    if (cfg != NULL) {
+        return mc_catch_start(&ws->fly, (const mc_catch_cfg_t *)cfg);
+    }
+    const mc_catch_cfg_t bad = {0};
+    (void)mc_catch_start(&ws->fly, &bad);
+    return false;
+}
+
+static mc_ip_status_t fly_step(mc_phase_ws_t *ws, const mc_phase_in_t *in, mc_phase_out_t *out)
+{
+    return mc_catch_step(&ws->fly, in->i_ab, in->vdc, &out->duty, &out->off);
+}
+
+static void fly_result(const mc_phase_ws_t *ws, mc_phase_result_t *r)
+{
+    const mc_catch_t *s = &ws->fly;
+    clear_result(r);
+    r->theta = s->theta;
+    r->theta_aux = s->rotation;
+    r->c1 = s->fit;
+    r->omega = s->omega;
+    r->moving = s->moving;
+    r->i_peak = s->i_peak;
+    r->calls = (int)s->calls;
+}
+
+const mc_phase_program_t mc_phase_catch = {"catch", sizeof(mc_catch_cfg_t), fly_begin, fly_step, fly_result};
 
 /* ---- holder ---- */
 

@@ -33,6 +33,6 @@ static void enc_diag(const mc_angle_src_state_t *s, mc_angle_diag_t *d)
 }
 
 const mc_angle_src_desc_t mc_angle_src_encoder = {
-    .name = "encoder", .needs_injection = false,
+    .name = "encoder", .needs_injection = false, .measures_angle = true,
     .init = enc_init, .reset = enc_reset, .step = enc_step, .diag = enc_diag,
 };

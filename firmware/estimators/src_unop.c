@@ -42,7 +42,10 @@ static void unop_reset(mc_angle_src_state_t *st, float theta, float omega)
 {
     src_unop_t *s = (src_unop_t *)(void *)st;
     mc_unop_reset(&s->unop, theta, omega);
-    mc_pll_reset(&s->pll, theta, omega);
+    /* like the estimator: the PLL's next prediction lands on theta; the speed comes in as the
+     * estimator's feed-forward, so the integrator holds none of it (mc/pll.h) */
+    mc_pll_reset(&s->pll, theta - omega * s->pll.cfg.ts, omega);
+    s->pll.integ = 0.0f;
     s->raw = (mc_angle_out_t){theta, omega};
 }
 

@@ -116,7 +116,13 @@ void Metrics::add_startup(const Sample& s)
     if (s.state == kRun && !std::isfinite(t_first_run_)) t_first_run_ = s.t;
     // the rotor must not turn against the intended direction (electrical degrees)
     reverse_max_ = std::max(reverse_max_, -s.direction * (s.theta_e_unwrapped - th0_) * 180.0 / kPiM);
-    if (s.state == kInit && !was_init_) t_init_ = s.t;
+    // Step I + II from Step I's start: the flying-start catch's probe (init step 4) before it
+    // is timed separately
+    constexpr int kStep1 = 1, kCatch = 4;
+    if (s.state == kInit && s.init_step == kStep1 && !std::isfinite(t_init_)) t_init_ = s.t;
+    if (s.state == kInit && s.init_step == kCatch && !std::isfinite(t_catch_)) t_catch_ = s.t;
+    if (std::isfinite(t_catch_) && !std::isfinite(t_catch_end_) && !(s.state == kInit && s.init_step == kCatch))
+        t_catch_end_ = s.t;
     if (s.state == kInit) was_init_ = true;
     if (s.state == kInit && s.init_step == kStep3 && !std::isfinite(t_step3_)) {
         t_step3_ = s.t;
@@ -131,6 +137,9 @@ void Metrics::add_startup(const Sample& s)
         post_sum_ += s.angle_err_any;
         post_n_ += 1;
     }
+    // locked: in RUN with the angle within 10 deg from then on (the flying start's criterion)
+    if (!(s.state == kRun && std::fabs(s.angle_err_any) <= 10.0)) t_unlocked_ = s.t;
+    i_peak_enable_ = std::max(i_peak_enable_, s.i_peak);
     // "enable to < 1 deg": the last sample at or above 1 deg in Step III and the first 20 ms of RUN
     const bool watch = (s.state == kInit && s.init_step == kStep3) ||
                        (s.state == kRun && std::isfinite(t_run_) && s.t < t_run_ + 0.02);
@@ -207,6 +216,12 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
     const bool init = std::isfinite(t_step3_);
     os << "  \"step12_time_s\": " << json_number(init ? t_step3_ - t_enable_ : NAN) << ",\n";
     os << "  \"step12_duration_s\": " << json_number(init ? t_step3_ - t_init_ : NAN) << ",\n";
+    os << "  \"catch_duration_s\": " << json_number(t_catch_end_ - t_catch_) << ",\n";
+    // enable -> in RUN within 10 deg for good (null: never, or not at the end)
+    const bool locked = std::isfinite(t_enable_) && (!std::isfinite(t_unlocked_) || t_unlocked_ < last_t_);
+    os << "  \"lock_time_s\": "
+       << json_number(locked ? (std::isfinite(t_unlocked_) ? t_unlocked_ + ts_ : t_enable_) - t_enable_ : NAN) << ",\n";
+    os << "  \"current_peak_from_enable_a\": " << json_number(i_peak_enable_) << ",\n";
     os << "  \"step1_err_deg\": " << json_number(step1_err_) << ",\n";
     os << "  \"step12_err_deg\": " << json_number(step12_err_) << ",\n";
     os << "  \"polarity_correct\": " << (init ? (std::fabs(step12_err_) < 90.0 ? "true" : "false") : "null") << ",\n";

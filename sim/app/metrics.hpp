@@ -55,6 +55,9 @@ private:
     // startup
     double t_enable_ = NAN, t_init_ = NAN, t_step3_ = NAN, t_run_ = NAN, t_last_bad_ = NAN;
     double t_fault_ = NAN;   // first period in FAULT
+    double t_catch_ = NAN, t_catch_end_ = NAN;   // the flying-start catch (init step 4)
+    double t_unlocked_ = NAN;   // last sample after the enable not in RUN within 10 deg
+    double i_peak_enable_ = 0;  // phase-current peak from the enable on
     double t_first_run_ = NAN;   // first period in RUN
     double step12_err_ = NAN, step1_err_ = NAN, init_err_ = NAN;
     double post_sum_ = 0, post_n_ = 0;   // mean error over the 20 ms after the hand-over

@@ -67,6 +67,7 @@ typedef union {
 typedef struct mc_angle_src_desc {
     const char *name;
     bool needs_injection;         /* the drive injects the HF voltage (6.4) while it runs     */
+    bool measures_angle;          /* an angle sensor: no initial-position search, no catch    */
     void (*init)(mc_angle_src_state_t *s, const mc_angle_src_cfg_t *cfg);
     /* estimate set to (theta, omega), filters primed: at enable and after the initial position */
     void (*reset)(mc_angle_src_state_t *s, float theta, float omega);

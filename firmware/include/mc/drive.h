@@ -120,6 +120,7 @@ typedef struct {
     mc_pulse3_cfg_t pulse3;
     mc_polarity_cfg_t ip2;
     mc_dvi_cfg_t dvi;
+    mc_catch_cfg_t fly;
 } mc_drive_blk_t;
 
 /* A complete derived configuration: the parameters, the ISR's values and every block's

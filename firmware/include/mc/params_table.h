@@ -112,7 +112,11 @@ X(lock_tol,       "protection.lock_speed_tol", F32, "1",   0.05f, 10,     0.5f, 
 X(lock_floor_rpm, "protection.lock_speed_floor_rpm", F32, "rpm", 0.1f, 1e4f, 100, LOCK_FLOOR, PROTECTION, STANDSTILL, "", "... plus this (default: a quarter of injection.n1_rpm: below it the raw speed is mostly noise) ...") \
 X(lock_time,      "protection.lock_time_s", F32, "s",      0,     1,      0.02f,    NONE,    PROTECTION, STANDSTILL, "", "... for this long: loss-of-lock fault (sensorless only).") \
 X(stall_rpm,      "protection.stall_speed_rpm", F32, "rpm", 0.1f, 1e4f,   20,       STALL,   PROTECTION, STANDSTILL, "", "Stall (speed mode): |speed estimate| below this (default: 5 % of injection.n1_rpm) while the speed reference is above it and the speed loop asks for at least 90 % of its torque limit ...") \
-X(stall_time,     "protection.stall_time_s", F32, "s",     0,     10,     0.3f,     NONE,    PROTECTION, STANDSTILL, "", "... for this long: stall fault.")
+X(stall_time,     "protection.stall_time_s", F32, "s",     0,     10,     0.3f,     NONE,    PROTECTION, STANDSTILL, "", "... for this long: stall fault.") \
+/* ---- startup: the flying-start catch (mc/catch.h), appended (CANopen index = position) ---- */ \
+X(catch_on,       "startup.catch",         ENUM, "",       0,     1,      1,        NONE,    STARTUP, STANDSTILL, "off|on", "Sensorless start: first probe with the zero vector whether the rotor turns; if it does, take its angle and speed from two zero-vector pulses (mc/catch.h) and go straight to RUN, else go on with startup.init_pos. Not with an angle sensor.") \
+X(catch_i,        "startup.catch_i_a",     F32, "A",       1e-3f, 10000,  3.3f,     CATCH_I, STARTUP, STANDSTILL, "", "Catch pulse: the zero vector lasts until the current has changed by this (default: 25 % of motor.i_rated_a; the peak stays near it plus one period's rise) ...") \
+X(catch_min_rpm,  "startup.catch_min_rpm", F32, "rpm",     0.1f,  1e5f,   24,       CATCH_MIN, STARTUP, STANDSTILL, "", "... and below this speed the rotor counts as standing: the probe lasts until the back-EMF at this speed would have driven a quarter of catch_i_a, and the standstill start follows (default: 2 Hz electrical, 24 rpm on the thesis motor).")
 /* clang-format on */
 
 #endif

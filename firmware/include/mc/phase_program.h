@@ -4,7 +4,8 @@
  *   - the three-phase pulse method (3.5.1, (3.19)-(3.21), Table 3.1), mc/pulse3.h,
  *   - Step II generalized polarity detection (5.3, (5.6)-(5.7)), mc/polarity.h,
  *   - dual voltage injection, DVI (3.5.2, Fig 3.8), mc/polarity.h,
- * and later identification routines and flying-start catches.
+ *   - the flying-start catch (two zero-vector pulses, (C.1)-(C.3)), mc/catch.h,
+ * and later identification routines.
  *
  * WHY: the drive runs at most one such program at a time, so it needs one dispatch (a table of
  * three functions) and one workspace (a union of the engines' states), not one member and one
@@ -29,6 +30,7 @@
 #define MC_PHASE_PROGRAM_H
 #include <stddef.h>
 
+#include "mc/catch.h"
 #include "mc/initpos.h"
 #include "mc/polarity.h"
 #include "mc/pulse3.h"
@@ -46,6 +48,8 @@ typedef struct {
 /* per period, out of the program */
 typedef struct {
     mc_abc_t duty;  /* high-side duties 0..1 for the NEXT period (V(000) = all 0) */
+    bool off;       /* outputs off from this sample on (a gate disable acts at once, not a period
+                       later like the duties); only the catch uses it, the others keep false */
 } mc_phase_out_t;
 
 /* Result, valid after DONE (before: the engine's fields so far).
@@ -56,6 +60,8 @@ typedef struct {
  *  step2_polarity   theta2 [-pi,pi)  theta1 (the input)    c1 > c2    (5.7) c1, c2 [H^2]
  *  step2_dvi        theta2 [-pi,pi)  theta1 (the input)    neg > pos  peak |i_delta| of the
  *                                                                     +V, -V pulse [A]
+ *  catch            theta at the     phi2 - phi1 (C.3)     false      |delta i2| / (C.1), 0
+ *                   last sample                                       (omega, moving: below)
  * Step I results are modulo pi (the d axis without its polarity); Step II adds pi when flip.
  * theta_full of step1_pulses: linear cost (5.5) = theta1; the nonlinear costs (7.1) search the
  * whole circle and it is the refined minimum there (a weak polarity hint, thesis 7.2.3). */
@@ -64,6 +70,8 @@ typedef struct {
     float theta_aux;  /* secondary angle [rad] (table above) */
     bool flip;        /* Step II: pi was added to theta_in */
     float c1, c2;     /* decision quantities (table above) */
+    float omega;      /* catch: the speed [rad/s el] (others: 0) */
+    bool moving;      /* catch: the rotor turns (false: standing, go on with the standstill start) */
     float i_peak;     /* largest |i_ab| sampled during the program [A] */
     int calls;        /* step calls consumed (PWM periods) */
 } mc_phase_result_t;
@@ -74,6 +82,7 @@ typedef union {
     mc_pulse3_t pulse3;    /* mc_phase_step1_pulse3   */
     mc_polarity_t pol;     /* mc_phase_step2_polarity */
     mc_dvi_t dvi;          /* mc_phase_step2_dvi      */
+    mc_catch_t fly;        /* mc_phase_catch          */
 } mc_phase_ws_t;
 
 typedef struct mc_phase_program {
@@ -93,6 +102,7 @@ extern const mc_phase_program_t mc_phase_step1_pulses;    /* cfg: mc_initpos_cfg
 extern const mc_phase_program_t mc_phase_step1_pulse3;    /* cfg: mc_pulse3_cfg_t   */
 extern const mc_phase_program_t mc_phase_step2_polarity;  /* cfg: mc_polarity_cfg_t */
 extern const mc_phase_program_t mc_phase_step2_dvi;       /* cfg: mc_dvi_cfg_t      */
+extern const mc_phase_program_t mc_phase_catch;           /* cfg: mc_catch_cfg_t    */
 
 /* Convenience holder: the program and its workspace together, so they cannot be mismatched.
  * prog == NULL (after mc_phase_stop, or a begin with NULL prog): step returns FAILED with

@@ -13,7 +13,9 @@ typedef enum {
     MC_STATE_INIT_POS       /* initial position: Step I, II (pulses), III (continuous injection) */
 } mc_state_t;
 
-typedef enum { MC_INIT_NONE = 0, MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3 } mc_init_step_t;
+/* CATCH (the flying-start catch, mc/catch.h) runs first when configured: a turning rotor goes
+ * from it straight to RUN, a standing one on to Step I (or RUN with the given angle). */
+typedef enum { MC_INIT_NONE = 0, MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3, MC_INIT_CATCH } mc_init_step_t;
 
 /* Fault reasons (bit mask, latched until the next enable). */
 #define MC_FAULT_OVERCURRENT   (1u << 0)
@@ -36,7 +38,9 @@ typedef enum { MC_INIT_NONE = 0, MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3 } m
 
 typedef struct {
     float ts;               /* [s] */
-    bool  init_pos;         /* run INIT_POS after the calibration (else straight to RUN)     */
+    bool  init_pos;         /* run Steps I-III after the calibration (else straight to RUN)  */
+    bool  catch_first;      /* the catch before them (INIT_POS with step CATCH)              */
+    float timeout_catch;    /* [s] the catch                                                 */
     float timeout_cal;      /* [s] OFFSET_CAL                                                */
     float timeout_step12;   /* [s] Step I + Step II together                                 */
     float timeout_step3;    /* [s] Step III until the convergence test holds                 */
@@ -54,7 +58,9 @@ typedef struct {
 
 typedef enum {
     MC_SEQ_CAL_DONE = 0,
-    MC_SEQ_STEP_DONE,       /* Step I or II finished; Step III: the convergence test holds   */
+    MC_SEQ_STEP_DONE,       /* Step I or II finished; Step III: the convergence test holds;
+                               the catch found the rotor standing                           */
+    MC_SEQ_CAUGHT,          /* the catch has the angle and speed of a turning rotor: RUN     */
 } mc_seq_event_t;
 
 void mc_seq_init(mc_seq_t *s, const mc_seq_cfg_t *cfg);

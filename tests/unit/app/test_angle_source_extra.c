@@ -91,6 +91,7 @@ static void rig_init(rig_t *r, const char *source)
     mc_drive_cfg_default(&r->cfg);
     assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_angle_src, source, NULL));
     assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_est_model, "const", NULL));   /* no map */
+    assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_catch_on, "off", NULL));   /* straight to RUN */
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     for (int k = 0; k < 3; ++k) {
         r->adc.sample.i[k] = (uint16_t)r->d.cfg->blk.offset_nominal;   /* zero current */

@@ -70,6 +70,46 @@ static void test_seq_path_and_timeouts(void **st)
     assert_int_equal(g.state, MC_STATE_RUN);
 }
 
+/* The catch first: a caught rotor goes straight to RUN, a standing one on to Step I (or to RUN
+ * with the given angle); the catch has its own timeout. */
+static void test_seq_catch(void **st)
+{
+    (void)st;
+    const mc_seq_cfg_t c = {.ts = 1e-4f, .init_pos = true, .catch_first = true, .timeout_cal = 0.01f,
+                            .timeout_catch = 0.003f, .timeout_step12 = 0.005f, .timeout_step3 = 0.02f};
+    mc_seq_t s;
+    mc_seq_init(&s, &c);
+    mc_seq_enable(&s, true);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    assert_int_equal(s.state, MC_STATE_INIT_POS);
+    assert_int_equal(s.step, MC_INIT_CATCH);
+    mc_seq_event(&s, MC_SEQ_STEP_DONE);   /* standing */
+    assert_int_equal(s.step, MC_INIT_STEP1);
+    mc_seq_enable(&s, false);
+    mc_seq_enable(&s, true);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    mc_seq_event(&s, MC_SEQ_CAUGHT);      /* turning: no Steps I-III */
+    assert_int_equal(s.state, MC_STATE_RUN);
+    mc_seq_event(&s, MC_SEQ_CAUGHT);      /* not RUN's event */
+    assert_int_equal(s.state, MC_STATE_RUN);
+    mc_seq_enable(&s, false);
+    mc_seq_enable(&s, true);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    for (int k = 0; k < 30; ++k) mc_seq_tick(&s);
+    assert_int_equal(s.state, MC_STATE_INIT_POS);
+    mc_seq_tick(&s);
+    assert_int_equal(s.state, MC_STATE_FAULT);
+    assert_true(s.faults & MC_FAULT_TIMEOUT);
+    mc_seq_t g;
+    mc_seq_cfg_t cg = c;
+    cg.init_pos = false;                  /* given angle: standing -> RUN */
+    mc_seq_init(&g, &cg);
+    mc_seq_enable(&g, true);
+    mc_seq_event(&g, MC_SEQ_CAL_DONE);
+    mc_seq_event(&g, MC_SEQ_STEP_DONE);
+    assert_int_equal(g.state, MC_STATE_RUN);
+}
+
 /* Timeouts that do not fit 32 bits of periods (1e9 s), NaN or a zero period are defined: the
  * longest timeout, none, the longest (converting them was undefined behaviour). */
 static void test_seq_extreme_timeouts(void **st)
@@ -183,6 +223,7 @@ static void rig_init(rig_t *r, double theta_r)
     p->angle_src = MC_ANGLE_SRC_unop;
     p->est_model = 0;                 /* constant parameters: the plant is linear */
     p->init_three_step = 1;
+    p->catch_on = 0;                  /* the thesis' path; test_catch_first adds the catch */
     assert_true(mc_param_set(p, MC_PARAM_step3_tol_rpm, 5.73f, NULL));   /* 3 rad/s electrical */
     r->cfg.est = (mc_est_model_t){.rs = NAN, .ld = (float)LD, .lq = (float)LQ, .psi_pm = 0.34305f, .map = &r->map};
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
@@ -198,6 +239,28 @@ static int run_until_leaves(rig_t *r, mc_state_t st, mc_init_step_t sub, int n)
         step(r, 1);
     }
     return n;
+}
+
+/* The drive with the default catch on a standing rotor: the probe (outputs on, V(000)), then
+ * the outputs off for a period, then Step I. */
+static void test_catch_first(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.7);
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_catch_on, 1.0f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    command(&r, true);
+    step(&r, 1);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 1000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+    const int n = run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_CATCH, 1000);
+    assert_int_equal(n, (int)r.d.cfg->blk.fly.n_probe + 1);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP1);
+    assert_false(hal_pwm_enabled(&r.pwm));   /* the probe's current decays first */
+    step(&r, 1);
+    assert_true(hal_pwm_enabled(&r.pwm));    /* Step I's first period */
 }
 
 static void test_drive_full_path(void **st)
@@ -323,6 +386,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_seq_path_and_timeouts),
         cmocka_unit_test(test_seq_extreme_timeouts),
+        cmocka_unit_test(test_seq_catch),
+        cmocka_unit_test(test_catch_first),
         cmocka_unit_test(test_drive_full_path),
         cmocka_unit_test(test_fault_in_every_step),
         cmocka_unit_test(test_repeated_enable_disable),

@@ -303,7 +303,7 @@ static void test_sizes(void **st)
 static void expect_dead(void)
 {
     mc_phase_in_t in = {{0.0f, 0.0f}, (float)VDC};
-    mc_phase_out_t out = {{0.5f, 0.5f, 0.5f}};
+    mc_phase_out_t out = {{0.5f, 0.5f, 0.5f}, true};
     assert_int_equal(mc_phase_step(&g_ph, &in, &out), MC_IP_FAILED);
     assert_true(out.duty.a == 0.0f && out.duty.b == 0.0f && out.duty.c == 0.0f);
 }

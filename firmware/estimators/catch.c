@@ -1,0 +1,190 @@
+/* Flying-start catch (mc/catch.h): two zero-vector pulses, (C.1)-(C.3). */
+#include "mc/catch.h"
+
+#include <math.h>
+
+#include "mc/angle.h"
+
+enum { PULSE1 = 0, GAP, PULSE2, END };
+
+static bool finite_pos(float x)
+{
+    return x > 0.0f && x < 3.0e38f;
+}
+
+bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg)
+{
+    *s = (mc_catch_t){.cfg = *cfg, .phase = PULSE1, .status = MC_IP_RUNNING};
+    const bool ok = finite_pos(cfg->ts) && finite_pos(cfg->ld) && finite_pos(cfg->lq) && finite_pos(cfg->psi_pm) &&
+                    finite_pos(cfg->i_pulse) && finite_pos(cfg->i_detect) && cfg->i_detect <= cfg->i_pulse &&
+                    finite_pos(cfg->i_rest) && finite_pos(cfg->rot_target) && cfg->rot_target < 2.0f &&
+                    cfg->n_probe >= 1u && cfg->n_pulse_max >= cfg->n_probe && cfg->n_gap_max >= 2u &&
+                    finite_pos(cfg->high_speed_share);
+    if (!ok) {
+        s->status = MC_IP_FAILED;
+        s->phase = END;
+    }
+    return ok;
+}
+
+static float mag(mc_ab_t v)
+{
+    return sqrtf(v.alpha * v.alpha + v.beta * v.beta);
+}
+
+static mc_ab_t sub(mc_ab_t a, mc_ab_t b)
+{
+    return (mc_ab_t){a.alpha - b.alpha, a.beta - b.beta};
+}
+
+/* Both pulses measured: (C.3) for the speed, (C.2) for the angle, (C.1) as the plausibility. */
+static mc_ip_status_t conclude(mc_catch_t *s)
+{
+    const mc_catch_cfg_t *c = &s->cfg;
+    const float phi1 = atan2f(s->di1.beta, s->di1.alpha);
+    const float phi2 = atan2f(s->di2.beta, s->di2.alpha);
+    const float t12 = (float)(s->calls - 1u - s->end1) * c->ts;   /* end of pulse 1 to end of pulse 2 */
+    s->rotation = mc_wrap_pi(phi2 - phi1);
+    s->omega = s->rotation / t12;                                               /* (C.3) */
+    const float delta = s->omega * (float)s->n1 * c->ts;
+    const float kd = (cosf(delta) - 1.0f) / c->ld, kq = -sinf(delta) / c->lq;   /* (C.1) / psi_pm */
+    s->theta = mc_wrap_pi(phi2 - atan2f(kq, kd));                               /* (C.2) */
+    s->fit = mag(s->di2) / (c->psi_pm * sqrtf(kd * kd + kq * kq));
+    /* the sign needs a rotation well above the angle noise; beyond 2.5 rad (C.3) may alias */
+    const float r = fabsf(s->rotation);
+    const bool ok = r >= 0.0873f && r <= 2.5f && s->fit >= 0.5f && s->fit <= 2.0f;
+    s->moving = ok;
+    return ok ? MC_IP_DONE : MC_IP_FAILED;
+}
+
+/* (C.2)'s offset: the current's angle minus the rotor's after a rotation delta from i = 0 */
+static float offset_c2(const mc_catch_cfg_t *c, float delta)
+{
+    return atan2f(-sinf(delta) / c->lq, (cosf(delta) - 1.0f) / c->ld);
+}
+
+/* |Delta| from |delta i| by (C.1), a fixed-point iteration on the first-order guess */
+static float rotation_of(const mc_catch_cfg_t *c, float di)
+{
+    float d = di * c->lq / c->psi_pm;
+    for (int k = 0; k < 3; ++k) {
+        const float kd = (cosf(d) - 1.0f) / c->ld, kq = sinf(d) / c->lq;
+        const float per = c->psi_pm * sqrtf(kd * kd + kq * kq) / d;   /* |i| / Delta */
+        d = di / per;
+    }
+    return d;
+}
+
+/* (C.4): the sign from pulse 1's middle and last samples; false when the two signs do not
+ * differ clearly enough (then the two-pulse method decides). */
+static bool single_pulse_sign(mc_catch_t *s)
+{
+    const mc_catch_cfg_t *c = &s->cfg;
+    const uint32_t n1 = s->n1, nm = n1 / 2u;
+    const mc_ab_t a = s->hist[nm - 1u], b = s->hist[n1 - 1u];
+    const float phi_m = atan2f(a.beta, a.alpha), phi_e = atan2f(b.beta, b.alpha);
+    const float dl = rotation_of(c, mag(b));
+    const float frac = (float)nm / (float)n1;
+    float r[2];
+    for (int k = 0; k < 2; ++k) {
+        const float sg = k == 0 ? 1.0f : -1.0f;
+        const float th_e = phi_e - offset_c2(c, sg * dl), th_m = phi_m - offset_c2(c, sg * dl * frac);
+        r[k] = fabsf(mc_wrap_pi(th_e - th_m - sg * dl * (1.0f - frac)));
+    }
+    /* the wrong sign misses by |Delta| (1 - frac) |2 - Lq/Ld|: ask for half of it, >= 2 deg */
+    const float miss = dl * (1.0f - frac) * fabsf(2.0f - c->lq / c->ld);
+    if (!(miss >= 0.07f) || !(fabsf(r[0] - r[1]) >= 0.5f * miss)) {
+        return false;
+    }
+    const float sg = r[0] < r[1] ? 1.0f : -1.0f;
+    s->omega = sg * dl / ((float)n1 * c->ts);
+    s->theta = mc_wrap_pi(phi_e - offset_c2(c, sg * dl));
+    s->rotation = sg * dl;
+    s->fit = 1.0f;
+    s->single = true;
+    s->moving = true;
+    return true;
+}
+
+mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty, bool *off)
+{
+    const mc_catch_cfg_t *c = &s->cfg;
+    *duty = (mc_abc_t){0.0f, 0.0f, 0.0f};
+    *off = true;
+    if (s->phase == END) {
+        return s->status;
+    }
+    const float im = mag(i_ab);
+    if (im > s->i_peak) {
+        s->i_peak = im;
+    }
+    const uint32_t call = s->calls++;
+    if (call == 0u) {   /* pulse 1 starts from this sample */
+        s->i0 = i_ab;
+        *off = false;
+        return MC_IP_RUNNING;
+    }
+    s->n++;
+    switch (s->phase) {
+    case PULSE1: {
+        const mc_ab_t di = sub(i_ab, s->i0);
+        const float dm = mag(di);
+        if (s->n == c->n_probe && dm < c->i_detect) {
+            s->moving = false;   /* no back-EMF worth the name: standing (below omega_min) */
+            s->phase = END;
+            s->status = MC_IP_DONE;
+            return s->status;
+        }
+        if (s->n <= MC_CATCH_HIST) {
+            s->hist[s->n - 1u] = di;
+        }
+        /* |omega| to first order of (C.1) */
+        const float w1 = dm * c->lq / (c->psi_pm * (float)s->n * c->ts);
+        const bool high = 1.7320508f * w1 * c->psi_pm > c->high_speed_share * vdc;
+        const float i_end = high ? 2.0f * c->i_pulse : c->i_pulse;
+        if (dm < i_end && s->n < c->n_pulse_max && !(high && s->n >= MC_CATCH_HIST)) {
+            *off = false;
+            return MC_IP_RUNNING;
+        }
+        s->di1 = di;
+        s->n1 = s->n;
+        s->end1 = call;
+        if (high && s->n1 >= 2u && s->n1 <= MC_CATCH_HIST && single_pulse_sign(s)) {
+            *off = false;   /* kept on: the control loop takes over from the next duties */
+            s->phase = END;
+            s->status = MC_IP_DONE;
+            return s->status;
+        }
+        /* the gap: rotate ~rot_target end to end */
+        const float n12 = c->rot_target / (w1 * c->ts);
+        const float ng = n12 - (float)s->n1;
+        s->n_gap = ng < 2.0f ? 2u : (ng > (float)c->n_gap_max ? c->n_gap_max : (uint32_t)ng);
+        s->phase = GAP;
+        s->n = 0u;
+        return MC_IP_RUNNING;
+    }
+    case GAP:
+        if (s->n < s->n_gap || (!(im <= c->i_rest) && s->n < s->n_gap + c->n_gap_max)) {
+            return MC_IP_RUNNING;
+        }
+        s->i0 = i_ab;   /* pulse 2 starts from this sample */
+        s->phase = PULSE2;
+        s->n = 0u;
+        *off = false;
+        return MC_IP_RUNNING;
+    case PULSE2:
+        *off = false;   /* kept on: the control loop takes over from the next duties */
+        if (s->n < s->n1) {
+            return MC_IP_RUNNING;
+        }
+        s->di2 = sub(i_ab, s->i0);
+        s->phase = END;
+        s->status = conclude(s);
+        if (s->status == MC_IP_FAILED) {
+            *off = true;
+        }
+        return s->status;
+    default:
+        return s->status;
+    }
+}

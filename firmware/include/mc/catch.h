@@ -1,0 +1,89 @@
+/* Flying-start catch: the rotor angle and speed of a machine that already turns, from the phase
+ * currents alone (no voltage sensing), before the estimator takes over. Not in the thesis; the
+ * principle is the one of its Step I (a known voltage, the current response), with the zero
+ * vector V(000) as the known voltage and the magnet's back-EMF as what the current reveals.
+ *
+ * PRINCIPLE. Under V(000) the stator voltage is zero, so (R neglected) the stator flux linkage
+ * stands still in the stator frame while the magnet turns on: psi_ab(t) = psi_ab(t0). From
+ * i = 0 at t0 (psi = psi_pm along d), after a rotation Delta = omega t the flux in the rotor
+ * frame at t is psi_pm (cos Delta, -sin Delta), so with the linear model psi_d = Ld i_d + psi_pm,
+ * psi_q = Lq i_q:
+ *     i_d = psi_pm (cos Delta - 1) / Ld,     i_q = -psi_pm sin Delta / Lq                  (C.1)
+ * i.e. mostly against q (braking), with a second-order part against d. The current's angle in
+ * the stator frame is therefore
+ *     phi = theta(t) + atan2(-sin Delta / Lq, (cos Delta - 1) / Ld)                         (C.2)
+ * which gives theta from the measured phi once Delta (the sign and size of the speed) is known.
+ * A single pulse cannot tell (theta, omega) from (theta + pi, -omega): to first order both give
+ * the same current. Two equal pulses separated by T12 can: the current's direction turns with
+ * the rotor, phi2 - phi1 = omega T12 (C.3), whose sign is the direction of rotation and whose
+ * size is the speed (no psi_pm, no L in it). T12 is chosen from the first pulse's magnitude
+ * (|omega| ~ |i| Lq / (psi_pm t)) for a rotation of about 20 deg: well above the angle noise
+ * of a current of i_pulse, well below the pi where (C.3) aliases.
+ *
+ * PROGRAM (mc/phase_program.h calling convention; duties always V(000), only `off` toggles):
+ *   pulse 1: V(000) until |i - i(start)| >= i_pulse (or n_pulse_max periods). After n_probe
+ *            periods a current below i_detect means the rotor stands (below omega_min): DONE,
+ *            not moving (the caller goes on with the standstill start);
+ *   gap:     outputs off (the diodes return the current to the link) for the rotation time,
+ *            and until |i| <= i_rest (bounded);
+ *   pulse 2: V(000) for exactly as long as pulse 1, so that the second-order part of (C.2) is
+ *            the same in both and cancels in (C.3);
+ *   result:  omega from (C.3), theta at the last sample from (C.2) with Delta = omega t_pulse.
+ * HIGH SPEED: where the back-EMF's line-to-line peak sqrt3 |omega| psi_pm comes near Vdc, the
+ * gap cannot be a gap: the diodes rectify and the current grows while the outputs are off
+ * (uncontrolled generation). There, pulse 1 is lengthened to 2 i_pulse and the sign is read from
+ * its own curvature: (C.2) applied to its middle and last samples gives two angles whose
+ * difference must be sigma |Delta| (1 - n_mid / n1); the wrong sign misses by about
+ * |Delta| (1 - n_mid / n1) |2 - Lq / Ld| (C.4). When that margin is too small (Lq near 2 Ld) the
+ * two-pulse method runs anyway.
+ * FAILED when the rotation is too small to give its sign (|phi2 - phi1| < 5 deg) or the second
+ * current does not fit (C.1) within a factor of 2 (a model or sensor far off): the caller faults
+ * rather than guess. The current peaks at about i_pulse plus one period's rise.
+ *
+ * Units SI: A, V, s, H, Wb, rad, rad/s electrical. */
+#ifndef MC_CATCH_H
+#define MC_CATCH_H
+#include <stdint.h>
+
+#include "mc/initpos.h"
+#include "mc/types.h"
+
+typedef struct {
+    float ts;                 /* [s] */
+    float ld, lq, psi_pm;     /* the estimator's model at i = 0 [H, H, Wb] */
+    float i_pulse;            /* |delta i| that ends a measuring pulse [A] */
+    float i_detect;           /* below this after n_probe periods: standing [A] */
+    float i_rest;             /* the gap lasts until |i| is below this [A] */
+    float rot_target;         /* rotation between the two pulses' ends [rad] */
+    uint32_t n_probe;         /* [periods] */
+    uint32_t n_pulse_max;     /* [periods] */
+    uint32_t n_gap_max;       /* [periods] */
+    float high_speed_share;   /* single-pulse sign above sqrt3 |omega| psi_pm > this x Vdc */
+} mc_catch_cfg_t;
+
+#define MC_CATCH_HIST 16      /* samples of pulse 1 kept for the single-pulse sign (C.4) */
+
+typedef struct {
+    mc_catch_cfg_t cfg;
+    int phase;                /* internal */
+    uint32_t n, n1, n_gap, calls, end1;
+    mc_ab_t i0, di1, di2;     /* pulse start current, both pulses' current changes [A] */
+    mc_ab_t hist[MC_CATCH_HIST];  /* pulse 1: delta i after n = 1..16 periods */
+    bool single;              /* the sign came from pulse 1 alone (C.4) */
+    mc_ip_status_t status;
+    /* results */
+    bool moving;              /* false: the rotor stands (below omega_min) */
+    float theta;              /* at the last sample [rad], (C.2) */
+    float omega;              /* [rad/s el], (C.3) */
+    float rotation;           /* phi2 - phi1 [rad] */
+    float fit;                /* |delta i2| / (C.1) */
+    float i_peak;             /* [A] */
+} mc_catch_t;
+
+/* false on a bad configuration (non-positive or non-finite values): the engine then FAILs */
+bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg);
+/* One period: sample i_ab; duty always V(000); *off: the outputs are off from this sample on
+ * (a gate disable acts at once, unlike the duties, which act a period later). */
+mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty, bool *off);
+
+#endif
