@@ -242,7 +242,9 @@ void mc_drive_isr(mc_drive_t *d)
      *     turns the outputs off before this period's duties are written. */
     const uint32_t implausible = mc_protect_running(d, &ang, d->tm.omega_raw, i_ref, i_fb, d->cc.u);
     if (implausible != 0u) {
-        mc_drive_trip(d, implausible);
+        if (!mc_drive_recover(d, implausible, vdc)) {
+            mc_drive_trip(d, implausible);
+        }
         d->i_ab_prev = i_ab;
         publish(d);
         return;

@@ -166,6 +166,9 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
 {
     const float el = RPM_TO_RAD_S * (float)p->pole_pairs;
     b->overspeed = p->overspeed_rpm * el;
+    b->recover = p->lock_action == 1 && !mc_angle_src_get(p->angle_src)->measures_angle;
+    b->retries = (uint32_t)p->retries;
+    b->retry_reset_n = periods_of(p->retry_reset, p->ts);
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */
     b->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
     b->i_sum_tol = p->i_sum_tol;

@@ -17,6 +17,10 @@ void mc_drive_startup_reset(mc_drive_t *d);
 /* Protection and the startup states for this period. Returns true when the control pipeline
  * runs this period (RUN, Step III); otherwise it has already written the PWM. */
 bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc, mc_ab_t i_ab, float vdc);
+/* A running-check fault while sensorless (loss of lock, voltage model, tracking) with
+ * protection.lock_action = recover and retries left: outputs off, RUN -> the catch again.
+ * false: not recoverable, the caller trips. */
+bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc);
 /* Outputs off, duties at 50 %, the reason latched (FAULT until disable + enable). */
 void mc_drive_trip(mc_drive_t *d, uint32_t reason);
 /* Plausibility detectors (protect.c): each returns a fault reason or 0. The sensor checks run

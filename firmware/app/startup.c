@@ -40,6 +40,9 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
 void mc_drive_startup_reset(mc_drive_t *d)
 {
     d->cal_count = 0u;
+    d->retries = 0u;
+    d->tm.recoveries = 0u;
+    d->tm.recovered_from = 0u;
     d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
@@ -148,6 +151,30 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     hal_pwm_enable(d->hal.pwm, true);
 }
 
+bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
+{
+    const mc_drive_blk_t *b = &d->cfg->blk;
+    const uint32_t recoverable = MC_FAULT_LOSS_OF_LOCK | MC_FAULT_VOLTAGE_MODEL | MC_FAULT_TRACKING;
+    if (!b->recover || (reason & ~recoverable) != 0u || d->retries >= b->retries ||
+        d->seq.state != MC_STATE_RUN) {
+        return false;
+    }
+    d->retries++;
+    d->tm.recoveries++;
+    d->tm.recovered_from |= reason;
+    /* outputs off now, V(000) latched for the catch's first pulse */
+    hal_pwm_enable(d->hal.pwm, false);
+    write_duties(d, (mc_abc_t){0.0f, 0.0f, 0.0f}, vdc);
+    mc_seq_event(&d->seq, MC_SEQ_RECOVER);
+    if (!mc_phase_begin(&d->phase, &mc_phase_catch, &b->fly, 0.0f)) {
+        mc_drive_trip(d, MC_FAULT_CONFIG);
+    }
+    /* the speed loop starts again from the caught speed, not from what it wound up to */
+    const mc_sc_cfg_t sc = d->sc.cfg;
+    mc_sc_init(&d->sc, &sc);
+    return true;
+}
+
 /* The catch's period; at its end a turning rotor goes to RUN with the estimate set to the
  * caught angle and speed, a standing one to Step I (or RUN with the given angle). */
 static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
@@ -168,6 +195,12 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     d->tm.c2 = res.omega;
     if (st == MC_IP_FAILED) {
         mc_drive_trip(d, MC_FAULT_INIT_POS);   /* no sign for the speed, or (C.1) does not fit */
+        return;
+    }
+    if (!res.moving && d->tm.recoveries > 0u && !d->seq.cfg.init_pos) {
+        /* a recovery that finds the rotor standing has no angle to go on with (the one given
+         * with the enable is stale): the reason that started it stands */
+        mc_drive_trip(d, d->tm.recovered_from);
         return;
     }
     if (res.moving) {
@@ -253,6 +286,9 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
         break;
     }
     mc_seq_tick(&d->seq);
+    if (d->seq.state == MC_STATE_RUN && d->seq.ticks >= d->cfg->blk.retry_reset_n) {
+        d->retries = 0u;   /* long enough in RUN: the recoveries count from zero again */
+    }
     if (d->seq.state == MC_STATE_FAULT && hal_pwm_enabled(d->hal.pwm)) {
         outputs_off(d);   /* a timeout raised by the tick */
     }

@@ -51,6 +51,8 @@ void mc_seq_event(mc_seq_t *s, mc_seq_event_t ev)
         } else {
             enter(s, MC_STATE_RUN, MC_INIT_NONE, 0.0f);
         }
+    } else if (s->state == MC_STATE_RUN && ev == MC_SEQ_RECOVER) {
+        enter(s, MC_STATE_INIT_POS, MC_INIT_CATCH, s->cfg.timeout_catch);
     } else if (s->state == MC_STATE_INIT_POS && s->step == MC_INIT_CATCH) {
         if (ev == MC_SEQ_CAUGHT || (ev == MC_SEQ_STEP_DONE && !s->cfg.init_pos)) {
             enter(s, MC_STATE_RUN, MC_INIT_NONE, 0.0f);

@@ -5,7 +5,7 @@
 
 #include "mc/angle.h"
 
-enum { PULSE1 = 0, GAP, PULSE2, END };
+enum { WAIT = 0, PULSE1, GAP, PULSE2, END };
 
 static bool finite_pos(float x)
 {
@@ -14,7 +14,7 @@ static bool finite_pos(float x)
 
 bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg)
 {
-    *s = (mc_catch_t){.cfg = *cfg, .phase = PULSE1, .status = MC_IP_RUNNING};
+    *s = (mc_catch_t){.cfg = *cfg, .phase = WAIT, .status = MC_IP_RUNNING};
     const bool ok = finite_pos(cfg->ts) && finite_pos(cfg->ld) && finite_pos(cfg->lq) && finite_pos(cfg->psi_pm) &&
                     finite_pos(cfg->i_pulse) && finite_pos(cfg->i_detect) && cfg->i_detect <= cfg->i_pulse &&
                     finite_pos(cfg->i_rest) && finite_pos(cfg->rot_target) && cfg->rot_target < 2.0f &&
@@ -119,8 +119,15 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         s->i_peak = im;
     }
     const uint32_t call = s->calls++;
-    if (call == 0u) {   /* pulse 1 starts from this sample */
+    if (s->phase == WAIT) {
+        /* pulse 1 starts from this sample once the current is at rest (at an enable it is;
+         * after a recovery the outputs were just switched off), or after the longest gap */
+        if (!(im <= c->i_rest) && s->n++ < c->n_gap_max) {
+            return MC_IP_RUNNING;
+        }
         s->i0 = i_ab;
+        s->phase = PULSE1;
+        s->n = 0u;
         *off = false;
         return MC_IP_RUNNING;
     }

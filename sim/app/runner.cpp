@@ -48,6 +48,16 @@ const char* state_name(mc_state_t s)
     return "?";
 }
 
+std::vector<std::string> fault_names(uint32_t f);
+
+// ["a", "b"]
+static std::string json_names(const std::vector<std::string>& v)
+{
+    std::string o = "[";
+    for (size_t k = 0; k < v.size(); ++k) o += (k ? ", \"" : "\"") + v[k] + "\"";
+    return o + "]";
+}
+
 std::vector<std::string> fault_names(uint32_t f)
 {
     std::vector<std::string> out;
@@ -503,7 +513,9 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
                                      {"sim_time_s", json_number(out.sim_time_s)},
                                      {"wall_time_s", json_number(wall)},
                                      {"realtime_factor", json_number(out.realtime_factor)},
-                                     {"fault_count", std::to_string(fault_names(tm.faults).size())}});
+                                     {"fault_count", std::to_string(fault_names(tm.faults).size())},
+                                     {"recoveries", std::to_string(tm.recoveries)},
+                                     {"recovered_from", json_names(fault_names(tm.recovered_from))}});
     if (!opt.out_dir.empty()) {
         std::ofstream m(opt.out_dir + "/metrics.json");
         m << out.metrics_json;

@@ -21,6 +21,8 @@
  * of a current of i_pulse, well below the pi where (C.3) aliases.
  *
  * PROGRAM (mc/phase_program.h calling convention; duties always V(000), only `off` toggles):
+ *   wait:    outputs off until |i| <= i_rest (at most n_gap_max periods): none at an enable,
+ *            a few periods when a recovery restarts the catch;
  *   pulse 1: V(000) until |i - i(start)| >= i_pulse (or n_pulse_max periods). After n_probe
  *            periods a current below i_detect means the rotor stands (below omega_min): DONE,
  *            not moving (the caller goes on with the standstill start);

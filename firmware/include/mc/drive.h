@@ -84,6 +84,8 @@ typedef struct {
     float    duty[3];
     bool     u_limited, fw_active;
     uint32_t cmd_rejected;       /* commands refused at the hand-over        */
+    uint32_t recoveries;         /* recoveries since the enable (protection.lock_action)      */
+    uint32_t recovered_from;     /* the reasons that started them (fault bits, or-ed)         */
     mc_cmd_reject_t cmd_reject_last;
 } mc_drive_telem_t;
 
@@ -113,6 +115,8 @@ typedef struct {
     float i_sum_tol, track_err, lock_tol, lock_floor, stall_speed, stall_torque;
     float resid_v, resid_w_coef;  /* [V], [V s/rad]: threshold resid_v + resid_w_coef |w|   */
     uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;
+    bool recover;                /* protection.lock_action = recover (sensorless only)          */
+    uint32_t retries, retry_reset_n;
     mc_seq_cfg_t seq;
     mc_angle_src_cfg_t src;
     mc_inj_cfg_t inj;
@@ -176,6 +180,7 @@ typedef struct {
         float u_d, u_q, i_d, i_q, w;          /* voltage, current, speed for the residual    */
     } prot;
     uint32_t step3_count;
+    uint32_t retries;            /* recoveries since the last retry_reset_s of clean RUN      */
     mc_cc_t cc;
     mc_sc_t sc;
     mc_tref_t tref;

@@ -61,6 +61,7 @@ typedef enum {
     MC_SEQ_STEP_DONE,       /* Step I or II finished; Step III: the convergence test holds;
                                the catch found the rotor standing                           */
     MC_SEQ_CAUGHT,          /* the catch has the angle and speed of a turning rotor: RUN     */
+    MC_SEQ_RECOVER,         /* RUN lost the angle: the catch (protection.lock_action)        */
 } mc_seq_event_t;
 
 void mc_seq_init(mc_seq_t *s, const mc_seq_cfg_t *cfg);
