@@ -867,7 +867,7 @@ LOST_DEG = 90.0  # an angle error at or beyond this is a lost estimate
 PEAK_NOTE_DEG = 45.0  # a holding cell names its transient peak from here on
 DOC_BEGIN, DOC_END = "<!-- envelope:begin -->", "<!-- envelope:end -->"
 # worst first: the cell shows the worst outcome over its seeds
-OUTCOME_RANK = {"holds": 0, "no_run": 1, "trips": 2, "runs_off": 3, "failed": 4}
+OUTCOME_RANK = {"holds": 0, "no_run": 1, "recovers": 2, "trips": 3, "runs_off": 4, "failed": 5}
 
 
 @dataclass(frozen=True)
@@ -919,7 +919,12 @@ def classify_run(metrics: dict | None, error: str | None = None) -> dict:
     drive runs, so after a fault angle_err_max_deg is the largest error before it.
       holds     no fault, |angle error| stayed below LOST_DEG: steady_deg is the steady error;
       trips     a fault, and the angle error stayed below LOST_DEG before it (a safe trip);
-      runs_off  the angle error reached LOST_DEG: with no fault, or before the fault;
+      recovers  the firmware detected a loss of lock, turned the outputs off and caught the
+                rotor again (protection.lock_action = recover; metrics recoveries > 0), ended
+                without a fault, and the angle error stayed below LOST_DEG;
+      runs_off  the angle error reached LOST_DEG: with no fault, or before a fault or a
+                recovery (conservative: the metrics do not say whether the angle was lost
+                before the first detection or during a retry);
       no_run    no fault, but the drive never ran (no angle error at all);
       failed    mcsim failed or wrote no metrics."""
     if error is not None or not isinstance(metrics, dict):
@@ -927,15 +932,19 @@ def classify_run(metrics: dict | None, error: str | None = None) -> dict:
     faults = [str(f) for f in (metrics.get("faults") or [])]
     amax = number(metrics.get("angle_err_max_deg"))
     lost = amax is not None and abs(amax) >= LOST_DEG
+    recoveries = int(number(metrics.get("recoveries")) or 0)
     if lost:
         outcome = "runs_off"
+    elif recoveries and not faults:
+        outcome = "recovers"
     elif faults:
         outcome = "trips"
     elif amax is None:
         outcome = "no_run"
     else:
         outcome = "holds"
-    return {"outcome": outcome, "faults": faults,
+    return {"outcome": outcome, "faults": faults, "recoveries": recoveries,
+            "recovered_from": [str(f) for f in (metrics.get("recovered_from") or [])],
             "fault_time_s": number(metrics.get("fault_time_s")),
             "angle_err_max_deg": None if amax is None else abs(amax),
             "steady_deg": steady_angle_deg(metrics)}
@@ -961,14 +970,26 @@ def _outcome_text(outcome: str, sel: list[dict], n: int) -> str:
         text = f"trips: {', '.join(reasons)}" + (f" at {t_first:.2f} s" if t_first is not None
                                                  else "")
         notes.append(f"max {_deg(maxof('angle_err_max_deg'), 0)}")
+        rec = maxof("recoveries")
+        if rec:
+            notes.append(f"after {rec} recover{'y' if rec == 1 else 'ies'}")
+    elif outcome == "recovers":
+        why = list(dict.fromkeys(f for r in sel for f in r.get("recovered_from", [])))
+        text = f"recovers ×{maxof('recoveries')} ({', '.join(why)}), then {_deg(maxof('steady_deg'))}"
+        notes.append(f"max {_deg(maxof('angle_err_max_deg'), 0)}")
     elif outcome == "runs_off":
-        silent = sum(1 for r in sel if not r.get("faults"))
+        silent = sum(1 for r in sel if not r.get("faults") and not r.get("recoveries"))
         text = f"RUNS OFF {_deg(maxof('angle_err_max_deg'), 0)}"
         if silent:
             text = f"**{text}**"  # the finding: the angle is lost and nothing trips
         if reasons:  # a trip after the angle was lost
             text += ", then " + ", ".join(reasons) \
                 + (f" in {len(sel) - silent}/{len(sel)}" if silent else "")
+        rec = maxof("recoveries")
+        if rec:
+            text += f" (after {rec} recover{'y' if rec == 1 else 'ies'})" if reasons else \
+                f", then recovers ×{rec}"
+
     elif outcome == "no_run":
         text = "never ran"
     else:
@@ -990,7 +1011,8 @@ def summarize_cell(runs: list[dict]) -> dict:
     steady = [r["steady_deg"] for r in groups[worst] if r.get("steady_deg") is not None]
     return {"outcome": worst, "text": text, "count": len(groups[worst]), "n": n,
             "faults": list(dict.fromkeys(f for r in runs for f in r.get("faults", []))),
-            "silent_runs_off": sum(1 for r in groups.get("runs_off", []) if not r.get("faults")),
+            "silent_runs_off": sum(1 for r in groups.get("runs_off", [])
+                                   if not r.get("faults") and not r.get("recoveries")),
             "steady_deg": max(steady) if worst == "holds" and steady else None,
             "angle_err_max_deg": max((r["angle_err_max_deg"] for r in runs
                                       if r.get("angle_err_max_deg") is not None), default=None)}
@@ -1011,12 +1033,15 @@ def envelope_markdown(rows: list[EnvelopeError], scen_names: list[str], cells: d
              f"until it (y = `angle_err_max_deg` with `metrics.start_s = 0`, counted while "
              f"running, i.e. before the fault); **RUNS OFF y°** the angle error reached "
              f"{LOST_DEG:g}°, in bold when no fault followed (the angle is lost and nothing trips), "
-             f"else \"then reason\" (the trip came after the angle was lost). L = the estimator's "
+             f"else \"then reason\" (the trip came after the angle was lost); **recovers ×k (reason), then x°** "
+             f"the firmware detected the loss (reason), turned the outputs off and caught the rotor "
+             f"again k times (protection.lock_action = recover, the default) and ran on without a "
+             f"fault, x = the steady error after. L = the estimator's "
              f"estimator.l_scale: the constants Ld, Lq (const model) or the flux map's "
              f"current-dependent part (fluxmap); ψpm = psi_scale, Rs = rs_scale, "
              f"cross-saturation = cross_scale (flux-map model only; docs/simulator.md "
              f"\"Estimator mismatch\").", "",
-             f"Cells: {counts['holds']} hold, {counts['trips']} trip, {counts['runs_off']} run off "
+             f"Cells: {counts['holds']} hold, {counts['recovers']} recover, {counts['trips']} trip, {counts['runs_off']} run off "
              f"({silent} without any fault)"
              + (f", {counts['failed']} with failed runs" if counts["failed"] else "")
              + (f", {counts['no_run']} never ran" if counts["no_run"] else "") + ".", "",

@@ -23,8 +23,8 @@ def metrics(faults=(), amax=1.0, steady=0.5, t_fault=None, windows=None):
 
 def test_classify_holds_trips_runs_off():
     assert classify_run(metrics(amax=12.0, steady=-3.5)) == {
-        "outcome": "holds", "faults": [], "fault_time_s": None, "angle_err_max_deg": 12.0,
-        "steady_deg": 3.5}
+        "outcome": "holds", "faults": [], "recoveries": 0, "recovered_from": [], "fault_time_s": None,
+        "angle_err_max_deg": 12.0, "steady_deg": 3.5}
     c = classify_run(metrics(["voltage_model"], amax=40.0, steady=None, t_fault=0.22))
     assert c["outcome"] == "trips" and c["faults"] == ["voltage_model"] and c["fault_time_s"] == 0.22
     # no fault, angle lost: the finding
@@ -35,6 +35,28 @@ def test_classify_holds_trips_runs_off():
     # the boundary: 90 deg is lost, just below is not
     assert classify_run(metrics(amax=90.0))["outcome"] == "runs_off"
     assert classify_run(metrics(["tracking"], amax=89.9))["outcome"] == "trips"
+
+
+def test_classify_recoveries():
+    # detected, caught again, ran on: recovers
+    m = metrics(amax=40.0, steady=1.2)
+    m.update(recoveries=1, recovered_from=["loss_of_lock"])
+    c = classify_run(m)
+    assert c["outcome"] == "recovers" and c["recovered_from"] == ["loss_of_lock"]
+    cell = summarize_cell([{"seed": 1, **c}])
+    assert cell["outcome"] == "recovers" and "recovers ×1 (loss_of_lock), then 1.2°" in cell["text"]
+    # retries used up, then the fault: a (detected) trip
+    m = metrics(["loss_of_lock"], amax=60.0, steady=None, t_fault=0.3)
+    m.update(recoveries=3, recovered_from=["loss_of_lock"])
+    c = classify_run(m)
+    assert c["outcome"] == "trips"
+    assert "after 3 recoveries" in summarize_cell([{"seed": 1, **c}])["text"]
+    # the angle lost at some point: a run-off, conservatively, with what followed
+    m = metrics(amax=178.0, steady=1.2)
+    m.update(recoveries=1, recovered_from=["loss_of_lock"])
+    cell = summarize_cell([{"seed": 1, **classify_run(m)}])
+    assert cell["outcome"] == "runs_off" and cell["text"] == "RUNS OFF 178°, then recovers ×1"
+    assert cell["silent_runs_off"] == 0   # detected: not silent
 
 
 def test_classify_edge_cases():
