@@ -165,7 +165,8 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         /* the gap: rotate ~rot_target end to end */
         const float n12 = c->rot_target / (w1 * c->ts);
         const float ng = n12 - (float)s->n1;
-        s->n_gap = ng < 2.0f ? 2u : (ng > (float)c->n_gap_max ? c->n_gap_max : (uint32_t)ng);
+        /* !(ng >= 2): also a NaN (a converted NaN is undefined behaviour) */
+        s->n_gap = !(ng >= 2.0f) ? 2u : (ng > (float)c->n_gap_max ? c->n_gap_max : (uint32_t)ng);
         s->phase = GAP;
         s->n = 0u;
         return MC_IP_RUNNING;

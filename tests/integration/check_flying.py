@@ -26,7 +26,7 @@ import sys
 ESTIMATES = (0.0, 90.0, 180.0, -90.0)
 
 
-def run(mcsim, scenario, out, speed, err, seed, preset):
+def run(mcsim, scenario, out, speed, err, seed, preset, sets=()):
     d = os.path.join(out, f"n{speed:+g}_e{err:+g}_s{seed}")
     args = [mcsim, "run", scenario, "--out", d, "--quiet",
             "--set", f"mechanics.dyno_speed_rpm={speed}", "--set", f"estimator.theta0_err_deg={err}",
@@ -34,6 +34,8 @@ def run(mcsim, scenario, out, speed, err, seed, preset):
             "--set", "output.trace=false"]
     if preset:
         args += ["--set", f'machine.preset="{preset}"']
+    for s in sets:
+        args += ["--set", s]
     r = subprocess.run(args, capture_output=True, text=True)
     if r.returncode != 0:
         return speed, err, seed, None, r.stderr.strip()
@@ -48,6 +50,8 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--preset", default="")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="more scenario keys for every run (e.g. scenario.profile=\"harsh\", estimator.l_scale=1.05)")
     ap.add_argument("--torque", type=float, default=14.85, help="the scenario's torque step [N m]")
     ap.add_argument("--speeds", default="50,-50,300,-300,900,-900,1500,-1500")
     ap.add_argument("--table", default="", help="also write the markdown table here")
@@ -58,10 +62,11 @@ def main():
     open_speeds = {float(x) for x in a.open.split(",") if x}
     jobs = [(s, e, k) for s in speeds for e in ESTIMATES for k in range(1, a.seeds + 1)]
     print(f"flying start: {len(jobs)} runs ({len(speeds)} speeds x {len(ESTIMATES)} initial estimates x "
-          f"{a.seeds} seeds), estimator model exact", flush=True)
+          f"{a.seeds} seeds), estimator model " + ("exact" if not a.set else "exact, with " + " ".join(a.set)),
+          flush=True)
     res = []
     with cf.ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as ex:
-        futs = [ex.submit(run, a.mcsim, a.scenario, a.out, s, e, k, a.preset) for s, e, k in jobs]
+        futs = [ex.submit(run, a.mcsim, a.scenario, a.out, s, e, k, a.preset, a.set) for s, e, k in jobs]
         for n, f in enumerate(cf.as_completed(futs), 1):
             res.append(f.result())
             if n % 32 == 0 or n == len(futs):

@@ -171,6 +171,27 @@ static void test_bad_config(void **st)
     assert_false(mc_catch_start(&c, &cfg));
 }
 
+/* NaN currents (a broken sensor path): the engine ends FAILED or not moving, never with a NaN
+ * angle or speed reported as a catch, and within its bounded time; the duties stay V(000). */
+static void test_nan_currents(void **st)
+{
+    (void)st;
+    mc_catch_t c;
+    const mc_catch_cfg_t cfg = cfg_for(10.5e-3, 12.9e-3);
+    assert_true(mc_catch_start(&c, &cfg));
+    mc_ip_status_t s = MC_IP_RUNNING;
+    int k = 0;
+    for (; k < 10000 && s == MC_IP_RUNNING; ++k) {
+        mc_abc_t duty;
+        bool off;
+        const float x = (k % 3 == 0) ? NAN : 1.0f;
+        s = mc_catch_step(&c, (mc_ab_t){x, x}, 300.0f, &duty, &off);
+        assert_true(duty.a == 0.0f && duty.b == 0.0f && duty.c == 0.0f);
+    }
+    assert_true(k < 10000);
+    assert_true(s == MC_IP_FAILED || !c.moving);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -178,6 +199,7 @@ int main(void)
         cmocka_unit_test(test_standstill),
         cmocka_unit_test(test_single_pulse_falls_back),
         cmocka_unit_test(test_bad_config),
+        cmocka_unit_test(test_nan_currents),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
