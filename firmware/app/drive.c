@@ -164,7 +164,8 @@ static mc_dq_t slew(mc_drive_t *d, mc_dq_t target)
 static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
 {
     float torque = 0.0f;
-    switch (d->cmd.mode) {
+    /* a fault reaction (FAULT_REACTION) holds zero torque: the field-weakening current only */
+    switch (d->seq.state == MC_STATE_FAULT_REACTION ? MC_MODE_TORQUE : d->cmd.mode) {
     case MC_MODE_CURRENT:
         d->tm.torque_ref = 0.0f;
         return slew(d, mc_limit_current_circle(d->cmd.i_ref, d->cfg->blk.i_ref_max));
@@ -173,7 +174,7 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
         break;
     case MC_MODE_TORQUE:
     default:
-        torque = d->cmd.torque_ref;
+        torque = d->seq.state == MC_STATE_FAULT_REACTION ? 0.0f : d->cmd.torque_ref;
         break;
     }
     d->tm.torque_ref = torque;
@@ -242,7 +243,7 @@ void mc_drive_isr(mc_drive_t *d)
      *     turns the outputs off before this period's duties are written. */
     const uint32_t implausible = mc_protect_running(d, &ang, d->tm.omega_raw, i_ref, i_fb, d->cc.u);
     if (implausible != 0u) {
-        if (!mc_drive_recover(d, implausible, vdc)) {
+        if (!mc_drive_recover(d, implausible, vdc) && !mc_drive_react(d, implausible, ang.omega, vdc)) {
             mc_drive_trip(d, implausible);
         }
         d->i_ab_prev = i_ab;

@@ -167,6 +167,9 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     const float el = RPM_TO_RAD_S * (float)p->pole_pairs;
     b->overspeed = p->overspeed_rpm * el;
     b->recover = p->lock_action == 1 && !mc_angle_src_get(p->angle_src)->measures_angle;
+    b->hold_fw = p->overspeed_action == 1;
+    b->ug_coef = 1.7320508f * p->psi_pm;
+    b->seq.timeout_reaction = p->reaction_timeout;
     b->retries = (uint32_t)p->retries;
     b->retry_reset_n = periods_of(p->retry_reset, p->ts);
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */

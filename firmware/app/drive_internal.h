@@ -21,6 +21,10 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
  * protection.lock_action = recover and retries left: outputs off, RUN -> the catch again.
  * false: not recoverable, the caller trips. */
 bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc);
+/* Over-speed above the uncontrolled-generation speed with protection.overspeed_action =
+ * hold_fw: the reason latched, FAULT_REACTION (zero torque, field weakening kept up) instead of
+ * outputs off. false: no reaction applies, the caller trips. */
+bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc);
 /* Outputs off, duties at 50 %, the reason latched (FAULT until disable + enable). */
 void mc_drive_trip(mc_drive_t *d, uint32_t reason);
 /* Plausibility detectors (protect.c): each returns a fault reason or 0. The sensor checks run

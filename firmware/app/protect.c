@@ -49,8 +49,9 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
                             mc_dq_t u_dq)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    if (!(fabsf(ang->omega) <= b->overspeed)) {
-        return MC_FAULT_OVERSPEED;   /* also a NaN speed */
+    if (!(fabsf(ang->omega) <= b->overspeed) &&
+        !(d->seq.state == MC_STATE_FAULT_REACTION && fabsf(ang->omega) < 3.0e38f)) {
+        return MC_FAULT_OVERSPEED;   /* also a NaN speed; latched already in its reaction */
     }
     /* (a) the estimator's raw speed against the filtered one: a lock on the wrong solution shows
      * as a raw speed of the wrong sign or size while the PLL keeps its speed (thesis Fig. 6.9) */

@@ -175,6 +175,17 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
     return true;
 }
 
+bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc)
+{
+    const mc_drive_blk_t *b = &d->cfg->blk;
+    if (!b->hold_fw || reason != MC_FAULT_OVERSPEED || d->seq.state != MC_STATE_RUN ||
+        !(b->ug_coef * fabsf(omega) > vdc)) {
+        return false;   /* below it, outputs off is current-free: the plain trip */
+    }
+    mc_seq_fault_reaction(&d->seq, reason);
+    return true;
+}
+
 /* The catch's period; at its end a turning rotor goes to RUN with the estimate set to the
  * caught angle and speed, a standing one to Step I (or RUN with the given angle). */
 static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
@@ -259,7 +270,7 @@ static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
 bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc, mc_ab_t i_ab, float vdc)
 {
     const mc_state_t s0 = d->seq.state;
-    if (s0 == MC_STATE_INIT_POS || s0 == MC_STATE_RUN) {
+    if (s0 == MC_STATE_INIT_POS || s0 == MC_STATE_RUN || s0 == MC_STATE_FAULT_REACTION) {
         protect(d, raw, i_abc, vdc);
     }
     switch (d->seq.state) {
@@ -281,6 +292,13 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
             outputs_off(d);
         }
         break;
+    case MC_STATE_FAULT_REACTION:
+        /* the link is safe once the line-to-line back-EMF is below it with a margin */
+        if (d->cfg->blk.ug_coef * fabsf(d->tm.omega) < 0.95f * vdc) {
+            mc_seq_event(&d->seq, MC_SEQ_REACTION_DONE);
+            outputs_off(d);
+        }
+        break;
     case MC_STATE_RUN:
     default:
         break;
@@ -292,7 +310,7 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
     if (d->seq.state == MC_STATE_FAULT && hal_pwm_enabled(d->hal.pwm)) {
         outputs_off(d);   /* a timeout raised by the tick */
     }
-    return d->seq.state == MC_STATE_RUN ||
+    return d->seq.state == MC_STATE_RUN || d->seq.state == MC_STATE_FAULT_REACTION ||
            (d->seq.state == MC_STATE_INIT_POS && d->seq.step == MC_INIT_STEP3 && s0 == MC_STATE_INIT_POS &&
             d->seq.ticks > 1u);
 }

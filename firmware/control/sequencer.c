@@ -51,6 +51,8 @@ void mc_seq_event(mc_seq_t *s, mc_seq_event_t ev)
         } else {
             enter(s, MC_STATE_RUN, MC_INIT_NONE, 0.0f);
         }
+    } else if (s->state == MC_STATE_FAULT_REACTION && ev == MC_SEQ_REACTION_DONE) {
+        enter(s, MC_STATE_FAULT, MC_INIT_NONE, 0.0f);
     } else if (s->state == MC_STATE_RUN && ev == MC_SEQ_RECOVER) {
         enter(s, MC_STATE_INIT_POS, MC_INIT_CATCH, s->cfg.timeout_catch);
     } else if (s->state == MC_STATE_INIT_POS && s->step == MC_INIT_CATCH) {
@@ -78,6 +80,16 @@ void mc_seq_fault(mc_seq_t *s, uint32_t reason)
 {
     s->faults |= reason;
     enter(s, MC_STATE_FAULT, MC_INIT_NONE, 0.0f);
+}
+
+void mc_seq_fault_reaction(mc_seq_t *s, uint32_t reason)
+{
+    if (s->state != MC_STATE_RUN) {
+        mc_seq_fault(s, reason);
+        return;
+    }
+    s->faults |= reason;
+    enter(s, MC_STATE_FAULT_REACTION, MC_INIT_NONE, s->cfg.timeout_reaction);
 }
 
 void mc_seq_tick(mc_seq_t *s)

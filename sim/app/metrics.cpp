@@ -80,6 +80,7 @@ void Metrics::acc_add(Acc& a, const Sample& s) const
     a.n += 1;
     a.i_peak = std::max(a.i_peak, s.i_peak);
     a.speed_sum += s.speed_rpm;
+    a.tq_all_sum += s.torque;
     if (!s.running) return;
     a.run_n += 1;
     a.err_sum += s.angle_err_deg;
@@ -111,8 +112,8 @@ void Metrics::add_startup(const Sample& s)
         th0_ = s.theta_e_unwrapped;
     }
     if (!std::isfinite(t_enable_)) return;
-    constexpr int kFault = 3;
-    if (s.state == kFault && !std::isfinite(t_fault_)) t_fault_ = s.t;
+    constexpr int kFault = 3, kReaction = 5;   // the reason is latched from the reaction on
+    if ((s.state == kFault || s.state == kReaction) && !std::isfinite(t_fault_)) t_fault_ = s.t;
     if (s.state == kRun && !std::isfinite(t_first_run_)) t_first_run_ = s.t;
     // the rotor must not turn against the intended direction (electrical degrees)
     reverse_max_ = std::max(reverse_max_, -s.direction * (s.theta_e_unwrapped - th0_) * 180.0 / kPiM);
@@ -258,6 +259,7 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
            << ", \"id_mean_a\": " << json_number(mean(a.id_sum, a.run_n))
            << ", \"iq_mean_a\": " << json_number(mean(a.iq_sum, a.run_n))
            << ", \"torque_mean_nm\": " << json_number(mean(a.tq_sum, a.run_n))
+           << ", \"shaft_torque_mean_nm\": " << json_number(mean(a.tq_all_sum, a.n))
            << ", \"current_peak_a\": " << json_number(a.i_peak)
            << ", \"samples\": " << json_number(a.n) << "}";
     }

@@ -40,6 +40,7 @@ private:
         double n = 0, err_sum = 0, err_absmax = 0;
         double sp_n = 0, sp_sq = 0, sp_max_abs = 0, sp_sum = 0, ref_sum = 0;
         double id_sum = 0, iq_sum = 0, tq_sum = 0, i_peak = 0, speed_sum = 0;
+        double tq_all_sum = 0;   // the machine's torque over every sample, running or not
         double run_n = 0;
     };
     void acc_add(Acc& a, const Sample& s) const;

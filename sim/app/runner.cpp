@@ -44,6 +44,7 @@ const char* state_name(mc_state_t s)
     case MC_STATE_RUN: return "RUN";
     case MC_STATE_FAULT: return "FAULT";
     case MC_STATE_INIT_POS: return "INIT_POS";
+    case MC_STATE_FAULT_REACTION: return "FAULT_REACTION";
     }
     return "?";
 }

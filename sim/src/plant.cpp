@@ -63,6 +63,10 @@ struct Plant::Impl {
     double th = 0, w = 0;
     bool floating = false;
     bool latched[3] = {false, false, false};
+    // A phase that starts to conduct from i = 0 when a floating machine's back-EMF exceeds the
+    // link: the direction its diode conducts (-1: out of the terminal into the upper diode, +1:
+    // in from the lower one), until its current has left the zero band.
+    int seed[3] = {0, 0, 0};
     // Open-phase fault: the disconnected phase (-1 none) and its stationary-frame direction
     // (i_x = e_x . i_ab).
     int open = -1;
@@ -407,6 +411,30 @@ struct Plant::Impl {
         x.uq = led.uq;
     }
 
+    // Floating terminals clamp again once the back-EMF's line-to-line peak exceeds the link plus
+    // two diode drops: the phases with the largest and smallest back-EMF conduct (uncontrolled
+    // generation into the link), the third stays open.
+    void reconduct() {
+        double c, s;
+        sincos_at(th, &c, &s);
+        const double we = p * w;
+        const Vec2 e_dq(-we * psi.y(), we * psi.x());
+        const auto e = inverse_clarke(Vec2(c * e_dq.x() - s * e_dq.y(), s * e_dq.x() + c * e_dq.y()));
+        int hi = 0, lo = 0;
+        for (int k = 1; k < 3; ++k) {
+            if (e[k] > e[hi]) hi = k;
+            if (e[k] < e[lo]) lo = k;
+        }
+        if (!(e[hi] - e[lo] > cfg.inverter.vdc + 2.0 * std::fabs(cfg.inverter.v_device))) return;
+        floating = false;
+        latched[0] = latched[1] = latched[2] = true;
+        latched[hi] = latched[lo] = false;
+        seed[0] = seed[1] = seed[2] = 0;
+        seed[hi] = -1;   // out of the terminal with the highest back-EMF, into the upper diode
+        seed[lo] = +1;   // into the one with the lowest, from the lower diode
+        i = model->current(psi);
+    }
+
     void go_floating(St& x) {
         // Snap the residual current (below the zero band) to exactly 0: the energy it held goes
         // back to the DC link through the diodes, booked as (negative) electrical input.
@@ -431,10 +459,13 @@ struct Plant::Impl {
         double tau = 0.0;
         auto count_latched = [&] { return int(latched[0]) + int(latched[1]) + int(latched[2]); };
         while (tau < Ts * (1 - 1e-12)) {
+            if (floating && open < 0) reconduct();
             if (!floating) {
                 const auto ia = phase_currents();
-                for (int k = 0; k < 3; ++k)
-                    if (std::fabs(ia[k]) <= cfg.inverter.i_zero_band) latched[k] = true;
+                for (int k = 0; k < 3; ++k) {
+                    if (seed[k] != 0 && std::fabs(ia[k]) > cfg.inverter.i_zero_band) seed[k] = 0;
+                    if (seed[k] == 0 && std::fabs(ia[k]) <= cfg.inverter.i_zero_band) latched[k] = true;
+                }
                 if (count_latched() >= 2) go_floating(x);
             }
             const double step = std::min(h, Ts - tau);
@@ -455,8 +486,13 @@ struct Plant::Impl {
             const auto ia = phase_currents();
             std::array<double, 3> v{};
             double sum_conducting = 0.0;
-            for (int k = 0; k < 3; ++k)
-                if (!latched[k]) sum_conducting += (v[k] = diode_phase_voltage(ia[k], cfg.inverter));
+            for (int k = 0; k < 3; ++k) {
+                if (latched[k]) continue;
+                // a seeded phase conducts the way its back-EMF drives it, also at i = 0
+                v[k] = seed[k] == 0 ? diode_phase_voltage(ia[k], cfg.inverter)
+                                    : diode_phase_voltage(seed[k] * 2.0 * cfg.inverter.i_zero_band, cfg.inverter);
+                sum_conducting += v[k];
+            }
             if (count_latched() == 1) {
                 double c, s;
                 sincos_at(th, &c, &s);
@@ -483,6 +519,7 @@ struct Plant::Impl {
             int who = -1;
             for (int k = 0; k < 3; ++k) {
                 if (latched[k] || ia[k] * ib[k] > 0.0) continue;
+                if (seed[k] != 0 && ib[k] * seed[k] > 0.0) continue;   // leaving 0 the seeded way
                 const double f = ia[k] / (ia[k] - ib[k]);
                 if (f < frac) {
                     frac = f;
@@ -529,6 +566,7 @@ void Plant::reset_state(const Vec2& psi_dq, double theta_m, double omega_m) {
     m.g_valid = false;
     m.cs_end_valid = false;
     m.latched[0] = m.latched[1] = m.latched[2] = false;
+    m.seed[0] = m.seed[1] = m.seed[2] = 0;
     m.i = m.model->current(psi_dq);
     m.w_init = m.model->energy(psi_dq);
     m.ledger = EnergyLedger{};
@@ -559,6 +597,7 @@ void Plant::step_period(double Ts, const std::array<double, 3>& duty, bool outpu
         m.i = m.model->current(m.psi);
     }
     if (outputs_enabled) m.latched[0] = m.latched[1] = m.latched[2] = false;
+    if (outputs_enabled) m.seed[0] = m.seed[1] = m.seed[2] = 0;
     if (m.open >= 0) m.latched[m.open] = true;  // disabled periods: that phase is open anyway
 
     m.cs_end_valid = false;

@@ -116,6 +116,8 @@ typedef struct {
     float resid_v, resid_w_coef;  /* [V], [V s/rad]: threshold resid_v + resid_w_coef |w|   */
     uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;
     bool recover;                /* protection.lock_action = recover (sensorless only)          */
+    bool hold_fw;                /* protection.overspeed_action = hold_fw                       */
+    float ug_coef;               /* sqrt3 psi_pm: the line-to-line back-EMF per rad/s el [V s]  */
     uint32_t retries, retry_reset_n;
     mc_seq_cfg_t seq;
     mc_angle_src_cfg_t src;

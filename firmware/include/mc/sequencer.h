@@ -10,7 +10,11 @@ typedef enum {
     MC_STATE_OFFSET_CAL,    /* outputs off, averaging the current-channel offsets              */
     MC_STATE_RUN,           /* closed-loop control                                             */
     MC_STATE_FAULT,         /* outputs off until disable + enable                              */
-    MC_STATE_INIT_POS       /* initial position: Step I, II (pulses), III (continuous injection) */
+    MC_STATE_INIT_POS,      /* initial position: Step I, II (pulses), III (continuous injection) */
+    MC_STATE_FAULT_REACTION /* a fault is latched, the outputs stay on for its reaction (CiA 402
+                               "fault reaction active"): over-speed above the uncontrolled-
+                               generation speed keeps field weakening up with zero torque until
+                               the speed is safe; then FAULT */
 } mc_state_t;
 
 /* CATCH (the flying-start catch, mc/catch.h) runs first when configured: a turning rotor goes
@@ -41,6 +45,7 @@ typedef struct {
     bool  init_pos;         /* run Steps I-III after the calibration (else straight to RUN)  */
     bool  catch_first;      /* the catch before them (INIT_POS with step CATCH)              */
     float timeout_catch;    /* [s] the catch                                                 */
+    float timeout_reaction; /* [s] FAULT_REACTION                                            */
     float timeout_cal;      /* [s] OFFSET_CAL                                                */
     float timeout_step12;   /* [s] Step I + Step II together                                 */
     float timeout_step3;    /* [s] Step III until the convergence test holds                 */
@@ -62,6 +67,7 @@ typedef enum {
                                the catch found the rotor standing                           */
     MC_SEQ_CAUGHT,          /* the catch has the angle and speed of a turning rotor: RUN     */
     MC_SEQ_RECOVER,         /* RUN lost the angle: the catch (protection.lock_action)        */
+    MC_SEQ_REACTION_DONE,   /* FAULT_REACTION reached its safe point: FAULT                  */
 } mc_seq_event_t;
 
 void mc_seq_init(mc_seq_t *s, const mc_seq_cfg_t *cfg);
@@ -71,6 +77,9 @@ bool mc_seq_enable(mc_seq_t *s, bool on);
 void mc_seq_event(mc_seq_t *s, mc_seq_event_t ev);
 /* Latch a fault reason: FAULT until disable + enable. */
 void mc_seq_fault(mc_seq_t *s, uint32_t reason);
+/* Latch a fault reason with its reaction first (RUN only; elsewhere the same as mc_seq_fault):
+ * FAULT_REACTION, then FAULT on MC_SEQ_REACTION_DONE, another fault or the timeout. */
+void mc_seq_fault_reaction(mc_seq_t *s, uint32_t reason);
 /* Once per period, after the events: counts and applies the timeouts. */
 void mc_seq_tick(mc_seq_t *s);
 

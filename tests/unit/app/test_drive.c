@@ -754,8 +754,33 @@ static void test_protect_overspeed(void **st)
         run(&r, 1);
     }
     print_message("over-speed fault after %d periods (%.1f ms)\n", k - 1, (double)(k - 1) * 0.1);
-    assert_fault(&r, MC_FAULT_OVERSPEED);
+    /* 2000 rpm: the back-EMF's line-to-line peak (574 V) exceeds the 300 V link, so the default
+     * reaction (hold_fw) keeps the outputs on with zero torque, the reason latched */
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT_REACTION);
+    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_OVERSPEED);
+    assert_true(hal_pwm_enabled(&r.pwm));
     assert_true(k - 1 <= 100);   /* the encoder PLL (150 Hz) settles within 10 ms */
+    assert_float_equal(r.d.tm.torque_ref, 0.0f, 0.0f);
+    /* slowing down: off once the back-EMF is below 95 % of the link (916 rpm) */
+    const uint32_t slow = 80000u * 800u / 60u / 10000u;
+    for (k = 1; k <= 1000 && mc_drive_state(&r.d) == MC_STATE_FAULT_REACTION; ++k) {
+        r.qep.sample.count = (r.qep.sample.count + slow) % 80000u;
+        run(&r, 1);
+    }
+    assert_fault(&r, MC_FAULT_OVERSPEED);
+    assert_true(k - 1 <= 100);
+
+    /* overspeed_action = off: outputs off at once */
+    rig_init(&r);
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_overspeed_action, "off", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
+    for (k = 1; k <= 1000 && mc_drive_state(&r.d) == MC_STATE_RUN; ++k) {
+        r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+        run(&r, 1);
+    }
+    assert_fault(&r, MC_FAULT_OVERSPEED);
 }
 
 int main(void)

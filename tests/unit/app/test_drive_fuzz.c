@@ -140,7 +140,7 @@ static void check_outputs(const rig_t *r)
         CHECK(!r->pwm.enabled);
     }
     const mc_state_t s = r->d.seq.state;
-    if (s != MC_STATE_RUN && s != MC_STATE_INIT_POS) {
+    if (s != MC_STATE_RUN && s != MC_STATE_INIT_POS && s != MC_STATE_FAULT_REACTION) {
         CHECK(!r->pwm.enabled);
     }
     stats.duty_checks++;

@@ -241,6 +241,54 @@ static int run_until_leaves(rig_t *r, mc_state_t st, mc_init_step_t sub, int n)
     return n;
 }
 
+/* A fault with its reaction: RUN -> FAULT_REACTION (reason latched) -> FAULT on the done event,
+ * on another fault or on the timeout; outside RUN it is a plain fault. */
+static void test_seq_fault_reaction(void **st)
+{
+    (void)st;
+    const mc_seq_cfg_t c = {.ts = 1e-4f, .timeout_cal = 0.01f, .timeout_reaction = 0.002f};
+    mc_seq_t s;
+    mc_seq_init(&s, &c);
+    mc_seq_enable(&s, true);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    assert_int_equal(s.state, MC_STATE_RUN);
+    mc_seq_fault_reaction(&s, MC_FAULT_OVERSPEED);
+    assert_int_equal(s.state, MC_STATE_FAULT_REACTION);
+    assert_int_equal(s.faults, MC_FAULT_OVERSPEED);
+    mc_seq_event(&s, MC_SEQ_REACTION_DONE);
+    assert_int_equal(s.state, MC_STATE_FAULT);
+    assert_int_equal(s.faults, MC_FAULT_OVERSPEED);
+    /* another fault during the reaction: FAULT with both reasons */
+    mc_seq_enable(&s, false);
+    mc_seq_enable(&s, true);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    mc_seq_fault_reaction(&s, MC_FAULT_OVERSPEED);
+    mc_seq_fault(&s, MC_FAULT_OVERCURRENT);
+    assert_int_equal(s.state, MC_STATE_FAULT);
+    assert_int_equal(s.faults, MC_FAULT_OVERSPEED | MC_FAULT_OVERCURRENT);
+    /* the timeout */
+    mc_seq_enable(&s, false);
+    mc_seq_enable(&s, true);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    mc_seq_fault_reaction(&s, MC_FAULT_OVERSPEED);
+    for (int k = 0; k < 20; ++k) mc_seq_tick(&s);
+    assert_int_equal(s.state, MC_STATE_FAULT_REACTION);
+    mc_seq_tick(&s);
+    assert_int_equal(s.state, MC_STATE_FAULT);
+    assert_true(s.faults & MC_FAULT_TIMEOUT);
+    /* disable during the reaction: IDLE (outputs off) */
+    mc_seq_enable(&s, false);
+    mc_seq_enable(&s, true);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    mc_seq_fault_reaction(&s, MC_FAULT_OVERSPEED);
+    mc_seq_enable(&s, false);
+    assert_int_equal(s.state, MC_STATE_IDLE);
+    /* not in RUN: a plain fault */
+    mc_seq_enable(&s, true);
+    mc_seq_fault_reaction(&s, MC_FAULT_OVERSPEED);
+    assert_int_equal(s.state, MC_STATE_FAULT);
+}
+
 /* The drive with the default catch on a standing rotor: the probe (outputs on, V(000)), then
  * the outputs off for a period, then Step I. */
 static void test_catch_first(void **st)
@@ -387,6 +435,7 @@ int main(void)
         cmocka_unit_test(test_seq_path_and_timeouts),
         cmocka_unit_test(test_seq_extreme_timeouts),
         cmocka_unit_test(test_seq_catch),
+        cmocka_unit_test(test_seq_fault_reaction),
         cmocka_unit_test(test_catch_first),
         cmocka_unit_test(test_drive_full_path),
         cmocka_unit_test(test_fault_in_every_step),
