@@ -73,9 +73,13 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
                               .rot_target = rot, .high_speed_share = 0.9f,
                               .n_probe = periods_up(0.25f * p->catch_i * t_per_a / p->ts),
                               .n_pulse_max = periods_up(1.5f * p->catch_i * t_per_a / p->ts),
-                              .n_gap_max = periods_up(rot / (w_min * p->ts))};
+                              .n_gap_max = periods_up(rot / (w_min * p->ts)),
+                              .n_wait_max = periods_up(1e-3f / p->ts)};
     if (b->fly.n_gap_max < 2u) {
         b->fly.n_gap_max = 2u;
+    }
+    if (b->fly.n_wait_max > b->fly.n_gap_max) {
+        b->fly.n_wait_max = b->fly.n_gap_max;
     }
     b->seq.timeout_catch =
         (float)(2u * b->fly.n_pulse_max + 2u * b->fly.n_gap_max + 10u) * p->ts;

@@ -35,6 +35,7 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
     d->step3_count = 0u;
     mc_protect_reset(d, omega);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
+    d->fw_did = 0.0f;
 }
 
 void mc_drive_startup_reset(mc_drive_t *d)

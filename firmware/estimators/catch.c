@@ -19,6 +19,7 @@ bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg)
                     finite_pos(cfg->i_pulse) && finite_pos(cfg->i_detect) && cfg->i_detect <= cfg->i_pulse &&
                     finite_pos(cfg->i_rest) && finite_pos(cfg->rot_target) && cfg->rot_target < 2.0f &&
                     cfg->n_probe >= 1u && cfg->n_pulse_max >= cfg->n_probe && cfg->n_gap_max >= 2u &&
+                    cfg->n_wait_max <= cfg->n_gap_max &&
                     finite_pos(cfg->high_speed_share);
     if (!ok) {
         s->status = MC_IP_FAILED;
@@ -122,7 +123,7 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
     if (s->phase == WAIT) {
         /* pulse 1 starts from this sample once the current is at rest (at an enable it is;
          * after a recovery the outputs were just switched off), or after the longest gap */
-        if (!(im <= c->i_rest) && s->n++ < c->n_gap_max) {
+        if (!(im <= c->i_rest) && s->n++ < c->n_wait_max) {
             return MC_IP_RUNNING;
         }
         s->i0 = i_ab;

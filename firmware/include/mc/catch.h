@@ -21,8 +21,10 @@
  * of a current of i_pulse, well below the pi where (C.3) aliases.
  *
  * PROGRAM (mc/phase_program.h calling convention; duties always V(000), only `off` toggles):
- *   wait:    outputs off until |i| <= i_rest (at most n_gap_max periods): none at an enable,
- *            a few periods when a recovery restarts the catch;
+ *   wait:    outputs off until |i| <= i_rest (at most n_wait_max periods): none at an enable
+ *            below the uncontrolled-generation speed, a few periods when a recovery restarts
+ *            the catch; above that speed the diodes' current never rests and pulse 1 starts
+ *            from it (the current differences of (C.1)-(C.3) are then exact only for Ld = Lq);
  *   pulse 1: V(000) until |i - i(start)| >= i_pulse (or n_pulse_max periods). After n_probe
  *            periods a current below i_detect means the rotor stands (below omega_min): DONE,
  *            not moving (the caller goes on with the standstill start);
@@ -60,6 +62,9 @@ typedef struct {
     uint32_t n_probe;         /* [periods] */
     uint32_t n_pulse_max;     /* [periods] */
     uint32_t n_gap_max;       /* [periods] */
+    uint32_t n_wait_max;      /* [periods] the longest wait for the current to rest first: it
+                                 decays through the diodes within a period or two, unless the
+                                 back-EMF exceeds the link (then it never does) */
     float high_speed_share;   /* single-pulse sign above sqrt3 |omega| psi_pm > this x Vdc */
 } mc_catch_cfg_t;
 

@@ -70,7 +70,8 @@ static mc_catch_cfg_t cfg_for(double ld, double lq)
                             .i_pulse = 3.3f, .i_detect = 0.825f, .i_rest = 0.3f, .rot_target = 0.35f,
                             .n_probe = (uint32_t)ceil(0.825 * tpa / TS),
                             .n_pulse_max = (uint32_t)ceil(1.5 * 3.3 * tpa / TS),
-                            .n_gap_max = (uint32_t)ceil(0.35 / (wmin * TS)), .high_speed_share = 0.9f};
+                            .n_gap_max = (uint32_t)ceil(0.35 / (wmin * TS)), .n_wait_max = 10u,
+                            .high_speed_share = 0.9f};
 }
 
 static outcome_t run_catch(double ld, double lq, double w, double th0)
