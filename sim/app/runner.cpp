@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,7 @@
 #include <fstream>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "drive_setup.hpp"
@@ -347,30 +349,65 @@ public:
     }
     ~Trace()
     {
+        flush();
         if (f_) std::fclose(f_);
     }
     Trace(const Trace&) = delete;
     Trace& operator=(const Trace&) = delete;
     bool wants(long k) const { return f_ && k % decim_ == 0; }
+    // One row. std::to_chars with a precision formats exactly as printf's "%.Nf" / "%.Ng" (both
+    // round the exact binary value), at a fraction of fprintf's cost: on a long run fprintf was a
+    // third of the loop. Rows are collected and written in blocks.
     void row(double t, const Plant& plant, const mc_drive_telem_t& tm, const Sample& s, double load, int p, bool est)
     {
         const double deg = 180.0 / kPi;
         const bool run = s.running;
         const auto iabc = plant.i_abc();
-        std::fprintf(f_,
-                     "%.6f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.4f,%.4f,%.5f,%.5f,%.5f,%.5f,%.5f,%.5f,%.3f,%d,"
-                     "%.4f,%.4f,%d,%.4g,%.3f\n",
-                     t, s.theta_true_deg, run ? tm.theta * deg : NAN, s.angle_err_deg, s.speed_rpm,
-                     run ? tm.omega / p * kRpm : NAN, s.speed_ref_rpm, s.id, s.iq, run ? tm.i_ref.d : NAN,
-                     run ? tm.i_ref.q : NAN, run ? tm.u_dq.d : NAN, run ? tm.u_dq.q : NAN, s.torque,
-                     run ? tm.torque_ref : NAN, load, iabc[0], iabc[1], iabc[2], tm.vdc, static_cast<int>(tm.state),
-                     run ? tm.theta_raw * deg : NAN, run ? tm.omega_raw / p * kRpm : NAN,
-                     run && est ? tm.est_iters : 0, run && est ? tm.est_cost : NAN, run ? tm.u_inj : NAN);
+        const double fixed[] = {t, s.theta_true_deg, run ? tm.theta * deg : NAN, s.angle_err_deg, s.speed_rpm,
+                                run ? tm.omega / p * kRpm : NAN, s.speed_ref_rpm, s.id, s.iq, run ? tm.i_ref.d : NAN,
+                                run ? tm.i_ref.q : NAN, run ? tm.u_dq.d : NAN, run ? tm.u_dq.q : NAN, s.torque,
+                                run ? tm.torque_ref : NAN, load, iabc[0], iabc[1], iabc[2], tm.vdc};
+        static const int prec[] = {6, 4, 4, 4, 4, 4, 4, 5, 5, 5, 5, 4, 4, 5, 5, 5, 5, 5, 5, 3};
+        for (size_t k = 0; k < sizeof fixed / sizeof fixed[0]; ++k) num(fixed[k], std::chars_format::fixed, prec[k]);
+        integer(static_cast<int>(tm.state));
+        num(run ? tm.theta_raw * deg : NAN, std::chars_format::fixed, 4);
+        num(run ? tm.omega_raw / p * kRpm : NAN, std::chars_format::fixed, 4);
+        integer(run && est ? tm.est_iters : 0);
+        num(run && est ? tm.est_cost : NAN, std::chars_format::general, 4);
+        num(run ? tm.u_inj : NAN, std::chars_format::fixed, 3);
+        buf_.back() = '\n';   // the last separator ends the row
+        if (buf_.size() > (1u << 16)) flush();
+    }
+
+private:
+    void num(double v, std::chars_format fmt, int precision)
+    {
+        if (std::isnan(v)) {   // printf's spelling, sign included
+            buf_.append(std::signbit(v) ? "-nan," : "nan,");
+            return;
+        }
+        char tmp[400];   // %.6f of the largest double needs ~317 characters
+        const auto r = std::to_chars(tmp, tmp + sizeof tmp, v, fmt, precision);
+        buf_.append(tmp, r.ptr);
+        buf_.push_back(',');
+    }
+    void integer(int v)
+    {
+        char tmp[16];
+        const auto r = std::to_chars(tmp, tmp + sizeof tmp, v);
+        buf_.append(tmp, r.ptr);
+        buf_.push_back(',');
+    }
+    void flush()
+    {
+        if (f_ && !buf_.empty()) std::fwrite(buf_.data(), 1, buf_.size(), f_);
+        buf_.clear();
     }
 
 private:
     std::FILE* f_ = nullptr;
     long decim_;
+    std::string buf_;
 };
 
 }  // namespace
