@@ -185,9 +185,14 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     b->lock_tol = p->lock_tol;
     b->lock_floor = p->lock_floor_rpm * el;
     b->lock_n = b->inject ? periods_of(p->lock_time, p->ts) : 0u;   /* estimators only */
+    b->jump_n = b->inject ? periods_of(p->jump_time, p->ts) : 0u;
+    b->jump = p->jump_deg * (MC_PI / 180.0f);
     b->stall_speed = p->stall_rpm * el;
     b->stall_torque = 0.9f * p->torque_max;
     b->stall_n = periods_of(p->stall_time, p->ts);
+    b->accel_n = periods_of(p->accel_time, p->ts);
+    b->accel_torque = 0.5f * p->torque_max;
+    b->accel_per_nm = 0.5f * (float)p->pole_pairs / p->inertia;
     b->resid_v = p->resid_v;
     b->resid_w_coef = 0.5f * p->lq * p->i_max;
     b->resid_n = periods_of(p->resid_time, p->ts);

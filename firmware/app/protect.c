@@ -4,6 +4,7 @@
  * outputs off in the same period. Detection time = persistence + the filters' settling. */
 #include <math.h>
 #include "drive_internal.h"
+#include "mc/angle.h"
 
 /* A condition held for n periods in a row (n = 0: never). */
 static bool persists(uint32_t *count, bool cond, uint32_t n)
@@ -22,6 +23,9 @@ static float avg(float *y, float x, float k)
 void mc_protect_reset(mc_drive_t *d, float omega)
 {
     d->prot.i_sum_n = d->prot.track_n = d->prot.lock_n = d->prot.stall_n = d->prot.resid_n = 0u;
+    d->prot.accel_n = d->prot.jump_n = 0u;
+    d->prot.w_prev = omega;
+    d->prot.accel = 0.0f;
     d->prot.err_d = d->prot.err_q = d->prot.w_dev2 = 0.0f;
     /* the averages start where a steady state at the estimate's speed (a caught rotor) would
      * have them: speeds at omega, the voltage at its back-EMF with no current */
@@ -68,6 +72,13 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
     if (persists(&d->prot.lock_n, swing || !(fabsf(w_raw - ang->omega) <= lock_band), b->lock_n)) {
         return MC_FAULT_LOSS_OF_LOCK;
     }
+    /* ... and its fast path: the raw angle far off the PLL's (the PLL's own error). An estimate
+     * that runs away does so in a few milliseconds (an inductance error at standstill under load:
+     * 25 -> 150 deg in 8 ms), faster than the averages above can say */
+    const float innov = fabsf(mc_wrap_pi(d->tm.theta_raw - ang->theta));
+    if (persists(&d->prot.jump_n, b->jump_n > 0u && !(innov <= b->jump), b->jump_n)) {
+        return MC_FAULT_LOSS_OF_LOCK;
+    }
     /* (c) the current does not follow its reference (a wrong angle, a missing phase at
      * standstill): the error vector low-passed, so that the ringing of a large step (which
      * averages out) does not count, a lasting offset does */
@@ -97,6 +108,19 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
                        fabsf(ang->omega) < b->stall_speed && fabsf(d->tm.torque_ref) >= b->stall_torque;
     if (persists(&d->prot.stall_n, stall, b->stall_n)) {
         return MC_FAULT_STALL;
+    }
+    /* (d) speed mode: strong torque one way, the speed estimate accelerating the other way at
+     * more than half of what that torque alone would give. A lock on the mirrored solution is
+     * consistent in its own frame (it sees -w and a torque that "accelerates" it), so this
+     * catches the partial errors (near 90 deg the torque vanishes and the load decelerates the
+     * rotor), and an overload far beyond the torque limit */
+    const float acc = avg(&d->prot.accel, (ang->omega - d->prot.w_prev) / b->ts, k);
+    d->prot.w_prev = ang->omega;
+    const float t_ref = d->tm.torque_ref;
+    const bool implausible_acc = d->cmd.mode == MC_MODE_SPEED && fabsf(t_ref) >= b->accel_torque &&
+                                 (t_ref > 0.0f ? -acc : acc) > b->accel_per_nm * fabsf(t_ref);
+    if (persists(&d->prot.accel_n, implausible_acc, b->accel_n)) {
+        return MC_FAULT_TORQUE;
     }
     return 0u;
 }

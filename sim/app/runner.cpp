@@ -77,6 +77,7 @@ std::vector<std::string> fault_names(uint32_t f)
     if (f & MC_FAULT_TRACKING) out.push_back("tracking");
     if (f & MC_FAULT_LOSS_OF_LOCK) out.push_back("loss_of_lock");
     if (f & MC_FAULT_STALL) out.push_back("stall");
+    if (f & MC_FAULT_TORQUE) out.push_back("torque_plausibility");
     if (f & MC_FAULT_OVERRUN) out.push_back("isr_overrun");
     if (f & MC_FAULT_VOLTAGE_MODEL) out.push_back("voltage_model");
     return out;

@@ -115,6 +115,11 @@ typedef struct {
     float i_sum_tol, track_err, lock_tol, lock_floor, stall_speed, stall_torque;
     float resid_v, resid_w_coef;  /* [V], [V s/rad]: threshold resid_v + resid_w_coef |w|   */
     uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;
+    uint32_t accel_n;            /* torque plausibility persistence [periods] (0: off)        */
+    uint32_t jump_n;             /* loss of lock, fast path: persistence [periods] (0: off)   */
+    float jump;                  /* ... its threshold on |theta_raw - theta| [rad]             */
+    float accel_torque;          /* |T_ref| from which it looks [N m]                         */
+    float accel_per_nm;          /* 0.5 p / J: half the acceleration a torque gives [rad/s^2 el per N m] */
     bool recover;                /* protection.lock_action = recover (sensorless only)          */
     bool hold_fw;                /* protection.overspeed_action = hold_fw                       */
     float ug_coef;               /* sqrt3 psi_pm: the line-to-line back-EMF per rad/s el [V s]  */
@@ -176,7 +181,8 @@ typedef struct {
     mc_phase_t phase;            /* the running phase program (Step I, II) and its workspace */
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
     struct {                     /* the plausibility detectors' state (protect.c)            */
-        uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;   /* periods the condition held  */
+        uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n, accel_n, jump_n;   /* periods the condition held */
+        float w_prev, accel;                  /* last speed, its derivative low-passed [rad/s^2 el] */
         float w_raw, err_d, err_q;            /* averages (blk.avg_k): raw speed, current error */
         float w_dev2;                         /* mean square of the speed's swing about w    */
         float u_d, u_q, i_d, i_q, w;          /* voltage, current, speed for the residual    */

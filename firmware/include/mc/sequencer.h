@@ -36,6 +36,9 @@ typedef enum { MC_INIT_NONE = 0, MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3, MC
 #define MC_FAULT_LOSS_OF_LOCK  (1u << 11)  /* estimator raw speed and filtered speed disagree */
 #define MC_FAULT_STALL         (1u << 12)  /* no speed at the torque limit                  */
 #define MC_FAULT_OVERRUN       (1u << 13)  /* the ISR overran its period (port flag)        */
+#define MC_FAULT_TORQUE        (1u << 15)  /* speed mode: strong torque commanded one way, the
+                                              speed estimate accelerating hard the other way (a
+                                              wrong angle, or an overload beyond the limit)  */
 #define MC_FAULT_VOLTAGE_MODEL (1u << 14)  /* the voltage the current loop needs does not fit
                                               the motor model at the angle source's speed: a
                                               frozen encoder, a wrong estimate, an open phase */
