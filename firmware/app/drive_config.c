@@ -70,7 +70,8 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
     const float rot = 0.35f;
     b->fly = (mc_catch_cfg_t){.ts = p->ts, .ld = m->ld, .lq = m->lq, .psi_pm = m->psi_pm,
                               .i_pulse = p->catch_i, .i_detect = 0.25f * p->catch_i, .i_rest = p->ip_i_rest,
-                              .rot_target = rot, .high_speed_share = 0.9f,
+                              .rot_target = rot, .high_speed_share = 0.9f, .v_device = p->v_device,
+                              .i_band = p->dtc_i_band,
                               .n_probe = periods_up(0.25f * p->catch_i * t_per_a / p->ts),
                               .n_pulse_max = periods_up(1.5f * p->catch_i * t_per_a / p->ts),
                               .n_gap_max = periods_up(rot / (w_min * p->ts)),

@@ -20,7 +20,8 @@ bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg)
                     finite_pos(cfg->i_rest) && finite_pos(cfg->rot_target) && cfg->rot_target < 2.0f &&
                     cfg->n_probe >= 1u && cfg->n_pulse_max >= cfg->n_probe && cfg->n_gap_max >= 2u &&
                     cfg->n_wait_max <= cfg->n_gap_max &&
-                    finite_pos(cfg->high_speed_share);
+                    finite_pos(cfg->high_speed_share) && cfg->v_device >= 0.0f && cfg->v_device < 1.0e3f &&
+                    finite_pos(cfg->i_band);
     if (!ok) {
         s->status = MC_IP_FAILED;
         s->phase = END;
@@ -38,19 +39,40 @@ static mc_ab_t sub(mc_ab_t a, mc_ab_t b)
     return (mc_ab_t){a.alpha - b.alpha, a.beta - b.beta};
 }
 
-/* Both pulses measured: (C.3) for the speed, (C.2) for the angle, (C.1) as the plausibility. */
+/* The current a stator-frame flux change psi drives at rotor angle theta: L^-1 in the rotor
+ * frame, back to the stator frame (the linear model of (C.1)). */
+static mc_ab_t current_of(const mc_catch_cfg_t *c, mc_ab_t psi, float theta)
+{
+    const float co = cosf(theta), si = sinf(theta);
+    const float id = (co * psi.alpha + si * psi.beta) / c->ld;
+    const float iq = (-si * psi.alpha + co * psi.beta) / c->lq;
+    return (mc_ab_t){co * id - si * iq, si * id + co * iq};
+}
+
+/* Both pulses measured: (C.3) for the speed, (C.2) for the angle, (C.1) as the plausibility.
+ * With a device drop, the current changes first lose what the drop's flux drove (evaluated at
+ * the angle found without it, then once more with the better angle). */
 static mc_ip_status_t conclude(mc_catch_t *s)
 {
     const mc_catch_cfg_t *c = &s->cfg;
-    const float phi1 = atan2f(s->di1.beta, s->di1.alpha);
-    const float phi2 = atan2f(s->di2.beta, s->di2.alpha);
     const float t12 = (float)(s->calls - 1u - s->end1) * c->ts;   /* end of pulse 1 to end of pulse 2 */
-    s->rotation = mc_wrap_pi(phi2 - phi1);
-    s->omega = s->rotation / t12;                                               /* (C.3) */
-    const float delta = s->omega * (float)s->n1 * c->ts;
-    const float kd = (cosf(delta) - 1.0f) / c->ld, kq = -sinf(delta) / c->lq;   /* (C.1) / psi_pm */
-    s->theta = mc_wrap_pi(phi2 - atan2f(kq, kd));                               /* (C.2) */
-    s->fit = mag(s->di2) / (c->psi_pm * sqrtf(kd * kd + kq * kq));
+    mc_ab_t d1 = s->di1, d2 = s->di2;
+    float kd = 0.0f, kq = 0.0f;
+    for (int pass = 0; pass < (c->v_device > 0.0f ? 3 : 1); ++pass) {
+        if (pass > 0) {
+            d1 = sub(s->di1, current_of(c, s->psi1, s->theta - s->omega * t12));
+            d2 = sub(s->di2, current_of(c, s->psi2, s->theta));
+        }
+        const float phi1 = atan2f(d1.beta, d1.alpha);
+        const float phi2 = atan2f(d2.beta, d2.alpha);
+        s->rotation = mc_wrap_pi(phi2 - phi1);
+        s->omega = s->rotation / t12;                                           /* (C.3) */
+        const float delta = s->omega * (float)s->n1 * c->ts;
+        kd = (cosf(delta) - 1.0f) / c->ld;                                      /* (C.1) / psi_pm */
+        kq = -sinf(delta) / c->lq;
+        s->theta = mc_wrap_pi(phi2 - atan2f(kq, kd));                           /* (C.2) */
+    }
+    s->fit = mag(d2) / (c->psi_pm * sqrtf(kd * kd + kq * kq));
     /* the sign needs a rotation well above the angle noise; beyond 2.5 rad (C.3) may alias */
     const float r = fabsf(s->rotation);
     const bool ok = r >= 0.0873f && r <= 2.5f && s->fit >= 0.5f && s->fit <= 2.0f;
@@ -82,29 +104,69 @@ static bool single_pulse_sign(mc_catch_t *s)
 {
     const mc_catch_cfg_t *c = &s->cfg;
     const uint32_t n1 = s->n1, nm = n1 / 2u;
-    const mc_ab_t a = s->hist[nm - 1u], b = s->hist[n1 - 1u];
-    const float phi_m = atan2f(a.beta, a.alpha), phi_e = atan2f(b.beta, b.alpha);
-    const float dl = rotation_of(c, mag(b));
     const float frac = (float)nm / (float)n1;
-    float r[2];
+    float r[2], th_end[2], dls[2];
     for (int k = 0; k < 2; ++k) {
+        /* each sign on its own: its angles, then (with a device drop) the current changes without
+         * the drop's part at those angles, and its angles again */
         const float sg = k == 0 ? 1.0f : -1.0f;
-        const float th_e = phi_e - offset_c2(c, sg * dl), th_m = phi_m - offset_c2(c, sg * dl * frac);
+        mc_ab_t a = s->hist[nm - 1u], b = s->hist[n1 - 1u];
+        float th_e = 0.0f, th_m = 0.0f, dl = 0.0f;
+        for (int pass = 0; pass < (c->v_device > 0.0f ? 3 : 1); ++pass) {
+            if (pass > 0) {
+                a = sub(s->hist[nm - 1u], current_of(c, s->hist_psi[nm - 1u], th_m));
+                b = sub(s->hist[n1 - 1u], current_of(c, s->hist_psi[n1 - 1u], th_e));
+            }
+            dl = rotation_of(c, mag(b));
+            th_e = atan2f(b.beta, b.alpha) - offset_c2(c, sg * dl);
+            th_m = atan2f(a.beta, a.alpha) - offset_c2(c, sg * dl * frac);
+        }
         r[k] = fabsf(mc_wrap_pi(th_e - th_m - sg * dl * (1.0f - frac)));
+        th_end[k] = th_e;
+        dls[k] = dl;
     }
+    const float dl = 0.5f * (dls[0] + dls[1]);
     /* the wrong sign misses by |Delta| (1 - frac) |2 - Lq/Ld|: ask for half of it, >= 2 deg */
     const float miss = dl * (1.0f - frac) * fabsf(2.0f - c->lq / c->ld);
     if (!(miss >= 0.07f) || !(fabsf(r[0] - r[1]) >= 0.5f * miss)) {
         return false;
     }
-    const float sg = r[0] < r[1] ? 1.0f : -1.0f;
-    s->omega = sg * dl / ((float)n1 * c->ts);
-    s->theta = mc_wrap_pi(phi_e - offset_c2(c, sg * dl));
-    s->rotation = sg * dl;
+    const int best = r[0] < r[1] ? 0 : 1;
+    const float sg = best == 0 ? 1.0f : -1.0f;
+    s->omega = sg * dls[best] / ((float)n1 * c->ts);
+    s->theta = mc_wrap_pi(th_end[best]);
+    s->rotation = sg * dls[best];
     s->fit = 1.0f;
     s->single = true;
     s->moving = true;
     return true;
+}
+
+/* The device drop under V(000): every phase conducts through its low-side switch or diode, whose
+ * drop opposes its current (a soft sign over i_band, as in the dead-time compensation); the
+ * line-to-neutral vector (2.4) [V]. */
+static mc_ab_t drop_voltage(const mc_catch_cfg_t *c, mc_ab_t i)
+{
+    const float ia = i.alpha, ib = -0.5f * i.alpha + 0.8660254f * i.beta, ic = -0.5f * i.alpha - 0.8660254f * i.beta;
+    const float ph[3] = {ia, ib, ic};
+    float v[3];
+    for (int k = 0; k < 3; ++k) {
+        const float x = ph[k] / c->i_band;
+        v[k] = -c->v_device * (x > 1.0f ? 1.0f : (x < -1.0f ? -1.0f : x));
+    }
+    return (mc_ab_t){(2.0f / 3.0f) * (v[0] - 0.5f * v[1] - 0.5f * v[2]), 0.57735027f * (v[1] - v[2])};
+}
+
+/* One period of V(000) ended at this sample: its drop's flux, trapezoidal in the current. */
+static void add_drop(mc_catch_t *s, mc_ab_t i_now)
+{
+    const mc_catch_cfg_t *c = &s->cfg;
+    if (!(c->v_device > 0.0f)) {
+        return;
+    }
+    const mc_ab_t a = drop_voltage(c, s->i_last), b = drop_voltage(c, i_now);
+    s->psi.alpha += 0.5f * c->ts * (a.alpha + b.alpha);
+    s->psi.beta += 0.5f * c->ts * (a.beta + b.beta);
 }
 
 mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty, bool *off)
@@ -127,12 +189,18 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
             return MC_IP_RUNNING;
         }
         s->i0 = i_ab;
+        s->i_last = i_ab;
+        s->psi = (mc_ab_t){0.0f, 0.0f};
         s->phase = PULSE1;
         s->n = 0u;
         *off = false;
         return MC_IP_RUNNING;
     }
     s->n++;
+    if (s->phase == PULSE1 || s->phase == PULSE2) {
+        add_drop(s, i_ab);
+        s->i_last = i_ab;
+    }
     switch (s->phase) {
     case PULSE1: {
         const mc_ab_t di = sub(i_ab, s->i0);
@@ -145,6 +213,7 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         }
         if (s->n <= MC_CATCH_HIST) {
             s->hist[s->n - 1u] = di;
+            s->hist_psi[s->n - 1u] = s->psi;
         }
         /* |omega| to first order of (C.1) */
         const float w1 = dm * c->lq / (c->psi_pm * (float)s->n * c->ts);
@@ -155,6 +224,7 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
             return MC_IP_RUNNING;
         }
         s->di1 = di;
+        s->psi1 = s->psi;
         s->n1 = s->n;
         s->end1 = call;
         if (high && s->n1 >= 2u && s->n1 <= MC_CATCH_HIST && single_pulse_sign(s)) {
@@ -177,6 +247,8 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
             return MC_IP_RUNNING;
         }
         s->i0 = i_ab;   /* pulse 2 starts from this sample */
+        s->i_last = i_ab;
+        s->psi = (mc_ab_t){0.0f, 0.0f};
         s->phase = PULSE2;
         s->n = 0u;
         *off = false;
@@ -187,6 +259,7 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
             return MC_IP_RUNNING;
         }
         s->di2 = sub(i_ab, s->i0);
+        s->psi2 = s->psi;
         s->phase = END;
         s->status = conclude(s);
         if (s->status == MC_IP_FAILED) {

@@ -46,6 +46,7 @@ const Alias kAliases[] = {
     {MC_PARAM_i_span, "sensors.i_full_scale_a"},    {MC_PARAM_vdc_span, "sensors.vdc_full_scale_v"},
     {MC_PARAM_adc_bits, "sensors.adc_bits"},        {MC_PARAM_vdc_nominal, "inverter.vdc_v"},
     {MC_PARAM_dead_time, "inverter.dead_time_s"},   {MC_PARAM_enc_lines, "sensors.encoder_lines"},
+    {MC_PARAM_v_device, "inverter.device_drop_v"},
     {MC_PARAM_enc_offset, "sensors.encoder_offset_deg"}, {MC_PARAM_inertia, "mechanics.inertia_kgm2"},
 };
 
@@ -146,6 +147,7 @@ void set_drive_params(const Scenario& sc, const MachineParams& mp, double vdc, d
     set_or_throw(sc, p, MC_PARAM_i_span, i_span, "sensors.i_full_scale_a");
     set_or_throw(sc, p, MC_PARAM_vdc_span, vdc_span, "sensors.vdc_full_scale_v");
     set_or_throw(sc, p, MC_PARAM_dead_time, sc.f("inverter.dead_time_s"), "inverter.dead_time_s");
+    set_or_throw(sc, p, MC_PARAM_v_device, sc.f("inverter.device_drop_v"), "inverter.device_drop_v");
     set_or_throw(sc, p, MC_PARAM_enc_lines, static_cast<double>(sc.i("sensors.encoder_lines")), "sensors.encoder_lines");
     set_or_throw(sc, p, MC_PARAM_enc_offset, mp.pole_pairs * sc.f("sensors.encoder_offset_deg") * kPi / 180.0,
                  "sensors.encoder_offset_deg");

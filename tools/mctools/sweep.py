@@ -1147,6 +1147,10 @@ def cmd_envelope(args) -> int:
     off = sum(1 for c in cells.values() if c["outcome"] == "runs_off")
     print(f"sweep envelope: {n_runs} runs, {len(failed)} failed, {off} cell(s) run off, "
           f"{wall:.1f} s wall ({args.jobs} at a time)")
+    if args.fail_on_runoff and off:
+        print(f"sweep envelope: FAIL: {off} cell(s) lose the angle before any detection",
+              file=sys.stderr)
+        return 1
     return 1 if failed else 0
 
 
@@ -1249,4 +1253,6 @@ def add_parser(sub) -> None:
                         "in FILE (appended with the markers if they are missing)")
     e.add_argument("--mcsim", metavar="PATH",
                    help="simulator binary (default: build/host/sim/app/mcsim, else mcsim on PATH)")
+    e.add_argument("--fail-on-runoff", action="store_true",
+                   help="exit 1 if any cell loses the angle (>= 90 deg) before a fault or recovery")
     e.set_defaults(func=cmd_envelope)

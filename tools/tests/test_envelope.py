@@ -238,6 +238,17 @@ def test_envelope_command(env):
     assert "sweep envelope: 44 runs, 2 failed" in o
 
 
+def test_envelope_fail_on_runoff(env):
+    root, fake = env
+    # only scenario "one": no failed run, but L x1.2 and x0.8 run off
+    rc, o, e = run_cli("sweep", "envelope", "--scenarios", str(root / "one.toml"), "--seeds", "1",
+                       "--mcsim", str(fake), "--out", str(root / "out_ro"))
+    assert rc == 0 and "4 cell(s) run off" in o
+    rc, o, e = run_cli("sweep", "envelope", "--scenarios", str(root / "one.toml"), "--seeds", "1",
+                       "--mcsim", str(fake), "--out", str(root / "out_ro2"), "--fail-on-runoff")
+    assert rc == 1 and "lose the angle before any detection" in e
+
+
 def test_envelope_input_errors(env):
     root, fake = env
     rc, _, e = run_cli("sweep", "envelope", "--scenarios", str(root / "missing.toml"),

@@ -66,6 +66,11 @@ typedef struct {
                                  decays through the diodes within a period or two, unless the
                                  back-EMF exceeds the link (then it never does) */
     float high_speed_share;   /* single-pulse sign above sqrt3 |omega| psi_pm > this x Vdc */
+    float v_device;           /* the power devices' on-state drop [V] (0: none): under V(000) it
+                                 opposes each phase current, acts like a resistance and, at low
+                                 speed, bends the current away from (C.1); its flux is added up
+                                 and its current taken out before (C.2), (C.3) */
+    float i_band;             /* soft sign of that drop: linear within +-i_band [A] */
 } mc_catch_cfg_t;
 
 #define MC_CATCH_HIST 16      /* samples of pulse 1 kept for the single-pulse sign (C.4) */
@@ -76,6 +81,8 @@ typedef struct {
     uint32_t n, n1, n_gap, calls, end1;
     mc_ab_t i0, di1, di2;     /* pulse start current, both pulses' current changes [A] */
     mc_ab_t hist[MC_CATCH_HIST];  /* pulse 1: delta i after n = 1..16 periods */
+    mc_ab_t hist_psi[MC_CATCH_HIST];  /* ... and the device drop's flux by then [Wb] */
+    mc_ab_t i_last, psi, psi1, psi2;  /* last sample; the drop's flux in this pulse, pulses 1, 2 */
     bool single;              /* the sign came from pulse 1 alone (C.4) */
     mc_ip_status_t status;
     /* results */

@@ -71,7 +71,7 @@ static mc_catch_cfg_t cfg_for(double ld, double lq)
                             .n_probe = (uint32_t)ceil(0.825 * tpa / TS),
                             .n_pulse_max = (uint32_t)ceil(1.5 * 3.3 * tpa / TS),
                             .n_gap_max = (uint32_t)ceil(0.35 / (wmin * TS)), .n_wait_max = 10u,
-                            .high_speed_share = 0.9f};
+                            .high_speed_share = 0.9f, .v_device = 0.0f, .i_band = 0.3f};
 }
 
 static outcome_t run_catch(double ld, double lq, double w, double th0)
