@@ -191,6 +191,13 @@ static mc_dq_t fw_feedback(mc_drive_t *d, mc_dq_t r, float omega, float vdc)
     return r;
 }
 
+/* The polarity re-check's d bias (polcheck.c), before the slew limit: 0 unless it runs. */
+static mc_dq_t with_bias(const mc_drive_t *d, mc_dq_t r)
+{
+    r.d += mc_polcheck_bias(d);
+    return r;
+}
+
 static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
 {
     float torque = 0.0f;
@@ -198,7 +205,7 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
     switch (d->seq.state == MC_STATE_FAULT_REACTION ? MC_MODE_TORQUE : d->cmd.mode) {
     case MC_MODE_CURRENT:
         d->tm.torque_ref = 0.0f;
-        return slew(d, mc_limit_current_circle(d->cmd.i_ref, d->cfg->blk.i_ref_max));
+        return slew(d, with_bias(d, mc_limit_current_circle(d->cmd.i_ref, d->cfg->blk.i_ref_max)));
     case MC_MODE_SPEED:
         torque = mc_sc_step(&d->sc, d->cmd.speed_ref, omega / (float)d->cfg->blk.pole_pairs);
         break;
@@ -208,7 +215,7 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
         break;
     }
     d->tm.torque_ref = torque;
-    return slew(d, fw_feedback(d, mc_tref_step(&d->tref, torque, omega, vdc), omega, vdc));
+    return slew(d, with_bias(d, fw_feedback(d, mc_tref_step(&d->tref, torque, omega, vdc), omega, vdc)));
 }
 
 void mc_drive_isr(mc_drive_t *d)
@@ -268,6 +275,18 @@ void mc_drive_isr(mc_drive_t *d)
     mc_dq_t u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, vdc * MC_1_SQRT3);
     d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
     u_dq.d += d->tm.u_inj;
+
+    /* 7a. The polarity re-check (polcheck.c): once at a RUN entry not preceded by Step II when so
+     *     configured, else when the loss-of-lock checks are in doubt (protect.c starts it). */
+    /* at_start: settled by then; an inconclusive verdict (the estimate still moving) tries
+     * again a settling time later, three times at most */
+    const uint32_t k = d->pol.starts;
+    if (c->pol_at_start && d->seq.state == MC_STATE_RUN && !c->three_step && k < 3u &&
+        (k == 0u || d->tm.polarity_last == 0) && d->seq.ticks == (k + 1u) * c->pol_start_n &&
+        mc_polcheck_start(d, ang.omega)) {
+        d->pol.starts = k + 1u;
+    }
+    (void)mc_polcheck_step(d, i_dq.d, i_fb.d, &ang);
 
     /* 7b. Plausibility: over-speed, loss of lock, current tracking, stall (protect.c); a fault
      *     turns the outputs off before this period's duties are written. */

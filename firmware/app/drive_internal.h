@@ -33,6 +33,13 @@ void mc_protect_reset(mc_drive_t *d, float omega);   /* averages primed at speed
 uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i);
 uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb,
                             mc_dq_t u_dq);
+/* Running polarity re-check (polcheck.c): start (false: not now), the d-reference bias while
+ * it runs, one measurement step (true: the estimate was reversed and turned by pi). */
+void mc_polcheck_reset(mc_drive_t *d);
+bool mc_polcheck_active(const mc_drive_t *d);
+bool mc_polcheck_start(mc_drive_t *d, float omega);
+float mc_polcheck_bias(const mc_drive_t *d);
+bool mc_polcheck_step(mc_drive_t *d, float i_d, float i_d_filtered, const mc_angle_out_t *ang);
 /* Step III convergence test, after the pipeline ran; hands over to RUN. */
 void mc_drive_step3_check(mc_drive_t *d, float omega_hat);
 

@@ -69,8 +69,13 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
     const float dev = ang->omega - d->prot.w;
     const float dev2 = avg(&d->prot.w_dev2, dev * dev, k);
     const bool swing = b->lock_n > 0u && dev2 > b->lock_floor * b->lock_floor;
-    if (persists(&d->prot.lock_n, swing || !(fabsf(w_raw - ang->omega) <= lock_band), b->lock_n)) {
+    const bool lock_doubt = swing || !(fabsf(w_raw - ang->omega) <= lock_band);
+    if (mc_polcheck_active(d)) {
+        /* the re-check's bias moves the estimate: the lock checks wait for its verdict */
+    } else if (persists(&d->prot.lock_n, lock_doubt, b->lock_n)) {
         return MC_FAULT_LOSS_OF_LOCK;
+    } else if (d->prot.lock_n > 0u && d->prot.lock_n == b->lock_n / 4u) {
+        (void)mc_polcheck_start(d, ang->omega);   /* in doubt: is the estimate reversed? */
     }
     /* ... and its fast path: the raw angle far off the PLL's (the PLL's own error). An estimate
      * that runs away does so in a few milliseconds (an inductance error at standstill under load:

@@ -36,6 +36,7 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
     mc_protect_reset(d, omega);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
     d->fw_did = 0.0f;
+    mc_polcheck_reset(d);
 }
 
 void mc_drive_startup_reset(mc_drive_t *d)
@@ -44,6 +45,9 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->retries = 0u;
     d->tm.recoveries = 0u;
     d->tm.recovered_from = 0u;
+    d->tm.polarity_checks = d->tm.polarity_flips = 0u;
+    d->pol.starts = 0u;
+    d->tm.polarity_last = 0;
     d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */

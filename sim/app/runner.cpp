@@ -554,7 +554,9 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
                                      {"realtime_factor", json_number(out.realtime_factor)},
                                      {"fault_count", std::to_string(fault_names(tm.faults).size())},
                                      {"recoveries", std::to_string(tm.recoveries)},
-                                     {"recovered_from", json_names(fault_names(tm.recovered_from))}});
+                                     {"recovered_from", json_names(fault_names(tm.recovered_from))},
+                                     {"polarity_checks", std::to_string(tm.polarity_checks)},
+                                     {"polarity_flips", std::to_string(tm.polarity_flips)}});
     if (!opt.out_dir.empty()) {
         std::ofstream m(opt.out_dir + "/metrics.json");
         m << out.metrics_json;

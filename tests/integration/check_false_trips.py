@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """No false trips (protection issue): every scenario under scenarios/ but scenarios/faults/ (the
-fault scenarios are meant to trip) x seeds 1..N runs without a fault and without a recovery.
+fault scenarios are meant to trip) x seeds 1..N runs without a fault, a recovery or a polarity flip (a
+running re-check that turned the estimate by pi).
 
     check_false_trips.py --mcsim PATH [--seeds 10] [--profile realistic|harsh] [--root DIR]
 
@@ -40,6 +41,8 @@ def run(mcsim: str, scen: Path, model: str | None, seed: int, profile: str) -> t
         events = list(m.get("faults") or [])
         if m.get("recoveries"):
             events.append(f"recoveries={m['recoveries']} ({', '.join(m.get('recovered_from') or [])})")
+        if m.get("polarity_flips"):
+            events.append(f"polarity_flips={m['polarity_flips']}")
         return scen, model, seed, events
 
 
@@ -64,7 +67,7 @@ def main() -> int:
                 print("FAIL:", bad[-1], flush=True)
             if done % 100 == 0:
                 print(f"  {done}/{len(jobs)} runs done", flush=True)
-    print(f"false trips: {len(jobs)} runs, {len(bad)} with a fault or a recovery")
+    print(f"false trips: {len(jobs)} runs, {len(bad)} with a fault, a recovery or a polarity flip")
     return 1 if bad else 0
 
 

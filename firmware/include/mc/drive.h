@@ -86,6 +86,8 @@ typedef struct {
     uint32_t cmd_rejected;       /* commands refused at the hand-over        */
     uint32_t recoveries;         /* recoveries since the enable (protection.lock_action)      */
     uint32_t recovered_from;     /* the reasons that started them (fault bits, or-ed)         */
+    uint32_t polarity_checks, polarity_flips;   /* running polarity re-checks, and reversals */
+    int      polarity_last;      /* last verdict: +1 reversed, -1 right, 0 inconclusive       */
     mc_cmd_reject_t cmd_reject_last;
 } mc_drive_telem_t;
 
@@ -122,6 +124,12 @@ typedef struct {
     float accel_per_nm;          /* 0.5 p / J: half the acceleration a torque gives [rad/s^2 el per N m] */
     bool recover;                /* protection.lock_action = recover (sensorless only)          */
     bool hold_fw;                /* protection.overspeed_action = hold_fw                       */
+    bool pol_check, pol_at_start;  /* protection.polarity_check                                */
+    float pol_bias;              /* [A]                                                         */
+    float pol_log_ratio;         /* ln (l_dd(-I_b) / l_dd(+I_b))^2 from the map (0: unknown)    */
+    uint32_t pol_settle_n, pol_measure_n;   /* [periods]                                      */
+    uint32_t pol_start_n;        /* at_start: this long into RUN (the estimate settled first)   */
+    float pol_w_scale;           /* 10 deg / speed tolerance: a speed drift in "angle" units    */
     float ug_coef;               /* sqrt3 psi_pm: the line-to-line back-EMF per rad/s el [V s]  */
     uint32_t retries, retry_reset_n;
     mc_seq_cfg_t seq;
@@ -189,6 +197,15 @@ typedef struct {
     } prot;
     uint32_t step3_count;
     uint32_t retries;            /* recoveries since the last retry_reset_s of clean RUN      */
+    struct {                     /* the running polarity re-check (polcheck.c)                */
+        int phase;
+        uint32_t n, cnt[2];
+        float acc[2];            /* sums of the squared HF d current, +I_b and -I_b           */
+        float moved;             /* largest unsettledness during the check (see polcheck.c)  */
+        float w0;                /* speed estimate (20 Hz average) at its start [rad/s el]    */
+        float innov;             /* |raw angle - PLL angle|, 20 Hz average [rad]              */
+        uint32_t starts;         /* at_start: checks begun since the enable (at most 3)       */
+    } pol;
     mc_cc_t cc;
     mc_sc_t sc;
     mc_tref_t tref;
