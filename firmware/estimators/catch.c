@@ -217,7 +217,10 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         }
         /* |omega| to first order of (C.1) */
         const float w1 = dm * c->lq / (c->psi_pm * (float)s->n * c->ts);
-        const bool high = 1.7320508f * w1 * c->psi_pm > c->high_speed_share * vdc;
+        /* the single pulse needs two samples below 2 i_pulse: not when one period's rise is
+         * already i_pulse (a low sampling rate at speed); then two one-period pulses */
+        const bool coarse = s->n == 1u && dm >= c->i_pulse;
+        const bool high = !coarse && 1.7320508f * w1 * c->psi_pm > c->high_speed_share * vdc;
         const float i_end = high ? 2.0f * c->i_pulse : c->i_pulse;
         if (dm < i_end && s->n < c->n_pulse_max && !(high && s->n >= MC_CATCH_HIST)) {
             *off = false;
