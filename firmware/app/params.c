@@ -368,6 +368,9 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         /* a current that reads the angle to a degree through the sensor noise and brakes little:
          * a quarter of rated (the rotation it takes, i Lq / psi_pm, is 7 deg on the thesis motor) */
         return nice2(0.25f * p->i_rated);
+    case MC_RULE_OFFSET_CAL:
+        /* 6.4 ms of samples (64 at 10 kHz), at least 16 for the average's noise */
+        return maxf(16.0f, roundf(6.4e-3f * fs));
     case MC_RULE_POL_BIAS:
         /* Step II's swing (0.57 x rated) rounded down: enough saturation to tell the poles */
         return nice2(0.5f * p->i_rated);

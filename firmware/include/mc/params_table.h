@@ -49,7 +49,7 @@ X(vdc_min,        "control.vdc_min_v",     F32, "V",       0,     5000,   150,  
 X(vdc_max,        "control.vdc_max_v",     F32, "V",       0,     5000,   450,      VDC_MAX, PROTECTION, STANDSTILL, "", "Over-voltage trip (default: 1.5 x hw.vdc_nominal_v).") \
 /* ---- control ---- */ \
 X(angle_src,      "control.angle_source",  ENUM, "",       0,     MC_ANGLE_SRC_COUNT - 1, 0, NONE, CONTROL, STANDSTILL, MC_ANGLE_SRC_CHOICES, "Angle the controller uses: the encoder, or the sensorless estimator UNOP (thesis ch. 6).") \
-X(offset_cal_samples, "control.offset_cal_samples", I32, "periods", 1, 65535, 64, NONE, CONTROL, STANDSTILL, "", "Periods averaged for the current offsets at every enable.") \
+X(offset_cal_samples, "control.offset_cal_samples", I32, "periods", 1, 65535, 64, OFFSET_CAL, CONTROL, STANDSTILL, "", "Periods averaged for the current offsets at every enable (default: 6.4 ms worth, at least 16: 64 at 10 kHz; a count of periods made the calibration 32 ms long at 2 kHz).") \
 X(i_max,          "control.i_max_a",       F32, "A",       0.01f, 10000,  13.29f,   I_MAX,   CONTROL, RUNTIME, "", "Phase current limit, peak; references stay within i_max (1 - i_headroom) (default: motor.i_rated_a).") \
 X(i_headroom,     "control.i_headroom",    F32, "1",       0,     0.49f,  0.03f,    NONE,    CONTROL, RUNTIME, "", "Share of control.i_max_a the references leave free for regulation error, noise and ripple.") \
 X(cc_bw_hz,       "control.current_bw_hz", F32, "Hz",      10,    5000,   250,      CC_BW,   CONTROL, RUNTIME, "", "Current-loop bandwidth (default: min(f_s / 40, injection.f_hz / 2)).") \
