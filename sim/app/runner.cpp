@@ -152,7 +152,7 @@ std::unique_ptr<mc_flux_map_t> make_estimator_map(const FluxModel& m, int n, dou
                                                   double psi_scale, double cross_scale)
 {
     const GridAxis axis{-span, span, n};
-    const FluxMapTable t = tabulate_flux_map(m, axis, axis);
+    const FluxMapTable t = tabulate_flux_map_cached(m, axis, axis);
     auto map = std::make_unique<mc_flux_map_t>();
     map->n_d = n;
     map->n_q = n;

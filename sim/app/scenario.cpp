@@ -525,9 +525,11 @@ Scenario Scenario::load(const std::string& path, const std::vector<std::string>&
                             std::to_string(kMaxScenarioBytes) + " bytes (1 MiB) for a scenario");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw ScenarioError(shown + ": cannot open scenario file");
-    std::string text(kMaxScenarioBytes + 1, '\0');
-    in.read(&text[0], std::streamsize(text.size()));
-    text.resize(size_t(in.gcount()));
+    // read what is there, at most a chunk past the limit (no 1 MiB buffer zeroed per run)
+    std::string text;
+    char chunk[16384];
+    while (text.size() <= kMaxScenarioBytes && (in.read(chunk, sizeof chunk) || in.gcount() > 0))
+        text.append(chunk, size_t(in.gcount()));
     if (text.size() > kMaxScenarioBytes)
         throw ScenarioError(shown + ": larger than the limit of " + std::to_string(kMaxScenarioBytes) +
                             " bytes (1 MiB) for a scenario");

@@ -231,7 +231,7 @@ FluxMapGridSpec default_flux_map_grid(double i_max, int n, double span_factor) {
 
 std::unique_ptr<TableModel> make_table_model_from(const FluxModel& m, const FluxMapGridSpec& grid,
                                                   InversionResult* diagnostics) {
-    const FluxMapTable fwd = tabulate_flux_map(m, grid.i_d, grid.i_q);
+    const FluxMapTable fwd = tabulate_flux_map_cached(m, grid.i_d, grid.i_q);
     const int nd = grid.psi_d.n > 0 ? grid.psi_d.n : grid.i_d.n;
     const int nq = grid.psi_q.n > 0 ? grid.psi_q.n : grid.i_q.n;
     auto [ad, aq] = flux_extent_axes(fwd, nd, nq);

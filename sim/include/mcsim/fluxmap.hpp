@@ -50,6 +50,10 @@ using CurrentMapTable = Table2D;  // kind CurrentOfFlux
 
 // psi(i) on the grid id x iq from a model (its FluxModel::flux, warm-started along the grid).
 FluxMapTable tabulate_flux_map(const FluxModel& m, const GridAxis& id, const GridAxis& iq);
+// The same through a disk cache (sim/src/fluxmap_cache.cpp: $MCSIM_CACHE_DIR, else
+// $XDG_CACHE_HOME/mcsim or ~/.cache/mcsim; MCSIM_CACHE=off: none): bit-identical tables, the
+// Newton solves only the first time a model and grid are seen.
+FluxMapTable tabulate_flux_map_cached(const FluxModel& m, const GridAxis& id, const GridAxis& iq);
 
 struct InversionOptions {
     int max_iter = 100;

@@ -4,6 +4,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
 #include <fstream>
 #include <random>
 
@@ -164,4 +168,52 @@ TEST(TableModel, BehavesLikeTheModelItWasBuiltFrom) {
                      (t->energy(psi + Vec2(0, h)) - t->energy(psi - Vec2(0, h))) / (2 * h));
         EXPECT_LT((g - i).norm(), 0.05) << i.transpose();
     }
+}
+
+// The disk cache of tabulate_flux_map: the first call writes, the second reads, both give the
+// fresh table to the bit; another model gets another file; a damaged file is recomputed and
+// rewritten; MCSIM_CACHE=off writes nothing.
+TEST(FluxMapCache, BitIdenticalAndKeyedByTheModel) {
+    char tmpl[] = "/tmp/mcsim_cache_test_XXXXXX";
+    ASSERT_NE(mkdtemp(tmpl), nullptr);
+    const std::string dir = tmpl;
+    setenv("MCSIM_CACHE_DIR", dir.c_str(), 1);
+    unsetenv("MCSIM_CACHE");
+    const auto m = sun_model();
+    const GridAxis ax{-20, 20, 9};
+    const FluxMapTable fresh = tabulate_flux_map(*m, ax, ax);
+    auto same = [&](const FluxMapTable& t) {
+        for (int a = 0; a < ax.n; ++a)
+            for (int b = 0; b < ax.n; ++b)
+                if (t.node(a, b) != fresh.node(a, b)) return false;
+        return true;
+    };
+    auto files = [&] {
+        std::vector<std::string> out;
+        for (const auto& e : std::filesystem::directory_iterator(dir)) out.push_back(e.path().string());
+        return out;
+    };
+    EXPECT_TRUE(same(tabulate_flux_map_cached(*m, ax, ax)));   // computed, written
+    ASSERT_EQ(files().size(), 1u);
+    EXPECT_TRUE(same(tabulate_flux_map_cached(*m, ax, ax)));   // read back
+    // damaged: truncated to half, then recomputed and rewritten whole
+    const std::string f = files()[0];
+    const auto full = std::filesystem::file_size(f);
+    std::filesystem::resize_file(f, full / 2);
+    EXPECT_TRUE(same(tabulate_flux_map_cached(*m, ax, ax)));
+    EXPECT_EQ(std::filesystem::file_size(f), full);
+    // another grid, another model: other files
+    const GridAxis ax2{-20, 20, 7};
+    (void)tabulate_flux_map_cached(*m, ax2, ax2);
+    const auto lin = make_preset_model(load_machine_preset("brodatzki-35kw"));
+    (void)tabulate_flux_map_cached(*lin, ax, ax);
+    EXPECT_EQ(files().size(), 3u);
+    // off: nothing new
+    setenv("MCSIM_CACHE", "off", 1);
+    const GridAxis ax3{-10, 10, 5};
+    (void)tabulate_flux_map_cached(*m, ax3, ax3);
+    EXPECT_EQ(files().size(), 3u);
+    unsetenv("MCSIM_CACHE");
+    unsetenv("MCSIM_CACHE_DIR");
+    std::filesystem::remove_all(dir);
 }
