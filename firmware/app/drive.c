@@ -276,16 +276,9 @@ void mc_drive_isr(mc_drive_t *d)
     d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
     u_dq.d += d->tm.u_inj;
 
-    /* 7a. The polarity re-check (polcheck.c): once at a RUN entry not preceded by Step II when so
-     *     configured, else when the loss-of-lock checks are in doubt (protect.c starts it). */
-    /* at_start: settled by then; an inconclusive verdict (the estimate still moving) tries
-     * again a settling time later, three times at most */
-    const uint32_t k = d->pol.starts;
-    if (c->pol_at_start && d->seq.state == MC_STATE_RUN && !c->three_step && k < 3u &&
-        (k == 0u || d->tm.polarity_last == 0) && d->seq.ticks == (k + 1u) * c->pol_start_n &&
-        mc_polcheck_start(d, ang.omega)) {
-        d->pol.starts = k + 1u;
-    }
+    /* 7a. The polarity re-check (polcheck.c): at a RUN entry not preceded by Step II when so
+     *     configured (else protect.c starts it when the loss-of-lock checks are in doubt). */
+    mc_polcheck_schedule(d, ang.omega);
     (void)mc_polcheck_step(d, i_dq.d, i_fb.d, &ang);
 
     /* 7b. Plausibility: over-speed, loss of lock, current tracking, stall (protect.c); a fault

@@ -38,6 +38,7 @@ uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omeg
 void mc_polcheck_reset(mc_drive_t *d);
 bool mc_polcheck_active(const mc_drive_t *d);
 bool mc_polcheck_start(mc_drive_t *d, float omega);
+void mc_polcheck_schedule(mc_drive_t *d, float omega);   /* the at_start trigger, every period */
 float mc_polcheck_bias(const mc_drive_t *d);
 bool mc_polcheck_step(mc_drive_t *d, float i_d, float i_d_filtered, const mc_angle_out_t *ang);
 /* Step III convergence test, after the pipeline ran; hands over to RUN. */

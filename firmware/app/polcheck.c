@@ -52,6 +52,19 @@ bool mc_polcheck_start(mc_drive_t *d, float omega)
     return true;
 }
 
+void mc_polcheck_schedule(mc_drive_t *d, float omega)
+{
+    /* at_start: a settling time into RUN; an inconclusive verdict (the estimate still moving)
+     * tries again a settling time later, three times at most */
+    const mc_drive_blk_t *b = &d->cfg->blk;
+    const uint32_t k = d->pol.starts;
+    if (b->pol_at_start && d->seq.state == MC_STATE_RUN && !b->three_step && k < 3u &&
+        (k == 0u || d->tm.polarity_last == 0) && d->seq.ticks == (k + 1u) * b->pol_start_n &&
+        mc_polcheck_start(d, omega)) {
+        d->pol.starts = k + 1u;
+    }
+}
+
 float mc_polcheck_bias(const mc_drive_t *d)
 {
     const float ib = d->cfg->blk.pol_bias;
