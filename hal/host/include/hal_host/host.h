@@ -4,6 +4,8 @@
 #ifndef HAL_HOST_H
 #define HAL_HOST_H
 #include "hal/adc.h"
+#include "hal/can.h"
+#include "hal/nvm.h"
 #include "hal/pwm.h"
 #include "hal/qep.h"
 #include "hal/time.h"
@@ -32,7 +34,42 @@ struct hal_time {
     uint32_t us;
 };
 
+/* CAN: two rings; the host side (the simulator's bus, a test) delivers received frames and
+ * takes the transmitted ones. */
+#define HAL_HOST_CAN_QUEUE 64u
+struct hal_can {
+    hal_can_frame_t tx[HAL_HOST_CAN_QUEUE], rx[HAL_HOST_CAN_QUEUE];
+    uint32_t tx_head, tx_count, rx_head, rx_count;
+    hal_can_state_t state;
+    uint32_t tx_dropped, rx_dropped;   /* frames refused because a ring was full */
+    uint32_t recoveries;               /* bus-off recoveries asked for */
+};
+
+/* NVM: 4 blocks of 4 KB, written in units of 8 bytes, with flash semantics. A power cut can be
+ * scheduled at any step (an erase is one step, every write unit one): that step is left half
+ * done (an erase: the block scrambled; a write: the unit with a random part of its bits cleared)
+ * and every later call fails until hal_host_nvm_power_on(). */
+#define HAL_HOST_NVM_BLOCKS 4u
+#define HAL_HOST_NVM_BLOCK_SIZE 4096u
+#define HAL_HOST_NVM_WRITE_UNIT 8u
+struct hal_nvm {
+    uint8_t mem[HAL_HOST_NVM_BLOCKS][HAL_HOST_NVM_BLOCK_SIZE];
+    uint32_t steps;     /* erase and write-unit steps since init */
+    uint32_t cut_at;    /* the step the power fails in (0: never) */
+    bool dead;          /* after the cut */
+    uint32_t rng;       /* for the scramble */
+};
+
 void hal_host_pwm_init(hal_pwm_t *pwm, float period_s, float dead_time_s);
+void hal_host_can_init(hal_can_t *can);
+/* bus -> controller: false when the frame is invalid or the RX ring is full (counted) */
+bool hal_host_can_deliver(hal_can_t *can, const hal_can_frame_t *f);
+/* controller -> bus: the oldest queued frame; false when none */
+bool hal_host_can_take(hal_can_t *can, hal_can_frame_t *f);
+void hal_host_can_set_state(hal_can_t *can, hal_can_state_t s);
+void hal_host_nvm_init(hal_nvm_t *nvm);                  /* every block erased */
+void hal_host_nvm_cut_at(hal_nvm_t *nvm, uint32_t step); /* 0: no cut */
+void hal_host_nvm_power_on(hal_nvm_t *nvm);              /* alive again, content as the cut left it */
 /* Period boundary: shadow -> active (what the hardware does at counter zero). */
 void hal_host_pwm_latch(hal_pwm_t *pwm);
 
