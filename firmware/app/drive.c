@@ -161,36 +161,6 @@ static mc_dq_t slew(mc_drive_t *d, mc_dq_t target)
     return target;
 }
 
-/* Field weakening by voltage feedback on top of the model's (2.26): while the current loop is
- * at its voltage limit above half the base speed, id goes further negative (the full current in
- * 10 ms), else back (in 40 ms). The model's ellipse plans the steady state; a model error, a
- * braking current caught at speed or uncontrolled generation at the enable can leave the loop
- * at the limit with the q current out of control (a tracking fault, or over-current), which the
- * extra flux weakening restores. Off in current mode (the references are the user's). */
-static mc_dq_t fw_feedback(mc_drive_t *d, mc_dq_t r, float omega, float vdc)
-{
-    const mc_drive_blk_t *b = &d->cfg->blk;
-    const float i_max = b->i_ref_max;
-    const bool high = fabsf(omega) * d->cfg->p.psi_pm > 0.5f * MC_1_SQRT3 * vdc;
-    if (d->cc.limited && high) {
-        d->fw_did -= 100.0f * i_max * b->ts;
-    } else {
-        d->fw_did += 25.0f * i_max * b->ts;
-    }
-    d->fw_did = d->fw_did > 0.0f ? 0.0f : (d->fw_did < -i_max ? -i_max : d->fw_did);
-    if (!(d->fw_did < 0.0f)) {
-        return r;   /* NaN-safe: a NaN state never leaves here */
-    }
-    r.d += d->fw_did;
-    if (r.d < -i_max) {
-        r.d = -i_max;
-    }
-    /* flux before torque within the current circle */
-    const float q_room = sqrtf(fmaxf(i_max * i_max - r.d * r.d, 0.0f));
-    r.q = r.q > q_room ? q_room : (r.q < -q_room ? -q_room : r.q);
-    return r;
-}
-
 /* The polarity re-check's d bias (polcheck.c), before the slew limit: 0 unless it runs. */
 static mc_dq_t with_bias(const mc_drive_t *d, mc_dq_t r)
 {
@@ -215,7 +185,8 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
         break;
     }
     d->tm.torque_ref = torque;
-    return slew(d, with_bias(d, fw_feedback(d, mc_tref_step(&d->tref, torque, omega, vdc), omega, vdc)));
+    const mc_dq_t r = mc_tref_step(&d->tref, torque, omega, vdc);
+    return slew(d, with_bias(d, mc_tref_fw_feedback(&d->tref, r, d->cc.limited, omega, vdc)));
 }
 
 void mc_drive_isr(mc_drive_t *d)

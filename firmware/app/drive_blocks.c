@@ -57,6 +57,8 @@ void mc_drive_retune(mc_drive_t *d, const mc_drive_built_t *b)
     d->sc.pi.integ = integ_s;
     d->sc.count = count;
     d->sc.torque_ref = t_ref;
+    const float fw_did = d->tref.fw_did;
     mc_tref_init(&d->tref, &b->tref);
+    d->tref.fw_did = fw_did;
     mc_dtc_init(&d->dtc, &b->dtc);
 }

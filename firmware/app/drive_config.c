@@ -264,7 +264,8 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
                             .torque_max = p->torque_max, .decimation = (int)p->sc_decimation};
     out->tref = (mc_tref_cfg_t){.pole_pairs = (int)p->pole_pairs,
                                 .mach = {.ld = p->ld, .lq = p->lq, .psi_pm = p->psi_pm},
-                                .i_max = b->i_ref_max, .u_margin = p->u_margin, .use_table = p->mtpa_table != 0};
+                                .i_max = b->i_ref_max, .u_margin = p->u_margin, .use_table = p->mtpa_table != 0,
+                                .ts = p->ts};
     mc_mtpa_table_fill_linear(&out->tref.table, &out->tref.mach, b->i_ref_max);
     out->dtc = (mc_dtc_cfg_t){.t_dead = p->dead_time, .t_pwm = p->ts, .i_band = p->dtc_i_band,
                               .enable = p->dtc_enable != 0};

@@ -35,7 +35,7 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
     d->step3_count = 0u;
     mc_protect_reset(d, omega);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
-    d->fw_did = 0.0f;
+    d->tref.fw_did = 0.0f;
     mc_polcheck_reset(d);
 }
 
@@ -191,15 +191,25 @@ bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc)
     return true;
 }
 
-/* The catch's period; at its end a turning rotor goes to RUN with the estimate set to the
- * caught angle and speed, a standing one to Step I (or RUN with the given angle). */
-static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
+/* One period of the running phase program: its outputs-off flag (at once) and its duties (a
+ * period later, mc/phase_program.h). */
+static mc_ip_status_t phase_period(mc_drive_t *d, mc_ab_t i_ab, float vdc)
 {
     const mc_phase_in_t in = {.i_ab = i_ab, .vdc = vdc};
     mc_phase_out_t out;
     const mc_ip_status_t st = mc_phase_step(&d->phase, &in, &out);
-    hal_pwm_enable(d->hal.pwm, !out.off);
+    if (out.off == hal_pwm_enabled(d->hal.pwm)) {
+        hal_pwm_enable(d->hal.pwm, !out.off);
+    }
     write_duties(d, out.duty, vdc);
+    return st;
+}
+
+/* The catch's period; at its end a turning rotor goes to RUN with the estimate set to the
+ * caught angle and speed, a standing one to Step I (or RUN with the given angle). */
+static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
+{
+    const mc_ip_status_t st = phase_period(d, i_ab, vdc);
     if (st == MC_IP_RUNNING) {
         return;
     }
@@ -240,13 +250,7 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
 /* Step I, then Step II on the same workspace; returns the program's status. */
 static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
 {
-    const mc_phase_in_t in = {.i_ab = i_ab, .vdc = vdc};
-    mc_phase_out_t out;
-    const mc_ip_status_t st = mc_phase_step(&d->phase, &in, &out);
-    if (out.off == hal_pwm_enabled(d->hal.pwm)) {
-        hal_pwm_enable(d->hal.pwm, !out.off);
-    }
-    write_duties(d, out.duty, vdc);
+    const mc_ip_status_t st = phase_period(d, i_ab, vdc);
     if (st != MC_IP_DONE) {
         return st;
     }

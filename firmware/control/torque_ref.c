@@ -156,6 +156,29 @@ void mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg)
     s->mtpa_i = (mc_dq_t){0.0f, 0.0f};
     s->mtpa_lim = s->mtpa_i;
     s->mtpa_limited = false;
+    s->fw_did = 0.0f;
+}
+
+mc_dq_t mc_tref_fw_feedback(mc_tref_t *s, mc_dq_t r, bool u_limited, float omega_e, float vdc)
+{
+    const float i_max = s->cfg.i_max, ts = s->cfg.ts;
+    const bool high = fabsf(omega_e) * s->cfg.mach.psi_pm > 0.5f * MC_1_SQRT3 * vdc;
+    if (u_limited && high) {
+        s->fw_did -= 100.0f * i_max * ts;
+    } else {
+        s->fw_did += 25.0f * i_max * ts;
+    }
+    s->fw_did = s->fw_did > 0.0f ? 0.0f : (s->fw_did < -i_max ? -i_max : s->fw_did);
+    if (!(s->fw_did < 0.0f)) {
+        return r;   /* NaN-safe: a NaN state never leaves here */
+    }
+    r.d += s->fw_did;
+    if (r.d < -i_max) {
+        r.d = -i_max;
+    }
+    const float q_room = sqrtf(fmaxf(i_max * i_max - r.d * r.d, 0.0f));
+    r.q = r.q > q_room ? q_room : (r.q < -q_room ? -q_room : r.q);
+    return r;
 }
 
 /* Step 1: MTPA point for |T| inside the circle (2.21), (2.24). */

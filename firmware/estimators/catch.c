@@ -4,6 +4,8 @@
 #include <math.h>
 
 #include "mc/angle.h"
+#include "mc/sincos.h"
+#include "mc/transforms.h"
 
 enum { WAIT = 0, PULSE1, GAP, PULSE2, END };
 
@@ -43,10 +45,9 @@ static mc_ab_t sub(mc_ab_t a, mc_ab_t b)
  * frame, back to the stator frame (the linear model of (C.1)). */
 static mc_ab_t current_of(const mc_catch_cfg_t *c, mc_ab_t psi, float theta)
 {
-    const float co = cosf(theta), si = sinf(theta);
-    const float id = (co * psi.alpha + si * psi.beta) / c->ld;
-    const float iq = (-si * psi.alpha + co * psi.beta) / c->lq;
-    return (mc_ab_t){co * id - si * iq, si * id + co * iq};
+    const mc_sincos_t sc = mc_sincos(mc_wrap_pi(theta));
+    const mc_dq_t p = mc_park(psi, sc);                              /* (2.5) */
+    return mc_park_inv((mc_dq_t){p.d / c->ld, p.q / c->lq}, sc);
 }
 
 /* Both pulses measured: (C.3) for the speed, (C.2) for the angle, (C.1) as the plausibility.
@@ -145,16 +146,16 @@ static bool single_pulse_sign(mc_catch_t *s)
 /* The device drop under V(000): every phase conducts through its low-side switch or diode, whose
  * drop opposes its current (a soft sign over i_band, as in the dead-time compensation); the
  * line-to-neutral vector (2.4) [V]. */
+static float soft_drop(const mc_catch_cfg_t *c, float i)
+{
+    const float x = i / c->i_band;
+    return -c->v_device * (x > 1.0f ? 1.0f : (x < -1.0f ? -1.0f : x));
+}
+
 static mc_ab_t drop_voltage(const mc_catch_cfg_t *c, mc_ab_t i)
 {
-    const float ia = i.alpha, ib = -0.5f * i.alpha + 0.8660254f * i.beta, ic = -0.5f * i.alpha - 0.8660254f * i.beta;
-    const float ph[3] = {ia, ib, ic};
-    float v[3];
-    for (int k = 0; k < 3; ++k) {
-        const float x = ph[k] / c->i_band;
-        v[k] = -c->v_device * (x > 1.0f ? 1.0f : (x < -1.0f ? -1.0f : x));
-    }
-    return (mc_ab_t){(2.0f / 3.0f) * (v[0] - 0.5f * v[1] - 0.5f * v[2]), 0.57735027f * (v[1] - v[2])};
+    const mc_abc_t ph = mc_clarke_inv(i);
+    return mc_clarke((mc_abc_t){soft_drop(c, ph.a), soft_drop(c, ph.b), soft_drop(c, ph.c)});   /* (2.4) */
 }
 
 /* One period of V(000) ended at this sample: its drop's flux, trapezoidal in the current. */

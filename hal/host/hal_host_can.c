@@ -6,9 +6,14 @@ void hal_host_can_init(hal_can_t *can)
     *can = (hal_can_t){.state = HAL_CAN_ERROR_ACTIVE};
 }
 
-static bool push(hal_can_frame_t *ring, uint32_t head, uint32_t *count, const hal_can_frame_t *f)
+/* a valid frame into a ring; a full ring refuses it and counts it */
+static bool push(hal_can_frame_t *ring, uint32_t head, uint32_t *count, uint32_t *dropped, const hal_can_frame_t *f)
 {
+    if (!hal_can_frame_valid(f)) {
+        return false;
+    }
     if (*count >= HAL_HOST_CAN_QUEUE) {
+        (*dropped)++;
         return false;
     }
     ring[(head + *count) % HAL_HOST_CAN_QUEUE] = *f;
@@ -29,14 +34,7 @@ static bool pop(const hal_can_frame_t *ring, uint32_t *head, uint32_t *count, ha
 
 bool hal_can_send(hal_can_t *can, const hal_can_frame_t *f)
 {
-    if (!hal_can_frame_valid(f) || can->state == HAL_CAN_BUS_OFF) {
-        return false;
-    }
-    if (!push(can->tx, can->tx_head, &can->tx_count, f)) {
-        can->tx_dropped++;
-        return false;
-    }
-    return true;
+    return can->state != HAL_CAN_BUS_OFF && push(can->tx, can->tx_head, &can->tx_count, &can->tx_dropped, f);
 }
 
 bool hal_can_receive(hal_can_t *can, hal_can_frame_t *f)
@@ -59,14 +57,7 @@ void hal_can_recover(hal_can_t *can)
 
 bool hal_host_can_deliver(hal_can_t *can, const hal_can_frame_t *f)
 {
-    if (!hal_can_frame_valid(f)) {
-        return false;
-    }
-    if (!push(can->rx, can->rx_head, &can->rx_count, f)) {
-        can->rx_dropped++;
-        return false;
-    }
-    return true;
+    return push(can->rx, can->rx_head, &can->rx_count, &can->rx_dropped, f);
 }
 
 bool hal_host_can_take(hal_can_t *can, hal_can_frame_t *f)

@@ -65,6 +65,13 @@ std::string json_string(const std::string& s)
     return o;
 }
 
+std::string json_string_array(const std::vector<std::string>& v)
+{
+    std::string o = "[";
+    for (size_t k = 0; k < v.size(); ++k) o += (k ? ", " : "") + json_string(v[k]);
+    return o + "]";
+}
+
 Metrics::Metrics(const Scenario& sc)
     : start_(sc.f("metrics.start_s")),
       settle_from_(sc.f("metrics.settle_from_s")),

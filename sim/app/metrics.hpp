@@ -76,5 +76,7 @@ std::string json_number(double v);
 // \n, \t, ... or \u00XX, and bytes that are not valid UTF-8 replaced by U+FFFD, so that any
 // std::string (a scenario or window name with quotes, NUL bytes, binary) gives valid JSON.
 std::string json_string(const std::string& s);
+// ["a", "b"]: json_string of each
+std::string json_string_array(const std::vector<std::string>& v);
 
 }  // namespace mcsim

@@ -53,14 +53,6 @@ const char* state_name(mc_state_t s)
 
 std::vector<std::string> fault_names(uint32_t f);
 
-// ["a", "b"]
-static std::string json_names(const std::vector<std::string>& v)
-{
-    std::string o = "[";
-    for (size_t k = 0; k < v.size(); ++k) o += (k ? ", \"" : "\"") + v[k] + "\"";
-    return o + "]";
-}
-
 std::vector<std::string> fault_names(uint32_t f)
 {
     std::vector<std::string> out;
@@ -554,7 +546,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
                                      {"realtime_factor", json_number(out.realtime_factor)},
                                      {"fault_count", std::to_string(fault_names(tm.faults).size())},
                                      {"recoveries", std::to_string(tm.recoveries)},
-                                     {"recovered_from", json_names(fault_names(tm.recovered_from))},
+                                     {"recovered_from", json_string_array(fault_names(tm.recovered_from))},
                                      {"polarity_checks", std::to_string(tm.polarity_checks)},
                                      {"polarity_flips", std::to_string(tm.polarity_flips)}});
     if (!opt.out_dir.empty()) {

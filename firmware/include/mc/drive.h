@@ -212,7 +212,6 @@ typedef struct {
     mc_dtc_t dtc;
 
     mc_dq_t i_ref_prev;          /* slew-limited reference of the last period */
-    float fw_did;                /* voltage-feedback field weakening's extra id [A] (<= 0)   */
     mc_ab_t i_ab_prev;
     mc_ab_t u_hist[2];           /* [0]: commanded last ISR (acts during k..k+1), [1]: the one before */
     mc_drive_telem_t tm;

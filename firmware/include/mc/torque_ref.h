@@ -11,6 +11,7 @@ typedef struct {
     float i_max;                /* current circle radius (peak) [A]                         */
     float u_margin;             /* fraction of vdc/sqrt(3) the references may plan for (0..1) */
     bool  use_table;            /* MTPA from `table` instead of (2.24)                      */
+    float ts;                   /* control period [s] for mc_tref_fw_feedback (0: feedback off) */
     mc_mtpa_table_t table;
 } mc_tref_cfg_t;
 
@@ -26,6 +27,7 @@ typedef struct {
     mc_dq_t mtpa_lim;           /* the same after the final circle limit (the result without
                                    field weakening, before the sign of T) [A]              */
     bool    mtpa_limited;       /* |T| beyond the current circle                            */
+    float   fw_did;             /* voltage feedback's extra id [A] (<= 0)                   */
 } mc_tref_t;
 
 void    mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg);
@@ -33,5 +35,13 @@ void    mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg);
  * root searches of at most 32 steps each, the MTPA one skipped while |T| repeats); continuous in
  * omega_e and torque. */
 mc_dq_t mc_tref_step(mc_tref_t *s, float torque, float omega_e, float vdc);
+/* Field weakening by voltage feedback on top of (2.26): while the current loop is at its voltage
+ * limit (u_limited, its last period) above half the base speed, id goes further negative (the
+ * full current in 10 ms), else back (in 40 ms); the reference r then gets that extra id, flux
+ * before torque within the current circle. The model's ellipse plans the steady state; a model
+ * error, a braking current caught at speed or uncontrolled generation at an enable can leave
+ * the loop at the limit with the q current out of control, which the extra flux weakening
+ * restores. Once per period after mc_tref_step. */
+mc_dq_t mc_tref_fw_feedback(mc_tref_t *s, mc_dq_t r, bool u_limited, float omega_e, float vdc);
 
 #endif

@@ -65,6 +65,7 @@ static void make(mc_tref_t *s, bool table, float margin)
     c.i_max = (float)IMAX;
     c.u_margin = margin;
     c.use_table = table;
+    c.ts = 1e-4f;
     mc_mtpa_table_fill_linear(&c.table, &c.mach, (float)IMAX);
     mc_tref_init(s, &c);
 }
@@ -379,6 +380,41 @@ static void test_fw_decision_matches_exact_test(void **state)
     }
 }
 
+/* The voltage feedback: at the voltage limit above half the base speed id goes further negative
+ * by i_max per 10 ms (flux before torque inside the circle), back at a quarter of that rate;
+ * below half the base speed, or not limited, it adds nothing; a NaN state adds nothing. */
+static void test_fw_voltage_feedback(void **st)
+{
+    (void)st;
+    mc_tref_t s;
+    make(&s, false, 1.0f);
+    const float we = (float)rpm_to_we(1200.0), ts = 1e-4f;
+    const mc_dq_t r = {-8.0f, 6.0f};
+    mc_dq_t o = r;
+    for (int k = 0; k < 20; ++k) {
+        o = mc_tref_fw_feedback(&s, r, true, we, (float)VDC);
+    }
+    assert_near(s.fw_did, -20.0 * 100.0 * IMAX * ts, 1e-4);    /* 2 ms: -2.658 A */
+    assert_near(o.d, r.d + s.fw_did, 1e-5);
+    assert_near(o.q, r.q, 1e-6);                                 /* still inside the circle */
+    for (int k = 0; k < 200; ++k) {
+        o = mc_tref_fw_feedback(&s, r, true, we, (float)VDC);
+    }
+    assert_near(o.d, -IMAX, 1e-5);                               /* at most i_max */
+    assert_near(o.q, 0.0, 1e-3);                                 /* flux first */
+    for (int k = 0; k < 400; ++k) {
+        o = mc_tref_fw_feedback(&s, r, false, we, (float)VDC);
+    }
+    assert_near(s.fw_did, 0.0, 0.0);
+    assert_near(o.d, r.d, 0.0);
+    /* low speed: limited or not, nothing */
+    o = mc_tref_fw_feedback(&s, r, true, (float)rpm_to_we(300.0), (float)VDC);
+    assert_near(s.fw_did, 0.0, 0.0);
+    s.fw_did = NAN;
+    o = mc_tref_fw_feedback(&s, r, true, we, (float)VDC);
+    assert_near(o.d, r.d, 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -391,6 +427,7 @@ int main(void)
         cmocka_unit_test(test_continuity_across_base_speed),
         cmocka_unit_test(test_mtpa_cache_follows_inputs),
         cmocka_unit_test(test_fw_decision_matches_exact_test),
+        cmocka_unit_test(test_fw_voltage_feedback),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
