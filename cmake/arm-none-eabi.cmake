@@ -1,15 +1,19 @@
-# Cross toolchain: Debian's arm-none-eabi-gcc for a Cortex-M4F (FPv4-SP, hard float).
+# Cross toolchain: Debian's arm-none-eabi-gcc for a Cortex-M4F (FPv4-SP, hard float), with the
+# generic memory-mapped port (hal/generic): the budget reference for small MCUs.
 set(CMAKE_SYSTEM_NAME Generic)
 set(CMAKE_SYSTEM_PROCESSOR arm)
 set(CMAKE_C_COMPILER arm-none-eabi-gcc)
 set(CMAKE_CXX_COMPILER arm-none-eabi-g++)
 set(CMAKE_ASM_COMPILER arm-none-eabi-gcc)
 set(CMAKE_SIZE arm-none-eabi-size)
+set(CMAKE_OBJCOPY arm-none-eabi-objcopy)
+set(CMAKE_ASM_FLAGS_INIT "-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard")
 set(CMAKE_TRY_COMPILE_TARGET_TYPE STATIC_LIBRARY)
 set(MC_CPU_FLAGS "-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard")
 set(CMAKE_C_FLAGS_INIT "${MC_CPU_FLAGS} -ffunction-sections -fdata-sections")
 set(CMAKE_CXX_FLAGS_INIT "${MC_CPU_FLAGS} -ffunction-sections -fdata-sections")
-set(CMAKE_EXE_LINKER_FLAGS_INIT "${MC_CPU_FLAGS} -specs=nano.specs -Wl,--gc-sections")
+set(CMAKE_EXE_LINKER_FLAGS_INIT "${MC_CPU_FLAGS} -specs=nano.specs -specs=nosys.specs -nostartfiles -Wl,--gc-sections")
+set(MC_PORT generic CACHE STRING "Target port (hal/<port>)")
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)

@@ -6,7 +6,8 @@ cd "$(dirname "$0")/.."
 
 APT_PACKAGES=(cmake ninja-build g++ gcc make pkg-config python3 python3-venv
               libeigen3-dev libcmocka-dev libtomlplusplus-dev libgtest-dev
-              gcc-arm-none-eabi libnewlib-arm-none-eabi)
+              gcc-arm-none-eabi libnewlib-arm-none-eabi
+              libunicorn-dev libcapstone-dev)
 
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

@@ -5,6 +5,7 @@
 #include "mc/sincos.h"
 #include "mc/transforms.h"
 #include "drive_internal.h"
+#include "hal/stage.h"
 
 /* The telemetry, published as one consistent record; its state fields are the sequencer's, set
  * here only. */
@@ -192,6 +193,7 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
 void mc_drive_isr(mc_drive_t *d)
 {
     const mc_drive_blk_t *c = &d->cfg->blk;
+    hal_stage_mark(HAL_STAGE_SAMPLE);
     take_command(d);
     take_config(d);
 
@@ -223,10 +225,12 @@ void mc_drive_isr(mc_drive_t *d)
     const mc_angle_in_t ain = {.i_ab = i_ab, .i_ab_prev = d->i_ab_prev, .u_ab_applied = d->u_hist[1],
                                .vdc = vdc, .qep_count = qep.count};
     mc_angle_out_t ang;
+    hal_stage_mark(HAL_STAGE_ANGLE);
     angle_source(d, &ain, &ang);
 
     /* 5. Park (2.5) into the controller's frame. While injecting, the current loop sees the
      *    currents with the injection frequency notched out, so it does not cancel it. */
+    hal_stage_mark(HAL_STAGE_REFERENCES);
     const mc_dq_t i_dq = mc_park(i_ab, mc_sincos(ang.theta));
     /* The angle of step 8 is known already: its sin/cos is taken here, where it does not wait
      * for the references and the current loop (an out-of-order core overlaps the two). */
@@ -243,6 +247,7 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 7. Current control, limited to the inscribed circle of the voltage hexagon; the HF
      *    injection (6.6) rides on the estimated d axis. */
+    hal_stage_mark(HAL_STAGE_CURRENT);
     mc_dq_t u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, vdc * MC_1_SQRT3);
     d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
     u_dq.d += d->tm.u_inj;
@@ -266,6 +271,7 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 8. Inverse Park at the middle of the period the voltage will act in, (k+1, k+2): the
      *    one-period update delay plus the half period of the average (sc_u, taken in step 5). */
+    hal_stage_mark(HAL_STAGE_MODULATION);
     const mc_ab_t u_ab = mc_park_inv(u_dq, sc_u);
 
     /* 9. SVPWM (min-max injection), then dead-time compensation with the current of that

@@ -23,6 +23,8 @@ const std::vector<KeySpec>& drive_key_specs();
 struct DriveSetup {
     mc_drive_cfg_t cfg;
     std::unique_ptr<mc_flux_map_t> est_map;  // owned here; the drive keeps a pointer
+    mc_params_t resolved;                    // cfg.p with every "auto" derived (mc_drive_build)
+    bool estimator = false;                  // the angle source runs a model-based estimator
 };
 
 // Defaults the simulator derives from the preset for its sensor keys (a sensor sized for the

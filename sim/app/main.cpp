@@ -1,5 +1,5 @@
 // mcsim: scenario runner CLI.
-//   mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]
+//   mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet] [--pil IMAGE.elf]
 //   mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]
 //   mcsim keys                      (the scenario key table, markdown)
 //   mcsim params                    (the firmware's parameter table, markdown)
@@ -45,7 +45,9 @@ double ns_per_call(F f)
 }
 
 const char* kUsage =
-    "usage: mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet]\n"
+    "usage: mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet] [--pil IMAGE.elf]\n"
+    "         --pil: run a cross-built firmware image (presets arm-cm4f, am263x) on an emulated core\n"
+    "                against the plant instead of the host build; adds estimated ISR cycles to metrics.json\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
     "       mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]\n"
     "       mcsim keys      (the scenario keys)\n"
@@ -69,7 +71,7 @@ trace = false
 
 int cmd_run(int argc, char** argv, bool check_only)
 {
-    std::string file, out;
+    std::string file, out, pil;
     std::vector<std::string> sets;
     bool quiet = false;
     for (int k = 2; k < argc; ++k) {
@@ -78,6 +80,8 @@ int cmd_run(int argc, char** argv, bool check_only)
         else if (a.rfind("--set=", 0) == 0) sets.push_back(a.substr(6));
         else if (a == "--out" && k + 1 < argc) out = argv[++k];
         else if (a == "--quiet") quiet = true;
+        else if (a == "--pil" && k + 1 < argc) pil = argv[++k];
+        else if (a.rfind("--pil=", 0) == 0) pil = a.substr(6);
         else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
         else {
             std::fprintf(stderr, "mcsim: unexpected argument '%s'\n%s", a.c_str(), kUsage);
@@ -99,6 +103,7 @@ int cmd_run(int argc, char** argv, bool check_only)
     mcsim::RunOptions opt;
     opt.out_dir = out;
     opt.progress = !quiet;
+    opt.pil_elf = pil;
     const mcsim::RunSummary r = mcsim::run_scenario(sc, opt);
     if (!quiet) {
         std::printf("%s", r.metrics_json.c_str());

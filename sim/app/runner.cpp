@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "drive_setup.hpp"
+#include "drive_target.hpp"
 #include "metrics.hpp"
 #include "mcsim/fluxmap.hpp"
 #include "mcsim/plant.hpp"
@@ -287,6 +288,8 @@ DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& m
     auto built = std::make_unique<mc_drive_built_t>();
     mc_param_err_t err{};
     if (!mc_drive_build(&ds.cfg, built.get(), &err)) throw ScenarioError(explain_config_error(sc, err));
+    ds.resolved = built->p;
+    ds.estimator = src != nullptr && src->needs_injection;
     return ds;
 }
 
@@ -420,18 +423,11 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     Sensors sensors = make_sensors(sc, r);
     const DriveSetup ds = drive_setup(sc, r, plant.model());
 
-    // ---- host HAL and firmware
-    hal_pwm_t pwm;
-    hal_host_pwm_init(&pwm, static_cast<float>(r.ts), static_cast<float>(sc.f("inverter.dead_time_s")));
-    hal_adc_t adc{};
-    hal_qep_t qep{};
-    qep.counts_per_rev = 4u * static_cast<uint32_t>(sc.i("sensors.encoder_lines"));
-    auto drive = std::make_unique<mc_drive_t>();
-    auto link = std::make_unique<mc_drive_link_t>();
-    if (!mc_drive_init(drive.get(), link.get(), &ds.cfg, &adc, &pwm, &qep))
-        throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive.get())));
-    const mc_params_t& dp = *mc_drive_params(drive.get());
-    const bool estimator = drive->src->needs_injection;
+    // ---- the firmware: built for the host, or a cross-built image under PIL
+    std::unique_ptr<DriveTarget> drive =
+        opt.pil_elf.empty() ? make_host_drive(sc, ds, r.ts) : make_pil_drive(opt.pil_elf, ds, r.ts);
+    const mc_params_t& dp = ds.resolved;
+    const bool estimator = ds.estimator;
 
     // ---- commands and outputs
     const Commander commander(sc);
@@ -455,26 +451,29 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     const long overrun_k0 = overrun_from >= 0.0 ? static_cast<long>(std::ceil(overrun_from / r.ts - 1e-9)) : -1;
 
     double isr_ns = 0, plant_ns = 0;
+    mc_drive_telem_t last_tm{};
     long timed = 0;
     const auto wall0 = std::chrono::steady_clock::now();
     for (long k = 0; k < periods; ++k) {
         const double t = k * r.ts;
         // Period boundary: the duties of the last ISR take effect; the ADC and QEP sample.
-        hal_host_pwm_latch(&pwm);
-        const AdcSample as = sensors.sample_adc(plant, r.vdc_at(t), r.ts, {pwm.active[0], pwm.active[1], pwm.active[2]},
-                                                pwm.enabled);
-        for (int j = 0; j < 3; ++j) adc.sample.i[j] = as.i[j];
-        adc.sample.vdc = as.vdc;
-        adc.sample.overrun = overrun_k0 >= 0 && k >= overrun_k0 &&
-                             (k == overrun_k0 || (overrun_every > 0 && (k - overrun_k0) % overrun_every == 0));
+        const PwmOut coming = drive->pending();
+        const AdcSample as = sensors.sample_adc(plant, r.vdc_at(t), r.ts, coming.duty, coming.enabled);
         const QepSample qs = sensors.sample_qep(plant);
-        qep.sample.count = qs.count;
-        qep.sample.index_seen = qs.index_seen;
-        qep.sample.index_count = qs.index_count;
+        DriveInputs in;
+        for (int j = 0; j < 3; ++j) in.adc_i[j] = as.i[j];
+        in.adc_vdc = as.vdc;
+        in.overrun = overrun_k0 >= 0 && k >= overrun_k0 &&
+                     (k == overrun_k0 || (overrun_every > 0 && (k - overrun_k0) % overrun_every == 0));
+        in.qep_count = qs.count;
+        in.qep_index_seen = qs.index_seen;
+        in.qep_index_count = qs.index_count;
+        in.t = t;
+        drive->boundary(in);
 
         const double theta = plant.theta_e();
         const mc_drive_cmd_t cmd = commander.at(t, theta);
-        mc_drive_command(drive.get(), &cmd);
+        drive->command(cmd);
 
         // The ISR / plant split is timed on every 17th period: a clock read costs about a tenth
         // of a simulated period, so timing all of them would slow down what it measures; 17 is
@@ -483,14 +482,13 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         timed += time_it;
         std::chrono::steady_clock::time_point i0;
         if (time_it) i0 = std::chrono::steady_clock::now();
-        mc_drive_isr(drive.get());
+        drive->isr(k);
         if (time_it) isr_ns += std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - i0).count();
-        if (k % 10 == 0) mc_drive_background(drive.get());
 
         // Record the state at the sample instant, before the plant moves on, as the background
         // would read it.
-        mc_drive_telem_t tm;
-        if (!mc_drive_telemetry_read(drive.get(), &tm)) throw std::runtime_error("telemetry: no consistent snapshot");
+        const mc_drive_telem_t tm = drive->telemetry();
+        last_tm = tm;
         const bool running = tm.state == MC_STATE_RUN;
         const auto iabc = plant.i_abc();
         const double ipk = std::max({std::fabs(iabc[0]), std::fabs(iabc[1]), std::fabs(iabc[2])});
@@ -519,7 +517,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         // The inverter applies the latched duties over (t, t + Ts).
         std::chrono::steady_clock::time_point p0;
         if (time_it) p0 = std::chrono::steady_clock::now();
-        plant.step_period(r.ts, {pwm.active[0], pwm.active[1], pwm.active[2]}, pwm.enabled);
+        const PwmOut now = drive->outputs();
+        plant.step_period(r.ts, now.duty, now.enabled);
         if (time_it) plant_ns += std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - p0).count();
 
         if ((k & 1023) == 0)
@@ -535,9 +534,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     out.isr_ns_mean = timed > 0 ? isr_ns / timed : 0;
     out.plant_ns_mean = timed > 0 ? plant_ns / timed : 0;
     out.periods = periods;
-    const mc_drive_telem_t& tm = *mc_drive_telemetry(drive.get());
-    out.metrics_json = metrics.json(fault_names(tm.faults), state_name(tm.state),
-                                    {{"scenario", json_string(sc.s("scenario.name"))},
+    const mc_drive_telem_t& tm = last_tm;
+    std::vector<std::pair<std::string, std::string>> extra = {{"scenario", json_string(sc.s("scenario.name"))},
                                      {"current_limit_a", json_number(dp.i_max)},
                                      {"current_trip_a", json_number(dp.i_trip)},
                                      {"speed_final_rpm", json_number(plant.omega_m() * kRpm)},
@@ -548,7 +546,9 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
                                      {"recoveries", std::to_string(tm.recoveries)},
                                      {"recovered_from", json_string_array(fault_names(tm.recovered_from))},
                                      {"polarity_checks", std::to_string(tm.polarity_checks)},
-                                     {"polarity_flips", std::to_string(tm.polarity_flips)}});
+                                     {"polarity_flips", std::to_string(tm.polarity_flips)}};
+    for (auto& kv : drive->metrics()) extra.push_back(std::move(kv));
+    out.metrics_json = metrics.json(fault_names(tm.faults), state_name(tm.state), extra);
     if (!opt.out_dir.empty()) {
         std::ofstream m(opt.out_dir + "/metrics.json");
         m << out.metrics_json;

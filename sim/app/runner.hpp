@@ -10,6 +10,7 @@ namespace mcsim {
 struct RunOptions {
     std::string out_dir;      // trace.csv and metrics.json go here ("" = write nothing)
     bool progress = false;    // progress line on stderr
+    std::string pil_elf;      // run this cross-built image under processor-in-the-loop ("" = host build)
 };
 
 struct RunSummary {

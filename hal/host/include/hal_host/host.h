@@ -8,6 +8,7 @@
 #include "hal/nvm.h"
 #include "hal/pwm.h"
 #include "hal/qep.h"
+#include "hal/stage.h"
 #include "hal/time.h"
 
 struct hal_pwm {

@@ -1,0 +1,226 @@
+/* Stored configuration records (mc/store.h). */
+#include "mc/store.h"
+#include <math.h>
+#include <string.h>
+
+uint32_t mc_crc32(const uint8_t *data, size_t n)
+{
+    /* IEEE 802.3 reflected, bitwise: runs at boot and on a store, not in the ISR */
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t k = 0; k < n; ++k) {
+        c ^= data[k];
+        for (int b = 0; b < 8; ++b) {
+            c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+        }
+    }
+    return ~c;
+}
+
+static void put(uint8_t *buf, size_t *at, uint32_t w)
+{
+    buf[*at] = (uint8_t)w;
+    buf[*at + 1u] = (uint8_t)(w >> 8);
+    buf[*at + 2u] = (uint8_t)(w >> 16);
+    buf[*at + 3u] = (uint8_t)(w >> 24);
+    *at += 4u;
+}
+
+static uint32_t get(const uint8_t *buf, size_t at)
+{
+    return (uint32_t)buf[at] | ((uint32_t)buf[at + 1u] << 8) | ((uint32_t)buf[at + 2u] << 16) |
+           ((uint32_t)buf[at + 3u] << 24);
+}
+
+static uint32_t fbits(float x)
+{
+    uint32_t w;
+    memcpy(&w, &x, sizeof w);
+    return w;
+}
+
+static float bitsf(uint32_t w)
+{
+    float x;
+    memcpy(&x, &w, sizeof x);
+    return x;
+}
+
+static size_t close_record(uint8_t *buf, size_t at)
+{
+    put(buf, &at, mc_crc32(buf, at));
+    return at;
+}
+
+size_t mc_store_params_encode(const mc_params_t *p, uint8_t *buf, size_t cap)
+{
+    const size_t len = 4u * (5u + 2u * (size_t)MC_PARAM_COUNT);
+    if (cap < len) {
+        return 0u;
+    }
+    size_t at = 0u;
+    put(buf, &at, MC_STORE_MAGIC_PARAMS);
+    put(buf, &at, MC_STORE_VERSION);
+    put(buf, &at, mc_params_table_hash());
+    put(buf, &at, (uint32_t)MC_PARAM_COUNT);
+    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
+        const bool is_auto = mc_param_is_auto(p, id);
+        put(buf, &at, (uint32_t)id | (is_auto ? MC_STORE_AUTO : 0u));
+        put(buf, &at, fbits(mc_param_get(p, id)));
+    }
+    return close_record(buf, at);
+}
+
+size_t mc_store_model_encode(const mc_est_model_t *m, uint8_t *buf, size_t cap)
+{
+    const mc_flux_map_t *map = m->map;
+    const size_t cells = map != NULL ? (size_t)map->n_d * (size_t)map->n_q : 0u;
+    const size_t len = 4u * (8u + (map != NULL ? 6u + 2u * cells : 0u));
+    if (cap < len || (map != NULL && (map->n_d < 2 || map->n_q < 2 || map->n_d > MC_FLUX_MAP_MAX ||
+                                      map->n_q > MC_FLUX_MAP_MAX))) {
+        return 0u;
+    }
+    size_t at = 0u;
+    put(buf, &at, MC_STORE_MAGIC_MODEL);
+    put(buf, &at, MC_STORE_VERSION);
+    put(buf, &at, fbits(m->rs));
+    put(buf, &at, fbits(m->ld));
+    put(buf, &at, fbits(m->lq));
+    put(buf, &at, fbits(m->psi_pm));
+    put(buf, &at, map != NULL ? 1u : 0u);
+    if (map != NULL) {
+        put(buf, &at, (uint32_t)map->n_d);
+        put(buf, &at, (uint32_t)map->n_q);
+        put(buf, &at, fbits(map->id0));
+        put(buf, &at, fbits(map->did));
+        put(buf, &at, fbits(map->iq0));
+        put(buf, &at, fbits(map->diq));
+        for (size_t k = 0; k < cells; ++k) {
+            put(buf, &at, fbits(map->psi_d[k]));
+        }
+        for (size_t k = 0; k < cells; ++k) {
+            put(buf, &at, fbits(map->psi_q[k]));
+        }
+    }
+    return close_record(buf, at);
+}
+
+static mc_store_status_t check_head(const uint8_t *buf, size_t n, uint32_t magic)
+{
+    if (n < 12u) {
+        return MC_STORE_BAD_SIZE;
+    }
+    const uint32_t m = get(buf, 0u);
+    if (m == 0xFFFFFFFFu) {
+        return MC_STORE_EMPTY;
+    }
+    if (m != magic) {
+        return MC_STORE_BAD_MAGIC;
+    }
+    return get(buf, 4u) == MC_STORE_VERSION ? MC_STORE_OK : MC_STORE_BAD_VERSION;
+}
+
+static bool crc_ok(const uint8_t *buf, size_t len)
+{
+    return mc_crc32(buf, len - 4u) == get(buf, len - 4u);
+}
+
+mc_store_status_t mc_store_params_decode(const uint8_t *buf, size_t n, mc_params_t *p)
+{
+    mc_store_status_t st = check_head(buf, n, MC_STORE_MAGIC_PARAMS);
+    if (st != MC_STORE_OK) {
+        return st;
+    }
+    if (n < 20u) {
+        return MC_STORE_BAD_SIZE;
+    }
+    if (get(buf, 8u) != mc_params_table_hash()) {
+        return MC_STORE_OTHER_TABLE;
+    }
+    const uint32_t count = get(buf, 12u);
+    if (count > (uint32_t)MC_PARAM_COUNT || 4u * (5u + 2u * (size_t)count) > n) {
+        return MC_STORE_BAD_SIZE;
+    }
+    const size_t len = 4u * (5u + 2u * (size_t)count);
+    if (!crc_ok(buf, len)) {
+        return MC_STORE_BAD_CRC;
+    }
+    mc_params_t q;
+    mc_params_default(&q);
+    for (uint32_t k = 0; k < count; ++k) {
+        const uint32_t w = get(buf, 16u + 8u * k);
+        const int id = (int)(w & ~MC_STORE_AUTO);
+        if (id >= (int)MC_PARAM_COUNT) {
+            return MC_STORE_BAD_VALUE;
+        }
+        if ((w & MC_STORE_AUTO) != 0u) {
+            mc_param_set_auto(&q, id, true);
+        } else {
+            /* the table's range here already: a stored set is refused whole, not at the build */
+            const float v = bitsf(get(buf, 20u + 8u * k));
+            const mc_param_info_t *e = &mc_param_table[id];
+            if (!(v >= e->min && v <= e->max) || !mc_param_set(&q, id, v, NULL)) {
+                return MC_STORE_BAD_VALUE;
+            }
+        }
+    }
+    *p = q;
+    return MC_STORE_OK;
+}
+
+mc_store_status_t mc_store_model_decode(const uint8_t *buf, size_t n, mc_est_model_t *m, mc_flux_map_t *map_out)
+{
+    mc_store_status_t st = check_head(buf, n, MC_STORE_MAGIC_MODEL);
+    if (st != MC_STORE_OK) {
+        return st;
+    }
+    if (n < 32u) {
+        return MC_STORE_BAD_SIZE;
+    }
+    const uint32_t has_map = get(buf, 24u);
+    size_t len = 32u;
+    uint32_t nd = 0u, nq = 0u;
+    if (has_map != 0u) {
+        if (n < 56u) {
+            return MC_STORE_BAD_SIZE;
+        }
+        nd = get(buf, 28u);
+        nq = get(buf, 32u);
+        if (nd < 2u || nq < 2u || nd > MC_FLUX_MAP_MAX || nq > MC_FLUX_MAP_MAX || map_out == NULL) {
+            return MC_STORE_BAD_SIZE;
+        }
+        len = 4u * (14u + 2u * (size_t)nd * nq);
+        if (len > n) {
+            return MC_STORE_BAD_SIZE;
+        }
+    }
+    if (!crc_ok(buf, len)) {
+        return MC_STORE_BAD_CRC;
+    }
+    m->rs = bitsf(get(buf, 8u));
+    m->ld = bitsf(get(buf, 12u));
+    m->lq = bitsf(get(buf, 16u));
+    m->psi_pm = bitsf(get(buf, 20u));
+    m->map = NULL;
+    if (has_map != 0u) {
+        map_out->n_d = (int)nd;
+        map_out->n_q = (int)nq;
+        map_out->id0 = bitsf(get(buf, 36u));
+        map_out->did = bitsf(get(buf, 40u));
+        map_out->iq0 = bitsf(get(buf, 44u));
+        map_out->diq = bitsf(get(buf, 48u));
+        const size_t cells = (size_t)nd * nq;
+        for (size_t k = 0; k < cells; ++k) {
+            map_out->psi_d[k] = bitsf(get(buf, 52u + 4u * k));
+            map_out->psi_q[k] = bitsf(get(buf, 52u + 4u * (cells + k)));
+        }
+        m->map = map_out;
+    }
+    return MC_STORE_OK;
+}
+
+const char *mc_store_status_name(mc_store_status_t s)
+{
+    static const char *const names[] = {"ok", "empty", "bad_magic", "bad_version", "other_table",
+                                        "bad_size", "bad_crc", "bad_value"};
+    return (unsigned)s < sizeof names / sizeof names[0] ? names[s] : "?";
+}

@@ -1,0 +1,125 @@
+/* The drive's firmware image: boot, configuration, the control ISR and the background loop, on
+ * whatever port the image is linked with (hal/generic, hal/am263x). The one instance of the drive
+ * and its mailbox live here, as statics of the image (the library has no globals).
+ *
+ * Boot: the board with the default timing (so the outputs are held off), the configuration from
+ * the image's configuration area (mc/store.h; the defaults where it is erased or refused, with
+ * the reason in the monitor), the board again with the configured PWM frequency and dead time,
+ * the drive, then the ISR. The background loop sleeps until an interrupt; after each control
+ * ISR it runs the drive's background work every 10th period, publishes the telemetry to the
+ * monitor block (mc/monitor.h) and hands the drive a command written there. */
+#include <math.h>
+#include "hal/board.h"
+#include "mc/drive.h"
+#include "mc/monitor.h"
+#include "mc/store.h"
+
+/* The configuration area: erased in the image, written by a tool before flashing. */
+__attribute__((section(".mc_config"), used, aligned(4)))
+const uint8_t mc_config_area[MC_CONFIG_AREA_SIZE] = {[0 ... MC_CONFIG_AREA_SIZE - 1] = 0xFFu};
+
+/* Read and written by a debugger (or the PIL) while the drive runs. */
+volatile mc_monitor_t mc_monitor;
+
+static mc_drive_t drive;
+static mc_drive_link_t drive_link;
+static mc_flux_map_t est_map;
+
+static void control_isr(void *ctx)
+{
+    mc_drive_isr((mc_drive_t *)ctx);
+    mc_monitor.isr_count = mc_monitor.isr_count + 1u;
+}
+
+static void board_cfg_from(const mc_params_t *p, hal_board_cfg_t *b)
+{
+    b->f_pwm_hz = 1.0f / p->ts;
+    b->dead_time_s = p->dead_time;
+    b->adc_ch_i[0] = 0u;
+    b->adc_ch_i[1] = 1u;
+    b->adc_ch_i[2] = 2u;
+    b->adc_ch_vdc = 3u;
+    b->qep_counts_per_rev = 4u * (uint32_t)p->enc_lines;
+    b->can_bitrate = 500000u;
+}
+
+static void load_config(mc_drive_cfg_t *cfg)
+{
+    const mc_store_status_t sp = mc_store_params_decode(mc_config_area, MC_CONFIG_MODEL_OFFSET, &cfg->p);
+    const mc_store_status_t sm = mc_store_model_decode(mc_config_area + MC_CONFIG_MODEL_OFFSET,
+                                                       MC_CONFIG_AREA_SIZE - MC_CONFIG_MODEL_OFFSET, &cfg->est,
+                                                       &est_map);
+    mc_monitor.store_params = (uint32_t)sp;
+    mc_monitor.store_model = (uint32_t)sm;
+}
+
+static void service(uint32_t *seen_isr, uint32_t *seen_cmd)
+{
+    const uint32_t n = mc_monitor.isr_count;
+    if (n != *seen_isr) {
+        *seen_isr = n;
+        if ((n - 1u) % 10u == 0u) {
+            mc_drive_background(&drive);
+        }
+        mc_drive_telem_t tm;
+        if (mc_drive_telemetry_read(&drive, &tm)) {
+            uint32_t w[MC_MONITOR_TM_WORDS];
+            mc_monitor_pack_telem(&tm, w);
+            for (unsigned k = 0u; k < MC_MONITOR_TM_WORDS; ++k) {
+                mc_monitor.tm[k] = w[k];
+            }
+            mc_monitor.tm_seq = mc_monitor.tm_seq + 1u;
+        }
+    }
+    const uint32_t s = mc_monitor.cmd_seq;
+    if (s != *seen_cmd) {
+        *seen_cmd = s;
+        uint32_t w[MC_MONITOR_CMD_WORDS];
+        for (unsigned k = 0u; k < MC_MONITOR_CMD_WORDS; ++k) {
+            w[k] = mc_monitor.cmd[k];
+        }
+        mc_drive_cmd_t cmd;
+        mc_monitor_unpack_cmd(w, &cmd);
+        mc_drive_command(&drive, &cmd);
+    }
+}
+
+int main(void)
+{
+    mc_monitor.magic = MC_MONITOR_MAGIC;
+    mc_monitor.version = MC_MONITOR_VERSION;
+    mc_monitor.boot = 0u;
+
+    static mc_drive_cfg_t cfg;
+    mc_drive_cfg_default(&cfg);
+    hal_board_cfg_t bcfg;
+    board_cfg_from(&cfg.p, &bcfg);
+    hal_board_t board;
+    if (!hal_board_init(&bcfg, &board)) {
+        mc_monitor.boot = 2u;
+        for (;;) {
+            hal_board_idle();
+        }
+    }
+    load_config(&cfg);
+    board_cfg_from(&cfg.p, &bcfg);
+    const bool board_ok = hal_board_init(&bcfg, &board);
+    if (!board_ok || !mc_drive_init(&drive, &drive_link, &cfg, board.adc, board.pwm, board.qep)) {
+        const mc_param_err_t *e = mc_drive_config_error(&drive);
+        mc_monitor.cfg_err_kind = board_ok ? (uint32_t)e->kind : 0xFFFFFFFFu;
+        mc_monitor.cfg_err_param = board_ok ? (uint32_t)e->param : 0xFFFFFFFFu;
+        mc_monitor.boot = 2u;
+        for (;;) {
+            hal_board_idle();   /* outputs off: the board came up with them off */
+        }
+    }
+    hal_board_attach_isr(control_isr, &drive);
+    mc_monitor.boot = 1u;
+    hal_board_start();
+
+    uint32_t seen_isr = 0u, seen_cmd = 0u;
+    for (;;) {
+        hal_board_idle();
+        service(&seen_isr, &seen_cmd);
+    }
+}

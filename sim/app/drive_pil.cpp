@@ -1,0 +1,210 @@
+// A cross-built firmware image under processor-in-the-loop (drive_target.hpp, sim/pil): the
+// scenario's configuration goes into the image's configuration area (mc/store.h) as a tool would
+// write it before flashing, the core boots from reset to its idle loop, and then every period
+// the commands go in and the telemetry comes out through the image's monitor block
+// (mc/monitor.h), while the peripheral registers carry the samples and the duties.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+
+#include "drive_target.hpp"
+#include "metrics.hpp"
+
+extern "C" {
+#include "hal/stage.h"
+#include "mc/monitor.h"
+#include "mc/store.h"
+}
+
+#ifdef MCSIM_HAVE_PIL
+#include "pil.hpp"
+#endif
+
+namespace mcsim {
+
+#ifndef MCSIM_HAVE_PIL
+
+bool pil_available() { return false; }
+
+std::unique_ptr<DriveTarget> make_pil_drive(const std::string& elf, const DriveSetup&, double)
+{
+    throw ScenarioError("--pil " + elf +
+                        ": this mcsim was built without the processor-in-the-loop engine (needs libunicorn-dev and "
+                        "libcapstone-dev; scripts/setup.sh installs them)");
+}
+
+#else
+
+bool pil_available() { return true; }
+
+namespace {
+
+constexpr uint64_t kBootBudget = 200'000'000;   // instructions from reset to the idle loop
+constexpr uint64_t kIsrBudget = 2'000'000;      // one ISR (a runaway loop stops here)
+constexpr uint64_t kBackgroundBudget = 20'000'000;
+const char* const kStageNames[HAL_STAGE_COUNT] = {"entry", "sample", "angle", "references", "current", "modulation"};
+
+struct Stats {
+    double sum = 0, max = 0;
+    long n = 0;
+    void add(double x)
+    {
+        sum += x;
+        max = std::max(max, x);
+        ++n;
+    }
+    double mean() const { return n > 0 ? sum / n : 0.0; }
+};
+
+class PilDrive final : public DriveTarget {
+public:
+    PilDrive(const std::string& elf, const DriveSetup& ds, double ts) : elf_(elf)
+    {
+        try {
+            t_ = pil::Target::load(elf);
+        } catch (const pil::LoadError& e) {
+            throw ScenarioError(std::string("--pil: ") + e.what());
+        }
+        for (const char* sym : {"mc_config_area", "mc_monitor", "hal_stage_reg"})
+            if (!t_->has_symbol(sym))
+                throw ScenarioError("--pil " + elf + ": not a drive image (no symbol '" + sym +
+                                    "'; build firmware/image with the arm-cm4f or am263x preset)");
+        // The configuration a tool writes before flashing.
+        std::vector<uint8_t> area(MC_CONFIG_AREA_SIZE, 0xFF);
+        if (mc_store_params_encode(&ds.cfg.p, area.data(), MC_CONFIG_MODEL_OFFSET) == 0 ||
+            mc_store_model_encode(&ds.cfg.est, area.data() + MC_CONFIG_MODEL_OFFSET,
+                                  MC_CONFIG_AREA_SIZE - MC_CONFIG_MODEL_OFFSET) == 0)
+            throw std::runtime_error("pil: the configuration does not fit the image's configuration area");
+        t_->write(t_->symbol("mc_config_area"), area.data(), area.size());
+        mon_ = t_->symbol("mc_monitor");
+        t_->reset_and_run_to_idle(kBootBudget);
+        const uint32_t magic = word(offsetof(mc_monitor_t, magic));
+        const uint32_t boot = word(offsetof(mc_monitor_t, boot));
+        if (magic != MC_MONITOR_MAGIC || word(offsetof(mc_monitor_t, version)) != MC_MONITOR_VERSION)
+            throw ScenarioError("--pil " + elf + ": the image's monitor block has another layout (magic/version)");
+        const auto sp = static_cast<mc_store_status_t>(word(offsetof(mc_monitor_t, store_params)));
+        const auto sm = static_cast<mc_store_status_t>(word(offsetof(mc_monitor_t, store_model)));
+        if (boot != 1u || sp != MC_STORE_OK || sm != MC_STORE_OK) {
+            std::ostringstream m;
+            m << "--pil " << elf << ": the image did not boot with the scenario's configuration (boot " << boot
+              << ", parameter record " << mc_store_status_name(sp) << ", model record " << mc_store_status_name(sm)
+              << ", refused parameter id " << static_cast<int32_t>(word(offsetof(mc_monitor_t, cfg_err_param)))
+              << ")";
+            throw ScenarioError(m.str());
+        }
+        const double prd = t_->peripherals().pwm_period_s();
+        if (!(std::fabs(prd - ts) <= 1e-3 * ts)) {
+            std::ostringstream m;
+            m << "--pil " << elf << ": the image programmed a PWM period of " << prd * 1e6 << " us, the scenario runs "
+              << ts * 1e6 << " us";
+            throw ScenarioError(m.str());
+        }
+    }
+
+    PwmOut pending() const override { return conv(t_->peripherals().pending_outputs()); }
+    void boundary(const DriveInputs& in) override
+    {
+        pil::PeriphInputs p;
+        for (int j = 0; j < 3; ++j) p.adc_i[j] = in.adc_i[j];
+        p.adc_vdc = in.adc_vdc;
+        p.adc_overrun = in.overrun;
+        p.qep_count = in.qep_count;
+        p.qep_index_seen = in.qep_index_seen;
+        p.qep_index_count = in.qep_index_count;
+        p.time_us = static_cast<uint32_t>(static_cast<uint64_t>(std::llround(in.t * 1e6)));
+        t_->period_boundary(p);
+    }
+    void command(const mc_drive_cmd_t& cmd) override
+    {
+        uint32_t w[MC_MONITOR_CMD_WORDS];
+        mc_monitor_pack_cmd(&cmd, w);
+        t_->write(mon_ + offsetof(mc_monitor_t, cmd), w, sizeof w);
+        ++cmd_seq_;
+        t_->write(mon_ + offsetof(mc_monitor_t, cmd_seq), &cmd_seq_, 4);
+        t_->run_background_to_idle(kBackgroundBudget);   // the loop hands it to the drive
+    }
+    void isr(long k) override
+    {
+        pil::IsrCost c;
+        if (!t_->take_irq(&c, kIsrBudget)) {
+            std::ostringstream m;
+            m << "pil: the control interrupt was not pending at period " << k
+              << " (the image did not enable its ADC end-of-conversion interrupt)";
+            throw std::runtime_error(m.str());
+        }
+        t_->run_background_to_idle(kBackgroundBudget);   // telemetry, background work
+        last_ = c;
+        have_last_ = true;
+    }
+    mc_drive_telem_t telemetry() override
+    {
+        uint32_t w[MC_MONITOR_TM_WORDS];
+        t_->read(mon_ + offsetof(mc_monitor_t, tm), w, sizeof w);
+        mc_drive_telem_t tm;
+        mc_monitor_unpack_telem(w, &tm);
+        if (have_last_) {   // the ISR's cost, by the state it ran in
+            have_last_ = false;
+            all_.add(last_.cycles);
+            instr_.add(static_cast<double>(last_.instructions));
+            if (tm.state == MC_STATE_RUN) {
+                run_.add(last_.cycles);
+                for (int s = 0; s < HAL_STAGE_COUNT; ++s) stage_[s].add(last_.stage[s].cycles);
+            }
+        }
+        return tm;
+    }
+    PwmOut outputs() const override { return conv(t_->outputs()); }
+
+    std::vector<std::pair<std::string, std::string>> metrics() const override
+    {
+        std::vector<std::pair<std::string, std::string>> m;
+        m.emplace_back("pil_image", json_string(elf_));
+        m.emplace_back("pil_core", json_string(t_->core() == pil::Core::CortexM4F ? "cortex-m4f" : "cortex-r5f"));
+        m.emplace_back("pil_port", json_string(t_->port()));
+        m.emplace_back("isr_cycles_mean", json_number(all_.mean()));
+        m.emplace_back("isr_cycles_max", json_number(all_.max));
+        m.emplace_back("isr_instructions_mean", json_number(instr_.mean()));
+        m.emplace_back("isr_instructions_max", json_number(instr_.max));
+        m.emplace_back("isr_cycles_mean_run", json_number(run_.mean()));
+        m.emplace_back("isr_cycles_max_run", json_number(run_.max));
+        std::string mean = "{", max = "{";
+        for (int s = 0; s < HAL_STAGE_COUNT; ++s) {
+            const std::string sep = s > 0 ? ", " : "";
+            mean += sep + json_string(kStageNames[s]) + ": " + json_number(stage_[s].mean());
+            max += sep + json_string(kStageNames[s]) + ": " + json_number(stage_[s].max);
+        }
+        m.emplace_back("isr_stage_cycles_mean_run", mean + "}");
+        m.emplace_back("isr_stage_cycles_max_run", max + "}");
+        return m;
+    }
+
+private:
+    uint32_t word(size_t off)
+    {
+        uint32_t w = 0;
+        t_->read(mon_ + static_cast<uint32_t>(off), &w, 4);
+        return w;
+    }
+    static PwmOut conv(const pil::PeriphOutputs& o) { return {{o.duty[0], o.duty[1], o.duty[2]}, o.enabled}; }
+
+    std::string elf_;
+    std::unique_ptr<pil::Target> t_;
+    uint32_t mon_ = 0, cmd_seq_ = 0;
+    pil::IsrCost last_;
+    bool have_last_ = false;
+    Stats all_, run_, instr_, stage_[HAL_STAGE_COUNT];
+};
+
+}  // namespace
+
+std::unique_ptr<DriveTarget> make_pil_drive(const std::string& elf, const DriveSetup& ds, double ts)
+{
+    return std::make_unique<PilDrive>(elf, ds, ts);
+}
+
+#endif
+
+}  // namespace mcsim

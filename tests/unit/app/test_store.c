@@ -1,0 +1,185 @@
+/* Stored configuration records (mc/store.h) and the monitor block's packing (mc/monitor.h):
+ * round trips bit for bit, and every corruption refused with its reason, nothing applied. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <string.h>
+#include "mc/monitor.h"
+#include "mc/store.h"
+
+static uint8_t buf[MC_CONFIG_AREA_SIZE];
+
+static void test_crc32_check_value(void **state)
+{
+    (void)state;
+    /* the CRC-32 (IEEE) check value of "123456789" */
+    assert_int_equal(mc_crc32((const uint8_t *)"123456789", 9u), 0xCBF43926u);
+}
+
+static void test_params_round_trip(void **state)
+{
+    (void)state;
+    mc_params_t p, q;
+    mc_params_default(&p);
+    const int ts = mc_param_find("control.ts_s");
+    const int lines = mc_param_find("hw.encoder_lines");
+    const int cc = mc_param_find("control.current_bw_hz");
+    assert_true(ts >= 0 && lines >= 0);
+    assert_true(mc_param_set(&p, ts, 5e-5f, NULL));
+    assert_true(mc_param_set(&p, lines, 1024.0f, NULL));
+    if (cc >= 0) {
+        mc_param_set_auto(&p, cc, true);
+    }
+    const size_t n = mc_store_params_encode(&p, buf, MC_CONFIG_MODEL_OFFSET);
+    assert_true(n > 0u && n <= MC_STORE_PARAMS_MAX);
+    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_OK);
+    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
+        assert_int_equal(mc_param_is_auto(&p, id), mc_param_is_auto(&q, id));
+        if (!mc_param_is_auto(&p, id)) {
+            const float a = mc_param_get(&p, id), b = mc_param_get(&q, id);
+            assert_memory_equal(&a, &b, sizeof a);
+        }
+    }
+    assert_true(fabsf(mc_param_get(&q, ts) - 5e-5f) == 0.0f);
+    assert_int_equal((int)mc_param_get(&q, lines), 1024);
+    /* too small a buffer: nothing written */
+    assert_int_equal(mc_store_params_encode(&p, buf, 16u), 0u);
+}
+
+static void test_params_corruption_refused(void **state)
+{
+    (void)state;
+    mc_params_t p, q;
+    mc_params_default(&p);
+    const size_t n = mc_store_params_encode(&p, buf, MC_CONFIG_MODEL_OFFSET);
+    mc_params_default(&q);
+    const int ts = mc_param_find("control.ts_s");
+    assert_true(mc_param_set(&q, ts, 2e-4f, NULL));
+    const mc_params_t before = q;
+
+    memset(buf + n, 0xFF, 8u);
+    uint8_t save = buf[20];
+    buf[20] ^= 0x01u;   /* a value bit */
+    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_BAD_CRC);
+    buf[20] = save;
+    buf[8] ^= 0x80u;    /* the table hash */
+    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_OTHER_TABLE);
+    buf[8] ^= 0x80u;
+    buf[4] = 7u;        /* version */
+    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_BAD_VERSION);
+    buf[4] = (uint8_t)MC_STORE_VERSION;
+    assert_int_equal(mc_store_params_decode(buf, n - 4u, &q), MC_STORE_BAD_SIZE);
+    memset(buf, 0xFF, 16u);
+    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_EMPTY);
+    assert_memory_equal(&q, &before, sizeof q);   /* nothing applied */
+}
+
+static void test_params_out_of_range_refused(void **state)
+{
+    (void)state;
+    mc_params_t p, q;
+    mc_params_default(&p);
+    const int ts = mc_param_find("control.ts_s");
+    size_t n = mc_store_params_encode(&p, buf, MC_CONFIG_MODEL_OFFSET);
+    /* write ts = 1 s (range 5e-5 .. 5e-4) into its slot and re-seal the CRC */
+    const float bad = 1.0f;
+    memcpy(buf + 16u + 8u * (size_t)ts + 4u, &bad, 4u);
+    const uint32_t crc = mc_crc32(buf, n - 4u);
+    for (int k = 0; k < 4; ++k) {
+        buf[n - 4u + (size_t)k] = (uint8_t)(crc >> (8 * k));
+    }
+    mc_params_default(&q);
+    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_BAD_VALUE);
+}
+
+static void test_model_round_trip_with_map(void **state)
+{
+    (void)state;
+    static mc_flux_map_t map, out;
+    memset(&map, 0, sizeof map);
+    map.n_d = 5;
+    map.n_q = 7;
+    map.id0 = -20.0f;
+    map.did = 5.0f;
+    map.iq0 = -15.0f;
+    map.diq = 5.0f;
+    for (int k = 0; k < 35; ++k) {
+        map.psi_d[k] = 0.3f + 0.001f * (float)k;
+        map.psi_q[k] = -0.1f + 0.002f * (float)k;
+    }
+    mc_est_model_t m = {0.4f, 0.0105f, 0.0129f, NAN, &map}, r;
+    const size_t n = mc_store_model_encode(&m, buf, sizeof buf);
+    assert_int_equal(n, 4u * (14u + 70u));
+    assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_OK);
+    assert_ptr_equal(r.map, &out);
+    assert_true(r.rs == 0.4f && r.ld == 0.0105f && r.lq == 0.0129f && isnan(r.psi_pm));
+    assert_int_equal(out.n_d, 5);
+    assert_int_equal(out.n_q, 7);
+    assert_memory_equal(out.psi_d, map.psi_d, 35u * sizeof(float));
+    assert_memory_equal(out.psi_q, map.psi_q, 35u * sizeof(float));
+    buf[60] ^= 0x10u;
+    assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_BAD_CRC);
+
+    mc_est_model_t nomap = {0.4f, 0.0105f, 0.0129f, 0.343f, NULL};
+    const size_t n2 = mc_store_model_encode(&nomap, buf, sizeof buf);
+    assert_int_equal(n2, 32u);
+    assert_int_equal(mc_store_model_decode(buf, n2, &r, &out), MC_STORE_OK);
+    assert_null(r.map);
+}
+
+static void test_monitor_telemetry_round_trip(void **state)
+{
+    (void)state;
+    mc_drive_telem_t t, u;
+    memset(&t, 0, sizeof t);
+    t.state = MC_STATE_FAULT_REACTION;
+    t.init_step = MC_INIT_CATCH;
+    t.faults = 0x8001u;
+    t.period = 123456u;
+    t.theta = -2.5f;
+    t.omega = 314.0f;
+    t.i_ref.q = 7.5f;
+    t.est_iters = -1;
+    t.duty[2] = 0.25f;
+    t.fw_active = true;
+    t.polarity_last = -1;
+    t.cmd_reject_last = MC_CMD_BAD_MODE;
+    uint32_t w[MC_MONITOR_TM_WORDS];
+    mc_monitor_pack_telem(&t, w);
+    mc_monitor_unpack_telem(w, &u);
+    assert_int_equal(u.state, MC_STATE_FAULT_REACTION);
+    assert_int_equal(u.init_step, MC_INIT_CATCH);
+    assert_int_equal(u.faults, 0x8001u);
+    assert_int_equal(u.period, 123456u);
+    assert_true(u.theta == -2.5f && u.omega == 314.0f && u.i_ref.q == 7.5f && u.duty[2] == 0.25f);
+    assert_int_equal(u.est_iters, -1);
+    assert_true(u.fw_active);
+    assert_int_equal(u.polarity_last, -1);
+    assert_int_equal(u.cmd_reject_last, MC_CMD_BAD_MODE);
+
+    mc_drive_cmd_t c = {true, MC_MODE_SPEED, {1.0f, -2.0f}, 3.0f, 104.7f, 0.5f}, d;
+    uint32_t cw[MC_MONITOR_CMD_WORDS];
+    mc_monitor_pack_cmd(&c, cw);
+    mc_monitor_unpack_cmd(cw, &d);
+    assert_true(d.enable && d.mode == MC_MODE_SPEED && d.i_ref.d == 1.0f && d.i_ref.q == -2.0f &&
+                d.torque_ref == 3.0f && d.speed_ref == 104.7f && d.theta_init == 0.5f);
+    cw[1] = 99u;   /* an unknown mode stays unknown (the drive refuses it) */
+    mc_monitor_unpack_cmd(cw, &d);
+    assert_int_equal(d.mode, MC_MODE_COUNT);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_crc32_check_value),
+        cmocka_unit_test(test_params_round_trip),
+        cmocka_unit_test(test_params_corruption_refused),
+        cmocka_unit_test(test_params_out_of_range_refused),
+        cmocka_unit_test(test_model_round_trip_with_map),
+        cmocka_unit_test(test_monitor_telemetry_round_trip),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
