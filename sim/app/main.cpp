@@ -4,6 +4,7 @@
 //   mcsim keys                      (the scenario key table, markdown)
 //   mcsim params                    (the firmware's parameter table, markdown)
 //   mcsim check SCENARIO.toml [--set key=value]...   (validate only)
+//   mcsim image-config SCENARIO.toml --image IN.elf --out OUT.elf [--set key=value]...
 // Exit status: 0 done, 2 bad input (scenario, key, value, file), 1 failure while running.
 #include <algorithm>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "drive_setup.hpp"
+#include "image_config.hpp"
 #include "runner.hpp"
 #include "scenario.hpp"
 
@@ -49,6 +51,8 @@ const char* kUsage =
     "         --pil: run a cross-built firmware image (presets arm-cm4f, am263x) on an emulated core\n"
     "                against the plant instead of the host build; adds estimated ISR cycles to metrics.json\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
+    "       mcsim image-config SCENARIO.toml --image IN.elf --out OUT.elf [--set key=value]...\n"
+    "                (the scenario's drive configuration written into a firmware image, for flashing)\n"
     "       mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]\n"
     "       mcsim keys      (the scenario keys)\n"
     "       mcsim params    (the drive's parameter table: ids, CANopen objects, rules)\n";
@@ -110,6 +114,34 @@ int cmd_run(int argc, char** argv, bool check_only)
         std::printf("mcsim: %.3f s simulated in %.2f s (%.0fx real time); wrote %s/metrics.json%s\n", r.sim_time_s,
                     r.wall_time_s, r.realtime_factor, out.c_str(), sc.b("output.trace") ? " and trace.csv" : "");
     }
+    return 0;
+}
+
+int cmd_image_config(int argc, char** argv)
+{
+    std::string file, in, out;
+    std::vector<std::string> sets;
+    for (int k = 2; k < argc; ++k) {
+        const std::string a = argv[k];
+        if (a == "--set" && k + 1 < argc) sets.push_back(argv[++k]);
+        else if (a == "--image" && k + 1 < argc) in = argv[++k];
+        else if (a == "--out" && k + 1 < argc) out = argv[++k];
+        else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
+        else {
+            std::fprintf(stderr, "mcsim image-config: unexpected argument '%s'\n%s", a.c_str(), kUsage);
+            return 2;
+        }
+    }
+    if (file.empty() || in.empty() || out.empty()) {
+        std::fprintf(stderr, "mcsim image-config: needs SCENARIO.toml, --image IN.elf and --out OUT.elf\n%s", kUsage);
+        return 2;
+    }
+    const mcsim::Scenario sc = mcsim::Scenario::load(file, sets);
+    const std::vector<uint8_t> area = mcsim::config_area_bytes(sc);
+    mcsim::patch_image_config(in, out, area);
+    std::printf("mcsim image-config: %s with the configuration of %s (%zu bytes in .mc_config); raw binary: "
+                "arm-none-eabi-objcopy -O binary %s OUT.bin\n",
+                out.c_str(), file.c_str(), area.size(), out.c_str());
     return 0;
 }
 
@@ -187,6 +219,7 @@ int main(int argc, char** argv)
         if (cmd == "run") return cmd_run(argc, argv, false);
         if (cmd == "check") return cmd_run(argc, argv, true);
         if (cmd == "bench") return cmd_bench(argc, argv);
+        if (cmd == "image-config") return cmd_image_config(argc, argv);
         if (cmd == "keys") {
             std::printf("%s", mcsim::schema_markdown().c_str());
             return 0;

@@ -408,6 +408,13 @@ private:
 
 }  // namespace
 
+DriveSetup drive_setup_for(const Scenario& sc)
+{
+    const Resolved r = resolve(sc);
+    const std::unique_ptr<FluxModel> magnetics = make_plant_model(sc, r.mp);
+    return drive_setup(sc, r, *magnetics);
+}
+
 void check_scenario(const Scenario& sc)
 {
     const Resolved r = resolve(sc);

@@ -3,6 +3,7 @@
 // plant integration over the period with the latched duties.
 #pragma once
 #include <string>
+#include "drive_setup.hpp"
 #include "scenario.hpp"
 
 namespace mcsim {
@@ -25,5 +26,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt);
 // Everything run_scenario checks before it runs (preset, plant, the drive's configuration as the
 // firmware will validate it); throws ScenarioError.
 void check_scenario(const Scenario& sc);
+// The drive's configuration for a scenario (parameters, the estimator's model and map), as
+// run_scenario hands it to the drive.
+DriveSetup drive_setup_for(const Scenario& sc);
 
 }  // namespace mcsim
