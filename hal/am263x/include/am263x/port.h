@@ -1,0 +1,176 @@
+/* TI AM263x port of the HAL (R5FSS0 core 0, LP-AM263 LaunchPad): the port's structs and the
+ * driver functions below the HAL contract. Every register access goes through a base address held
+ * in these structs (am263x/mmio.h), so that the unit tests (tests/unit/am263x) point them at RAM
+ * arrays; board.c holds the one instance of each with the real base addresses (am263x/regs_soc.h).
+ *
+ * Conventions of this port:
+ *  - PWM: ePWM0, 1, 2 = phase a, b, c; ePWM0 is the master (sync-out at counter zero, ADC SOCA at
+ *    counter zero), ePWM1/2 follow it (sync-in, phase 0). Up-down count, TBPRD = EPWMCLK /
+ *    (2 f_pwm), period = 2 TBPRD counts. Action qualifier on output A (the high side): set on CAU
+ *    (counter = CMPA going up), clear on CAD: A is high while the counter is above CMPA, so the
+ *    high-side on-fraction is d = (TBPRD - CMPA) / TBPRD, CMPA = round((1 - d) TBPRD). At counter
+ *    zero (the period boundary, where the ADC samples) every phase is low: the centre of the zero
+ *    vector V0, all low-side switches on. B = complement of A with the dead band on both edges
+ *    (active-high complementary); the trip zone drives A and B low.
+ *  - ADC: ADC0, SOC0..2 = phase a..c current, SOC3 = Vdc (channels from hal_board_cfg_t), all
+ *    triggered by ePWM0 SOCA, converted in SOC order; ADCINT1 = end of SOC3 -> INTXBAR output 0 ->
+ *    VIM interrupt 146.
+ *  - eQEP0 in quadrature count mode, MCAN0, RTI0 counter 0 (1 MHz), QSPI0 + its flash window. */
+#ifndef AM263X_PORT_H
+#define AM263X_PORT_H
+#include <stdbool.h>
+#include <stdint.h>
+#include "hal/adc.h"
+#include "hal/can.h"
+#include "hal/nvm.h"
+#include "hal/pwm.h"
+#include "hal/qep.h"
+#include "hal/time.h"
+#include "am263x/regs_mcan.h"
+
+/* ---------------------------------------------------------------- ePWM (epwm.c) */
+struct hal_pwm {
+    uintptr_t epwm[3];      /* ePWM0..2 register blocks                                   */
+    uintptr_t ctrl;         /* CONTROLSS_CTRL (time-base clock enable, EPWM_CLKSYNC)      */
+    uint32_t clk_hz;        /* EPWMCLK = TBCLK (dividers 1)                                */
+    uint16_t prd;           /* TBPRD [counts]                                              */
+    uint16_t db;            /* DBRED = DBFED [counts]                                      */
+    float period_s, dead_time_s;   /* as programmed                                       */
+    uint32_t nonfinite;     /* duties that arrived as NaN or infinite (became 0.5)         */
+    uint32_t clamped;       /* finite duties outside [0, 1] (clamped)                      */
+};
+
+/* TBPRD and dead band in counts for f_pwm and dead_time at clk_hz; false if not realisable:
+ * TBPRD outside [100, 65535], or the dead band above 14 bits or above a quarter period. */
+bool am263x_pwm_timing(uint32_t clk_hz, float f_pwm_hz, float dead_time_s, uint16_t *prd, uint16_t *db);
+/* CMPA for a high-side on-fraction d (clamped / NaN as hal_pwm_set_duties). */
+uint16_t am263x_pwm_cmpa(hal_pwm_t *pwm, float d);
+/* Outputs tripped (both low) first, then the three modules configured with their counters
+ * stopped; false (outputs left tripped) if am263x_pwm_timing refuses. */
+bool am263x_pwm_init(hal_pwm_t *pwm, float f_pwm_hz, float dead_time_s);
+/* Counters running (up-down), the three time-base clocks enabled together. Outputs stay tripped. */
+void am263x_pwm_start(hal_pwm_t *pwm);
+
+/* ---------------------------------------------------------------- ADC (adc.c) */
+struct hal_adc {
+    uintptr_t adc;          /* ADC0 control block                                          */
+    uintptr_t result;       /* ADC0 result block                                           */
+    uint32_t overruns;      /* samples read with the overflow flag set                     */
+};
+#define AM263X_ADC_ACQ_CYCLES 20u   /* sample window [SYSCLK cycles] = 100 ns                  */
+/* Powered up (the caller waits the power-up time), SOC0..3 on channels ch[0..3] triggered by
+ * ePWM0 SOCA, ADCINT1 at the end of SOC3 (not yet enabled), flags cleared. Channels are 0..31
+ * (CHSEL is 5 bits); false for a channel out of range or a repeated one. */
+bool am263x_adc_init(hal_adc_t *adc, const uint8_t ch[4]);
+void am263x_adc_enable_irq(hal_adc_t *adc);
+/* End of the control ISR: ADCINT1 cleared, so that the next EOC is not an overflow. */
+void am263x_adc_ack(hal_adc_t *adc);
+
+/* ---------------------------------------------------------------- eQEP (eqep.c) */
+struct hal_qep {
+    uintptr_t eqep;
+    uint32_t counts_per_rev;
+    uint32_t unit_clk;      /* QUPRD [SYSCLK cycles]                                       */
+    uint32_t last_lat;      /* QPOSLAT of the previous unit time-out                       */
+    bool have_last;
+};
+#define AM263X_QEP_UPPS 2u          /* unit position event every 2^2 = 4 counts (one line)     */
+#define AM263X_QEP_CCPS 7u          /* capture clock SYSCLK / 2^7 = 1.5625 MHz                 */
+/* Quadrature count mode, QPOSMAX = counts_per_rev - 1 (reset on maximum), index latch on the
+ * rising edge, unit timer of unit_clk SYSCLK cycles latching QPOSLAT and QCPRDLAT, capture unit
+ * on. false: counts_per_rev < 4 or unit_clk 0. */
+bool am263x_qep_init(hal_qep_t *qep, uint32_t counts_per_rev, uint32_t unit_clk);
+
+typedef struct {
+    float unit_cps;     /* position change over the unit period [counts/s], signed           */
+    float capture_cps;  /* 2^UPPS counts / the captured edge period [counts/s], signed; 0 when
+                           the capture overflowed (too slow) or the direction changed        */
+    bool capture_valid;
+} am263x_qep_speed_t;
+
+/* Signed position change from latch prev to latch cur (both 0..cpr-1) over at most half a
+ * revolution; 'up' (QEPSTS.QDF) resolves an exact half turn. */
+int32_t am263x_qep_delta(uint32_t prev, uint32_t cur, uint32_t cpr, bool up);
+/* [counts/s] from a change of delta counts over unit_clk cycles of clk_hz. */
+float am263x_qep_unit_speed(int32_t delta, uint32_t unit_clk, uint32_t clk_hz);
+/* [counts/s] from a captured period of qcprd capture-clock ticks between unit position events
+ * (2^upps counts), capture clock = clk_hz / 2^ccps; 0 for qcprd 0. */
+float am263x_qep_capture_speed(uint16_t qcprd, uint32_t upps, uint32_t ccps, uint32_t clk_hz, bool up);
+/* At a unit time-out (QFLG.UTO): both measurements from the latched registers, the flag and the
+ * capture errors cleared; false (out untouched) when no time-out is pending. The first call after
+ * init has no previous latch: its unit speed is 0. */
+bool am263x_qep_poll_speed(hal_qep_t *qep, am263x_qep_speed_t *out);
+
+/* ---------------------------------------------------------------- time (rti.c) */
+struct hal_time {
+    uintptr_t rti;
+};
+/* RTI counter block 0 at 1 MHz: RTICPUC0 = rti_clk_hz / 1 MHz - 1, counters restarted. */
+void am263x_time_init(hal_time_t *t, uint32_t rti_clk_hz);
+
+/* ---------------------------------------------------------------- MCAN (mcan.c) */
+struct hal_can {
+    uintptr_t ss;           /* MCANSS wrapper (CFG base)                                   */
+    uintptr_t core;         /* M_CAN core registers (CFG base + 0x200)                     */
+    uintptr_t ram;          /* message RAM                                                 */
+    uint32_t tx_dropped;    /* frames refused: TX FIFO full                                */
+    uint32_t rx_lost;       /* RX FIFO 0 overflows seen (frames the controller dropped)    */
+    uint32_t rx_bad;        /* elements taken but not classic CAN (FDF set)                */
+    bool up;                /* init completed                                              */
+};
+typedef struct {
+    uint16_t brp;           /* prescaler 1..512                                            */
+    uint8_t tseg1;          /* time quanta before the sample point (after sync) 2..256     */
+    uint8_t tseg2;          /* after the sample point 1..128                               */
+    uint8_t sjw;            /* 1..tseg2                                                    */
+} am263x_can_timing_t;
+/* Nominal bit timing for bitrate at fclk: 8..25 time quanta per bit, the sample point nearest
+ * 87.5 % (CiA 301), among those an exact divisor; false if none divides exactly. */
+bool am263x_can_bit_timing(uint32_t bitrate, uint32_t fclk_hz, am263x_can_timing_t *t);
+uint32_t am263x_can_nbtp(const am263x_can_timing_t *t);
+/* Message RAM element words of a (valid) frame / of a received element. decode: false for a CAN
+ * FD element (FDF), which this port does not configure. */
+void am263x_can_encode(const hal_can_frame_t *f, uint32_t w[MCAN_ELEM_WORDS]);
+bool am263x_can_decode(const uint32_t w[MCAN_ELEM_WORDS], hal_can_frame_t *f);
+/* Controller configured (message RAM layout in am263x/regs_mcan.h) and started on the bus;
+ * false: no exact bit timing, or the controller did not enter/leave initialisation. */
+bool am263x_can_init(hal_can_t *can, uint32_t bitrate, uint32_t fclk_hz);
+
+/* ---------------------------------------------------------------- NVM (nvm.c) */
+struct hal_nvm {
+    uintptr_t qspi;         /* QSPI0 controller                                            */
+    uintptr_t window;       /* memory-mapped flash window (flash offset 0)                 */
+    uint32_t base;          /* flash offset of block 0                                     */
+    uint32_t busy_polls;    /* QSPI word-complete polls before a transfer counts as failed */
+    uint32_t erase_polls;   /* status reads while an erase runs                            */
+    uint32_t program_polls; /* status reads while a page program runs                      */
+};
+/* 8 blocks of 4 KiB (the flash's sector), written in units of 8 bytes, at flash offset
+ * 0x7F8000..0x7FFFFF: the last 32 KiB of the first 8 MiB, far above the SBL (0x0) and the
+ * application image (0x80000) that TI's flashing tools write. */
+#define AM263X_NVM_BLOCKS      8u
+#define AM263X_NVM_BLOCK_SIZE  4096u
+#define AM263X_NVM_UNIT        8u
+#define AM263X_NVM_FLASH_OFF   0x007F8000u
+void am263x_nvm_init(hal_nvm_t *nvm, uintptr_t qspi, uintptr_t window, uint32_t flash_offset);
+
+/* ---------------------------------------------------------------- VIM + crossbar (vim.c) */
+/* Interrupt `line` as an IRQ (not FIQ), level type, priority prio (0 highest), vector `handler`
+ * (stored word-aligned, see startup.S), its pending state cleared, enabled. */
+void am263x_vim_route(uintptr_t vim, uint32_t line, uint32_t prio, uintptr_t handler);
+/* The line's pending status cleared (a level line: after its source was cleared). */
+void am263x_vim_clear(uintptr_t vim, uint32_t line);
+/* CONTROLSS interrupt crossbar: output `out` = the OR of the sources in group g's mask (the other
+ * groups of that output cleared). */
+void am263x_intxbar_route(uintptr_t xbar, uint32_t out, uint32_t group, uint32_t mask);
+/* Control MMR partition 0 of CONTROLSS_CTRL / TOP_CTRL (KICK0/KICK1). */
+void am263x_mmr_unlock(uintptr_t base);
+void am263x_mmr_lock(uintptr_t base);
+
+/* ---------------------------------------------------------------- board.c */
+/* The ADC end-of-conversion interrupt handler registered in the VIM (called by the IRQ entry of
+ * startup.S): calls the function given to hal_board_attach_isr, then acknowledges the ADC and
+ * the VIM line. */
+void am263x_adc_eoc_isr(void);
+
+#endif

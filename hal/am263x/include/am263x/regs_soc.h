@@ -1,0 +1,77 @@
+/* TI AM263x (R5FSS0 core 0, LP-AM263 LaunchPad): memory map, peripheral base addresses, clocks
+ * and interrupt numbers used by this port.
+ *
+ * Sources of the facts (TI's public MCU+ SDK, mcupsdk-core, read for this port; no SDK code is
+ * used): base addresses from source/drivers/hw_include/am263x/cslr_soc_baseaddress.h (TRM:
+ * "Memory Map"), the R5F interrupt numbers from cslr_intr_r5fss0_core0.h (TRM: "Interrupts",
+ * R5FSS0_CORE0 interrupt map), the interrupt crossbar layout from cslr_controlss_intxbar.h and
+ * soc_xbar.h (TRM: "Control Subsystem, Interrupt XBAR"), the control-MMR lock (KICK0/KICK1) from
+ * source/drivers/soc/am263x/soc.c and cslr_controlss_ctrl.h / cslr_top_ctrl.h (TRM: "Control
+ * Module, Lock/Kick mechanism"). */
+#ifndef AM263X_REGS_SOC_H
+#define AM263X_REGS_SOC_H
+#include <stdint.h>
+
+/* ---- Memories (R5FSS0 core 0 view) */
+#define AM263X_ATCM_BASE        0x00000000u   /* TCM A, 32 KiB: vectors + startup              */
+#define AM263X_ATCM_SIZE        0x00008000u
+#define AM263X_BTCM_BASE        0x00080000u   /* TCM B, 32 KiB: .data, .bss, stacks            */
+#define AM263X_BTCM_SIZE        0x00008000u
+#define AM263X_MSRAM_BASE       0x70000000u   /* on-chip shared RAM (L2OCRAM), 2 MiB           */
+#define AM263X_MSRAM_SIZE       0x00200000u
+/* QSPI flash, memory-mapped read window (CSL_EXT_FLASH0_U_BASE; the controller's window is
+ * 32 MiB up to CSL_EXT_FLASH1_U_BASE). This port maps and uses the first 8 MiB: the LaunchPad's
+ * QSPI NOR part is assumed to be at least 8 MiB (its exact part and size were not verified from
+ * a TI source here). */
+#define AM263X_FLASH_WIN_BASE   0x60000000u
+#define AM263X_FLASH_WIN_SIZE   0x00800000u
+
+/* ---- Peripherals (TRM: Memory Map; each block 4 KiB unless noted) */
+#define AM263X_EPWM_BASE(n)     (0x50000000u + 0x1000u * (uint32_t)(n))  /* CONTROLSS_G0_EPWMn  */
+#define AM263X_ADC_RESULT_BASE(n) (0x50100000u + 0x1000u * (uint32_t)(n)) /* CONTROLSS_ADCn_RESULT */
+#define AM263X_EQEP_BASE(n)     (0x50270000u + 0x1000u * (uint32_t)(n))  /* CONTROLSS_EQEPn      */
+#define AM263X_ADC_BASE(n)      (0x502C0000u + 0x1000u * (uint32_t)(n))  /* CONTROLSS_ADCn       */
+#define AM263X_INTXBAR_BASE     0x502D5000u   /* CONTROLSS_INTXBAR                             */
+#define AM263X_CTRLSS_CTRL_BASE 0x502F0000u   /* CONTROLSS_CTRL (8 KiB: lock at 0x1008)        */
+#define AM263X_TOP_CTRL_BASE    0x50D80000u   /* TOP_CTRL (8 KiB: lock at 0x1008)              */
+#define AM263X_VIM_BASE         0x50F00000u   /* R5FSS0 core 0 VIM (12 KiB: vectors at 0x2000) */
+#define AM263X_RTI_BASE(n)      (0x52180000u + 0x1000u * (uint32_t)(n))  /* RTIn               */
+#define AM263X_MCAN_MSGRAM_BASE(n) (0x52600000u + 0x10000u * (uint32_t)(n)) /* MCANn message RAM */
+#define AM263X_MCAN_CFG_BASE(n) (0x52608000u + 0x10000u * (uint32_t)(n))  /* MCANn MCANSS wrapper;
+                                                                              M_CAN core at +0x200 */
+#define AM263X_QSPI_BASE        0x48200000u   /* QSPI0 controller (TI QSPI, config port)       */
+
+/* ---- Clocks (assumptions: the LaunchPad's defaults as TI's SBL / SOC init GEL leave them) */
+#define AM263X_CPU_HZ           400000000u    /* R5F core clock                                */
+#define AM263X_SYSCLK_HZ        200000000u    /* CONTROLSS SYSCLK = EPWMCLK = eQEP/ADC clock:
+                                                 TI's ePWM examples use 200 MHz (SYSCLK_FREQ)   */
+#define AM263X_EPWMCLK_HZ       AM263X_SYSCLK_HZ
+#define AM263X_MCAN_FCLK_HZ     80000000u     /* MCAN functional clock                         */
+#define AM263X_RTI_CLK_HZ       25000000u     /* RTI input clock: the 25 MHz crystal           */
+
+/* ---- Interrupts. The ADC interrupts reach the R5F through the CONTROLSS interrupt crossbar:
+ * INTXBAR output k (registers INTXBARk_G0..G6, groups: G0 ePWM INT, G1 ePWM TZINT, G2 ADC
+ * INT1..4/EVT) drives R5FSS0_CORE0 interrupt CONTROLSS_INTRXBAR0_OUT_k = 146 + k. */
+#define AM263X_INTXBAR_G(out, g) (0x100u + 0x40u * (uint32_t)(out) + 4u * (uint32_t)(g))
+#define AM263X_INTXBAR_GROUP_ADC 2u
+#define AM263X_INTXBAR_ADC0_INT1 0x00000001u   /* bit in group 2                              */
+#define AM263X_INTXBAR_OUT_ADC   0u            /* the crossbar output this port uses          */
+#define AM263X_IRQ_INTXBAR_OUT0  146u          /* CSLR_R5FSS0_CORE0_CONTROLSS_INTRXBAR0_OUT_0 */
+#define AM263X_IRQ_ADC_EOC       (AM263X_IRQ_INTXBAR_OUT0 + AM263X_INTXBAR_OUT_ADC)
+
+/* ---- Control MMR lock (partition 0 of CONTROLSS_CTRL and TOP_CTRL): writes to the protected
+ * registers need KICK0 then KICK1 written with these values; 0 locks again. */
+#define AM263X_LOCK0_KICK0      0x1008u
+#define AM263X_LOCK0_KICK1      0x100Cu
+#define AM263X_KICK0_UNLOCK     0x01234567u
+#define AM263X_KICK1_UNLOCK     0x0FEDCBA8u
+#define AM263X_KICK_LOCK        0x00000000u
+/* CONTROLSS_CTRL: the ePWM time-base clock enables (one bit per ePWM module): the counters of
+ * the enabled modules start together (the C2000 "TBCLKSYNC"). */
+#define AM263X_CTRLSS_EPWM_CLKSYNC 0x010u
+/* TOP_CTRL: ADC reference buffers (SOC_enableAdcReference: REFBUF0 = 7 for ADC0..2, the
+ * comparator enables 0x7 << 0 for ADC0). */
+#define AM263X_TOP_ADC_REFBUF0_CTRL   0xC00u
+#define AM263X_TOP_ADC_REF_COMP_CTRL  0xC08u
+
+#endif

@@ -1,0 +1,24 @@
+/* Microsecond time base of the AM263x port: RTI0 counter block 0 (am263x/regs_rti.h; TRM: RTI
+ * Counter Operation). RTICLK is assumed to be the 25 MHz crystal (AM263X_RTI_CLK_HZ). */
+#include "am263x/mmio.h"
+#include "am263x/port.h"
+#include "am263x/regs_rti.h"
+
+void am263x_time_init(hal_time_t *t, uint32_t rti_clk_hz)
+{
+    const uintptr_t b = t->rti;
+    am263x_wr32(b + RTI_RTIGCTRL, 0u);          /* counters stopped                      */
+    am263x_wr32(b + RTI_RTITBCTRL, 0u);         /* counter 0 from RTICLK                 */
+    am263x_wr32(b + RTI_RTICAPCTRL, 0u);
+    am263x_wr32(b + RTI_RTICOMPCTRL, 0u);
+    am263x_wr32(b + RTI_RTIUC0, 0u);
+    am263x_wr32(b + RTI_RTIFRC0, 0u);
+    am263x_wr32(b + RTI_RTICPUC0, rti_clk_hz / 1000000u - 1u);   /* FRC0 at 1 MHz         */
+    am263x_wr32(b + RTI_RTIGCTRL, RTI_GCTRL_CNT0EN);
+}
+
+/* ---- hal/time.h */
+uint32_t hal_time_us(const hal_time_t *t)
+{
+    return am263x_rd32(t->rti + RTI_RTIFRC0);
+}

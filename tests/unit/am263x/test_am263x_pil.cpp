@@ -1,0 +1,296 @@
+// The AM263x port's drivers (built for the host with AM263X_MMIO_HOOKS) running against the
+// processor-in-the-loop register model (sim/pil/dev_am263x.cpp): every register access of
+// hal_board_init/_start, the HAL calls and the EOC handler goes to the model's read()/write(), at
+// the real AM263x addresses. Checks that the model and the drivers agree: the programmed period
+// and dead band, the trip as outputs off, shadowed duties latched at the period boundary, the ADC
+// conversion and its interrupt through the crossbar and the VIM (IRQVEC = the registered handler,
+// acknowledged), the overrun flag, the encoder sample, the time base, the NVM through the QSPI
+// model onto the flash window, a CAN frame queued.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "peripherals.hpp"
+
+extern "C" {
+#include "hal/board.h"
+#include "am263x/port.h"
+#include "am263x/regs_soc.h"
+#include "am263x/regs_vim.h"
+}
+
+namespace {
+
+mcsim::pil::Peripherals* g_model = nullptr;
+std::vector<uint8_t> g_flash;
+int g_outside = 0;   // accesses outside every window and memory: a driver/model mismatch
+
+bool in_flash(uintptr_t a) { return a >= AM263X_FLASH_WIN_BASE && a < AM263X_FLASH_WIN_BASE + AM263X_FLASH_WIN_SIZE; }
+
+bool in_window(uintptr_t a, unsigned size)
+{
+    for (const auto& w : g_model->windows())
+        if (a >= w.base && a + size <= w.base + w.size) return true;
+    return false;
+}
+
+}  // namespace
+
+extern "C" uint32_t am263x_mmio_read(uintptr_t a, unsigned size)
+{
+    if (in_flash(a)) {
+        uint32_t v = 0;
+        std::memcpy(&v, &g_flash[a - AM263X_FLASH_WIN_BASE], size);
+        return v;
+    }
+    if (!in_window(a, size)) {
+        ++g_outside;
+        return 0;
+    }
+    return static_cast<uint32_t>(g_model->read(a, size));
+}
+
+extern "C" void am263x_mmio_write(uintptr_t a, unsigned size, uint32_t v)
+{
+    if (!in_window(a, size)) {
+        ++g_outside;
+        return;
+    }
+    g_model->write(a, size, v);
+}
+
+namespace {
+
+struct IsrLog {
+    int calls = 0;
+    hal_adc_sample_t adc{};
+    hal_qep_sample_t qep{};
+    uint32_t t = 0;
+    hal_board_t* board = nullptr;
+};
+
+void control_isr(void* ctx)
+{
+    auto* l = static_cast<IsrLog*>(ctx);
+    ++l->calls;
+    hal_adc_read(l->board->adc, &l->adc);
+    hal_qep_read(l->board->qep, &l->qep);
+    l->t = hal_time_us(l->board->time);
+}
+
+// What startup.S's IRQ entry does: IRQVEC, call, acknowledge.
+void take_irq(mcsim::pil::Peripherals& m)
+{
+    const uint32_t vec = static_cast<uint32_t>(m.read(AM263X_VIM_BASE + VIM_IRQVEC, 4));
+    ASSERT_EQ(vec, static_cast<uint32_t>(reinterpret_cast<uintptr_t>(&am263x_adc_eoc_isr)) & ~3u);
+    am263x_adc_eoc_isr();
+    m.write(AM263X_VIM_BASE + VIM_IRQVEC, 4, vec);
+}
+
+class Am263xPil : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        model = mcsim::pil::make_am263x_peripherals();
+        g_model = model.get();
+        g_flash.assign(AM263X_FLASH_WIN_SIZE, 0x5A);
+        g_outside = 0;
+        model->bind_memory(
+            [](uint32_t addr, const void* d, size_t n) { std::memcpy(&g_flash[addr - AM263X_FLASH_WIN_BASE], d, n); },
+            [](uint32_t addr, void* d, size_t n) { std::memcpy(d, &g_flash[addr - AM263X_FLASH_WIN_BASE], n); });
+        cfg.f_pwm_hz = 20000.0f;
+        cfg.dead_time_s = 1e-6f;
+        cfg.adc_ch_i[0] = 0;
+        cfg.adc_ch_i[1] = 1;
+        cfg.adc_ch_i[2] = 2;
+        cfg.adc_ch_vdc = 3;
+        cfg.qep_counts_per_rev = 4000;
+        cfg.can_bitrate = 500000;
+    }
+    void TearDown() override
+    {
+        EXPECT_EQ(g_outside, 0);
+        g_model = nullptr;
+    }
+    std::unique_ptr<mcsim::pil::Peripherals> model;
+    hal_board_cfg_t cfg{};
+    hal_board_t board{};
+};
+
+TEST_F(Am263xPil, MemoryMapAndWindows)
+{
+    const auto mem = model->memories();
+    ASSERT_EQ(mem.size(), 4u);
+    EXPECT_EQ(mem[0].base, 0x0u);
+    EXPECT_EQ(mem[0].size, 32u * 1024u);
+    EXPECT_EQ(mem[1].base, 0x80000u);
+    EXPECT_EQ(mem[2].base, 0x70000000u);
+    EXPECT_EQ(mem[2].size, 2u * 1024u * 1024u);
+    EXPECT_EQ(mem[3].base, 0x60000000u);
+    for (const auto& w : model->windows()) {
+        EXPECT_EQ(w.base % 4096u, 0u) << w.name;
+        EXPECT_EQ(w.size % 4096u, 0u) << w.name;
+    }
+    const auto wins = model->windows();
+    for (size_t i = 0; i < wins.size(); ++i) {
+        for (size_t j = i + 1; j < wins.size(); ++j) {
+            const auto &w = wins[i], &v = wins[j];
+            EXPECT_TRUE(w.base + w.size <= v.base || v.base + v.size <= w.base) << w.name << " " << v.name;
+        }
+    }
+}
+
+TEST_F(Am263xPil, BootRunsAndInterrupts)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    EXPECT_NEAR(model->pwm_period_s(), 50e-6, 1e-12);
+    EXPECT_NEAR(model->dead_time_s(), 1e-6, 1e-12);
+    EXPECT_NEAR(hal_pwm_period_s(board.pwm), 50e-6, 1e-10);   // float
+    EXPECT_FALSE(model->outputs().enabled);
+    EXPECT_FALSE(hal_pwm_enabled(board.pwm));
+    IsrLog log;
+    log.board = &board;
+    hal_board_attach_isr(control_isr, &log);
+
+    mcsim::pil::PeriphInputs in;
+    in.adc_i[0] = 100;
+    in.adc_i[1] = 200;
+    in.adc_i[2] = 300;
+    in.adc_vdc = 2000;
+    in.qep_count = 1234;
+    in.qep_index_seen = true;
+    in.qep_index_count = 17;
+    in.time_us = 555;
+    model->period_boundary(in);   // not started: no conversion, no interrupt
+    EXPECT_FALSE(model->irq_pending());
+
+    hal_board_start();
+    EXPECT_FALSE(model->irq_pending());
+    EXPECT_FALSE(model->outputs().enabled);   // running, still tripped
+    hal_pwm_set_duties(board.pwm, 0.2f, 0.5f, 0.9f);
+    hal_pwm_enable(board.pwm, true);
+    EXPECT_TRUE(hal_pwm_enabled(board.pwm));
+    auto pend = model->pending_outputs();
+    EXPECT_NEAR(pend.duty[0], 0.2, 1e-3);
+    EXPECT_NEAR(pend.duty[2], 0.9, 1e-3);
+    auto now = model->outputs();
+    EXPECT_TRUE(now.enabled);
+    EXPECT_NEAR(now.duty[0], 0.0, 1e-9);   // nothing latched yet: the counters just started
+
+    in.time_us = 1000;
+    model->period_boundary(in);
+    now = model->outputs();
+    EXPECT_NEAR(now.duty[0], 0.2, 1e-3);
+    EXPECT_NEAR(now.duty[1], 0.5, 1e-3);
+    EXPECT_NEAR(now.duty[2], 0.9, 1e-3);
+    ASSERT_TRUE(model->irq_pending());
+    EXPECT_EQ(model->irq_vector(), static_cast<uint32_t>(reinterpret_cast<uintptr_t>(&am263x_adc_eoc_isr)) & ~3u);
+    take_irq(*model);
+    EXPECT_FALSE(model->irq_pending());
+    EXPECT_EQ(log.calls, 1);
+    EXPECT_EQ(log.adc.i[0], 100);
+    EXPECT_EQ(log.adc.i[1], 200);
+    EXPECT_EQ(log.adc.i[2], 300);
+    EXPECT_EQ(log.adc.vdc, 2000);
+    EXPECT_FALSE(log.adc.overrun);
+    EXPECT_EQ(log.qep.count, 1234u);
+    EXPECT_TRUE(log.qep.index_seen);
+    EXPECT_EQ(log.qep.index_count, 17u);
+    EXPECT_EQ(log.t, 1000u);
+
+    // a period whose interrupt is not taken: the next sample reports the overrun
+    in.time_us = 1050;
+    model->period_boundary(in);
+    in.time_us = 1100;
+    in.adc_i[0] = 111;
+    model->period_boundary(in);
+    take_irq(*model);
+    EXPECT_EQ(log.calls, 2);
+    EXPECT_TRUE(log.adc.overrun);
+    EXPECT_EQ(log.adc.i[0], 111);
+    in.time_us = 1150;
+    model->period_boundary(in);
+    take_irq(*model);
+    EXPECT_FALSE(log.adc.overrun);   // cleared by the read
+    in.adc_overrun = true;           // fault injection
+    model->period_boundary(in);
+    take_irq(*model);
+    EXPECT_TRUE(log.adc.overrun);
+
+    // outputs off at once, without a boundary
+    hal_pwm_enable(board.pwm, false);
+    EXPECT_FALSE(model->outputs().enabled);
+    EXPECT_FALSE(hal_pwm_enabled(board.pwm));
+}
+
+TEST_F(Am263xPil, ReinitKeepsOutputsOff)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    hal_board_start();
+    hal_pwm_enable(board.pwm, true);
+    EXPECT_TRUE(model->outputs().enabled);
+    cfg.f_pwm_hz = 10000.0f;
+    cfg.dead_time_s = 2e-6f;
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    EXPECT_FALSE(model->outputs().enabled);
+    EXPECT_NEAR(model->pwm_period_s(), 100e-6, 1e-12);
+    EXPECT_NEAR(model->dead_time_s(), 2e-6, 1e-12);
+    cfg.f_pwm_hz = 500.0f;   // TBPRD 200000: refused, outputs off
+    EXPECT_FALSE(hal_board_init(&cfg, &board));
+    EXPECT_FALSE(model->outputs().enabled);
+}
+
+TEST_F(Am263xPil, EncoderSpeedFromTheModel)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    hal_board_start();
+    mcsim::pil::PeriphInputs in;
+    am263x_qep_speed_t sp{};
+    // 20 counts per 50 us period = 400000 counts/s; the unit timer (1 ms) latches every 20 periods
+    int polls = 0;
+    for (int k = 1; k <= 60; ++k) {
+        in.time_us = 50u * static_cast<uint32_t>(k);
+        in.qep_count = (20u * static_cast<uint32_t>(k)) % 4000u;
+        model->period_boundary(in);
+        if (am263x_qep_poll_speed(board.qep, &sp)) ++polls;
+    }
+    EXPECT_EQ(polls, 3);
+    EXPECT_NEAR(sp.unit_cps, 400000.0, 1.0);
+    EXPECT_TRUE(sp.capture_valid);
+    // 4 counts per 10 us = 15.625 capture ticks, latched as 16: 390625 counts/s
+    EXPECT_NEAR(sp.capture_cps, 400000.0, 0.03 * 400000.0);
+}
+
+TEST_F(Am263xPil, NvmThroughTheQspiModel)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    ASSERT_TRUE(hal_nvm_erase(board.nvm, 5));
+    const uint32_t base = AM263X_NVM_FLASH_OFF + 5u * 4096u;
+    for (uint32_t k = 0; k < 4096; ++k) ASSERT_EQ(g_flash[base + k], 0xFF);
+    EXPECT_EQ(g_flash[base - 1], 0x5A);
+    uint8_t d[16];
+    for (int k = 0; k < 16; ++k) d[k] = static_cast<uint8_t>(0xA0 + k);
+    ASSERT_TRUE(hal_nvm_write(board.nvm, 5, 32, d, 16));
+    uint8_t e[8] = {0x0F, 0x0F, 0x0F, 0x0F, 0xFF, 0xFF, 0xFF, 0xFF};
+    ASSERT_TRUE(hal_nvm_write(board.nvm, 5, 32, e, 8));   // AND: only clears bits
+    uint8_t back[16];
+    ASSERT_TRUE(hal_nvm_read(board.nvm, 5, 32, back, 16));
+    for (int k = 0; k < 16; ++k) EXPECT_EQ(back[k], k < 4 ? (d[k] & 0x0F) : d[k]) << k;
+}
+
+TEST_F(Am263xPil, CanFrameQueued)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    EXPECT_EQ(hal_can_state(board.can), HAL_CAN_ERROR_ACTIVE);
+    hal_can_frame_t f{};
+    f.id = 0x701;
+    f.dlc = 1;
+    f.data[0] = 0x05;
+    for (int k = 0; k < 20; ++k) EXPECT_TRUE(hal_can_send(board.can, &f));   // the model sends at once
+    hal_can_frame_t r;
+    EXPECT_FALSE(hal_can_receive(board.can, &r));
+}
+
+}  // namespace
