@@ -16,7 +16,7 @@ struct hal_nvm { uintptr_t flc; uint32_t base; };
 #define REG(b, off) (*(volatile uint32_t *)((b) + (off)))
 
 /* The name the PIL picks this port's peripheral model by. */
-const char hal_port_name[] = "generic";
+__attribute__((used, section(".rodata.hal_port_name"))) const char hal_port_name[] = "generic";
 /* Stage marker (hal/stage.h): the PIL watches stores to it. */
 volatile uint32_t hal_stage_reg;
 

@@ -12,13 +12,32 @@ void hal_host_pwm_init(hal_pwm_t *pwm, float period_s, float dead_time_s)
     }
     pwm->enabled = false;
     pwm->writes = 0u;
+    pwm->nonfinite = 0u;
+    pwm->counts = 0u;
+    pwm->off_time = false;
+}
+
+void hal_host_pwm_set_counts(hal_pwm_t *pwm, uint32_t counts, bool off_time)
+{
+    pwm->counts = counts;
+    pwm->off_time = off_time;
+    for (int k = 0; k < 3; ++k) {
+        pwm->cmp_shadow[k] = pwm->cmp_active[k] = off_time ? counts - counts / 2u : counts / 2u;
+    }
 }
 
 void hal_host_pwm_latch(hal_pwm_t *pwm)
 {
     for (int k = 0; k < 3; ++k) {
         pwm->active[k] = pwm->shadow[k];
+        pwm->cmp_active[k] = pwm->cmp_shadow[k];
     }
+}
+
+static uint32_t compare(const hal_pwm_t *pwm, float d)
+{
+    const float n = (float)pwm->counts;
+    return pwm->off_time ? (uint32_t)roundf((1.0f - d) * n) : (uint32_t)lroundf(d * n);
 }
 
 /* A NaN compares false both ways, so a plain clamp would pass it on: it becomes 50 % (zero
@@ -40,6 +59,11 @@ void hal_pwm_set_duties(hal_pwm_t *pwm, float da, float db, float dc)
     pwm->shadow[0] = clamp01(pwm, da);
     pwm->shadow[1] = clamp01(pwm, db);
     pwm->shadow[2] = clamp01(pwm, dc);
+    if (pwm->counts > 0u) {
+        for (int k = 0; k < 3; ++k) {
+            pwm->cmp_shadow[k] = compare(pwm, pwm->shadow[k]);
+        }
+    }
     pwm->writes++;
 }
 

@@ -1,4 +1,5 @@
 // The firmware on the host HAL port (drive_target.hpp).
+#include <algorithm>
 #include <stdexcept>
 
 #include "drive_target.hpp"
@@ -17,13 +18,13 @@ public:
     {
         hal_host_pwm_init(&pwm_, static_cast<float>(ts), static_cast<float>(sc.f("inverter.dead_time_s")));
         qep_.counts_per_rev = 4u * static_cast<uint32_t>(sc.i("sensors.encoder_lines"));
+        if (sc.i("inverter.pwm_counts") > 0)
+            hal_host_pwm_set_counts(&pwm_, static_cast<uint32_t>(sc.i("inverter.pwm_counts")),
+                                    sc.s("inverter.pwm_compare") == "off_time");
         if (!mc_drive_init(drive_.get(), link_.get(), &ds.cfg, &adc_, &pwm_, &qep_))
             throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive_.get())));
     }
-    PwmOut pending() const override
-    {
-        return {{pwm_.shadow[0], pwm_.shadow[1], pwm_.shadow[2]}, pwm_.enabled};
-    }
+    PwmOut pending() const override { return duties(pwm_.shadow, pwm_.cmp_shadow); }
     void boundary(const DriveInputs& in) override
     {
         hal_host_pwm_latch(&pwm_);
@@ -46,12 +47,24 @@ public:
         if (!mc_drive_telemetry_read(drive_.get(), &tm)) throw std::runtime_error("telemetry: no consistent snapshot");
         return tm;
     }
-    PwmOut outputs() const override
-    {
-        return {{pwm_.active[0], pwm_.active[1], pwm_.active[2]}, pwm_.enabled};
-    }
+    PwmOut outputs() const override { return duties(pwm_.active, pwm_.cmp_active); }
 
 private:
+    // The duties the inverter applies: as written, or from the compare counts (in double, as a
+    // PIL port model turns its compare registers into an on-fraction).
+    PwmOut duties(const float* d, const uint32_t* cmp) const
+    {
+        PwmOut o;
+        o.enabled = pwm_.enabled;
+        const double n = pwm_.counts;
+        for (int k = 0; k < 3; ++k) {
+            if (pwm_.counts == 0) o.duty[k] = d[k];
+            else if (pwm_.off_time) o.duty[k] = (n - std::min<double>(cmp[k], n)) / n;
+            else o.duty[k] = std::min(std::max(static_cast<double>(cmp[k]) / n, 0.0), 1.0);
+        }
+        return o;
+    }
+
     hal_pwm_t pwm_{};
     hal_adc_t adc_{};
     hal_qep_t qep_{};

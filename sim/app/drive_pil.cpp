@@ -164,6 +164,8 @@ public:
         m.emplace_back("pil_image", json_string(elf_));
         m.emplace_back("pil_core", json_string(t_->core() == pil::Core::CortexM4F ? "cortex-m4f" : "cortex-r5f"));
         m.emplace_back("pil_port", json_string(t_->port()));
+        m.emplace_back("pil_pwm_counts", std::to_string(t_->peripherals().pwm_counts()));
+        m.emplace_back("pil_pwm_compare", json_string(t_->peripherals().pwm_off_time() ? "off_time" : "on_time"));
         m.emplace_back("isr_cycles_mean", json_number(all_.mean()));
         m.emplace_back("isr_cycles_max", json_number(all_.max));
         m.emplace_back("isr_instructions_mean", json_number(instr_.mean()));

@@ -40,6 +40,8 @@ const std::vector<KeySpec>& scenario_schema()
     {"inverter.vdc_ripple_hz", KeyType::Float, "300.0", nullptr, 0, 100000, "Hz", "", "DC-link ripple frequency (300 Hz: a six-pulse rectifier on 50 Hz mains)."},
     {"inverter.dead_time_s", KeyType::Float, "0.5e-6", "0.0", 0, 10e-6, "s", "", "Dead time per commutation.", nullptr, "2e-6"},
     {"inverter.device_drop_v", KeyType::Float, "0.0", nullptr, 0, 10, "V", "", "Device on-state drop.", nullptr, "1.0"},
+    {"inverter.pwm_counts", KeyType::Int, "0", nullptr, 0, 65535, "counts", "", "Compare resolution of the host build's modulator: 0 ideal (the firmware's duties as computed); N: each duty becomes a whole number of counts of a half period of N counts, as a timer compare does (a --pil run: the image's own timer does it; check_pil.py sets this to the port's, e.g. 5000 generic, 10000 AM263x at 10 kHz)."},
+    {"inverter.pwm_compare", KeyType::Enum, "\"on_time\"", nullptr, 0, 0, "", "on_time|off_time", "With inverter.pwm_counts: the compare value counts the high side's on-time (round(d N), the generic port) or its off-time (N - round((1 - d) N), the AM263x ePWM)."},
     {"inverter.integrator", KeyType::Enum, "\"taylor\"", nullptr, 0, 0, "", "taylor|hermite|rk4",
      "Plant integration (docs/plant.md): taylor: the period in one pass with the current map expanded to second order about mid-period, exact at the period end (tables go edge by edge with Hermite); hermite: one model evaluation per switching interval (the most exact); classical RK4 (reference)."},
 

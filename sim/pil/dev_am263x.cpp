@@ -236,6 +236,14 @@ public:
         return 2.0 * static_cast<double>(get(kEpwm, EPWM_TBPRD, 2)) / static_cast<double>(AM263X_EPWMCLK_HZ);
     }
 
+    uint32_t pwm_counts() const override { return get(kEpwm, EPWM_TBPRD, 2); }
+    bool pwm_off_time() const override
+    {
+        // A set at CMPA going up, cleared going down: on while TBCTR > CMPA, CMPA counts the off-time
+        const uint32_t aq = get(kEpwm, EPWM_AQCTLA, 2);
+        return ((aq >> EPWM_AQ_CAU_SHIFT) & 3u) == EPWM_AQ_SET && ((aq >> EPWM_AQ_CAD_SHIFT) & 3u) == EPWM_AQ_CLEAR;
+    }
+
     double dead_time_s() const override
     {
         if ((get(kEpwm, EPWM_DBCTL, 2) & 0x3u) != 0x3u) return 0.0;

@@ -68,6 +68,11 @@ public:
     // PWM period and dead time as programmed [s] (for the report and the host-vs-PIL check).
     virtual double pwm_period_s() const = 0;
     virtual double dead_time_s() const = 0;
+    // The compare resolution as programmed: duties are whole counts of a half period of
+    // pwm_counts() (0: unknown), the compare value counting the high side's off-time when
+    // pwm_off_time() (the host build mimics it: scenario keys inverter.pwm_counts / pwm_compare).
+    virtual uint32_t pwm_counts() const { return 0; }
+    virtual bool pwm_off_time() const { return false; }
 };
 
 std::unique_ptr<Peripherals> make_generic_peripherals();   // hal/generic (Cortex-M4F image)

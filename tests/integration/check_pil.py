@@ -48,8 +48,12 @@ def main():
     a = ap.parse_args()
     if not os.path.exists(a.image):
         sys.exit(f"check_pil: image {a.image} not found (the host build cross-builds it: MC_BUILD_IMAGES)")
-    mh, th = run(a.mcsim, a.scenario, os.path.join(a.out, "host"), a.set)
+    # The image's timer quantises the duties; the host build does the same with the port's
+    # compare resolution (reported by the PIL run), so both drive the plant with equal duties.
     mp, tp = run(a.mcsim, a.scenario, os.path.join(a.out, "pil"), a.set, a.image)
+    host_sets = a.set + [f"inverter.pwm_counts={mp['pil_pwm_counts']}",
+                         f"inverter.pwm_compare=\"{mp['pil_pwm_compare']}\""]
+    mh, th = run(a.mcsim, a.scenario, os.path.join(a.out, "host"), host_sets)
     bad = []
     if len(th) != len(tp):
         bad.append(f"trace lengths differ: host {len(th)}, pil {len(tp)}")

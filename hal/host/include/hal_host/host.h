@@ -20,6 +20,9 @@ struct hal_pwm {
     uint32_t writes;    /* number of duty writes (diagnostics)            */
     uint32_t nonfinite; /* duties that arrived as NaN or infinite (a firmware bug: the drive
                            checks before it writes; the port still never passes one on) */
+    uint32_t counts;    /* compare resolution: 0 ideal, N: duties in whole counts of N        */
+    bool off_time;      /* the compare counts the off-time (N - round((1 - d) N))             */
+    uint32_t cmp_shadow[3], cmp_active[3];   /* the compare values when counts > 0            */
 };
 
 struct hal_adc {
@@ -62,6 +65,10 @@ struct hal_nvm {
 };
 
 void hal_host_pwm_init(hal_pwm_t *pwm, float period_s, float dead_time_s);
+/* Quantise duties as a timer's compare register does (counts = 0: ideal), computed in float as
+ * the target ports compute their compare values, so that the host build and a PIL image get the
+ * same duties: on_time: round(d N) (hal/generic); off_time: round((1 - d) N) (hal/am263x ePWM). */
+void hal_host_pwm_set_counts(hal_pwm_t *pwm, uint32_t counts, bool off_time);
 void hal_host_can_init(hal_can_t *can);
 /* bus -> controller: false when the frame is invalid or the RX ring is full (counted) */
 bool hal_host_can_deliver(hal_can_t *can, const hal_can_frame_t *f);
