@@ -80,6 +80,19 @@ public:
             throw std::runtime_error("pil: the configuration does not fit the image's configuration area");
         t_->write(t_->symbol("mc_config_area"), area.data(), area.size());
         mon_ = t_->symbol("mc_monitor");
+        // The stack is not initialised by the startup code: painted here, its high-water mark
+        // is read at the end (the RAM budget counts the stack as sized, this says how much of it
+        // the boot, the ISR and the background ever used).
+        if (t_->has_symbol("__mc_stack_bottom") && t_->has_symbol("__mc_stack_top")) {
+            stack_lo_ = t_->symbol("__mc_stack_bottom");
+            stack_hi_ = t_->symbol("__mc_stack_top");
+            if (stack_hi_ > stack_lo_ && stack_hi_ - stack_lo_ <= (1u << 20)) {
+                const std::vector<uint8_t> paint(stack_hi_ - stack_lo_, kPaint);
+                t_->write(stack_lo_, paint.data(), paint.size());
+            } else {
+                stack_lo_ = stack_hi_ = 0;
+            }
+        }
         t_->reset_and_run_to_idle(kBootBudget);
         const uint32_t magic = word(offsetof(mc_monitor_t, magic));
         const uint32_t boot = word(offsetof(mc_monitor_t, boot));
@@ -166,6 +179,14 @@ public:
         m.emplace_back("pil_port", json_string(t_->port()));
         m.emplace_back("pil_pwm_counts", std::to_string(t_->peripherals().pwm_counts()));
         m.emplace_back("pil_pwm_compare", json_string(t_->peripherals().pwm_off_time() ? "off_time" : "on_time"));
+        if (stack_hi_ > stack_lo_) {
+            std::vector<uint8_t> st(stack_hi_ - stack_lo_);
+            t_->read(stack_lo_, st.data(), st.size());
+            size_t untouched = 0;
+            while (untouched < st.size() && st[untouched] == kPaint) ++untouched;
+            m.emplace_back("stack_size_bytes", std::to_string(st.size()));
+            m.emplace_back("stack_used_bytes", std::to_string(st.size() - untouched));
+        }
         m.emplace_back("isr_cycles_mean", json_number(all_.mean()));
         m.emplace_back("isr_cycles_max", json_number(all_.max));
         m.emplace_back("isr_instructions_mean", json_number(instr_.mean()));
@@ -195,6 +216,8 @@ private:
     std::string elf_;
     std::unique_ptr<pil::Target> t_;
     uint32_t mon_ = 0, cmd_seq_ = 0;
+    uint32_t stack_lo_ = 0, stack_hi_ = 0;
+    static constexpr uint8_t kPaint = 0xA5;
     pil::IsrCost last_;
     bool have_last_ = false;
     Stats all_, run_, instr_, stage_[HAL_STAGE_COUNT];

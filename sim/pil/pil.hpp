@@ -28,6 +28,29 @@ struct StageCycles {
     double cycles = 0;
 };
 
+// Memory contents for Target::create: bytes at an address.
+struct Segment {
+    uint32_t addr = 0;
+    std::vector<uint8_t> bytes;
+};
+
+// One decoded instruction with the cycle model's cost (Target::explain).
+struct InsnCost {
+    uint32_t addr = 0;
+    uint8_t size = 0;
+    std::string text;       // "vdiv.f32 s0, s1, s2"
+    const char* cls = "";   // the timing-table row
+    double cycles = 0;
+};
+
+// Where the ISRs' cycles went, by function (Target::profile).
+struct ProfileEntry {
+    std::string function;   // the ELF symbol (STT_FUNC) holding the code, or "0x..." without one
+    uint32_t addr = 0;      // its start
+    uint64_t instructions = 0;
+    double cycles = 0;      // the instructions' and branch penalties (entry/exit/lazy FP excluded)
+};
+
 // One control ISR, as the cycle model saw it.
 struct IsrCost {
     uint64_t instructions = 0;
@@ -65,6 +88,37 @@ public:
     virtual bool take_irq(IsrCost* cost, uint64_t max_instructions) = 0;
 
     virtual Peripherals& peripherals() = 0;
+
+    // ---- additions (tests, tools, reports); the declarations above are the engine's contract
+
+    // A core with the given peripherals and memory contents but no ELF: for tests and tools that
+    // run machine code directly. The peripherals' memories and windows are mapped as for load();
+    // no vector table or port checks. The stage marker is unset (set_stage_marker).
+    static std::unique_ptr<Target> create(Core core, std::unique_ptr<Peripherals> periph,
+                                          const std::vector<Segment>& contents, const std::string& port = "synthetic");
+    // Run from `entry` (bit 0 set: Thumb state) with SP = `sp` (0: as it is) until the core
+    // executes a WFI, at most max_instructions; the cost as an ISR body (the instructions' cycles
+    // and branch penalties, stage split by the marker; no interrupt entry or exit).
+    virtual IsrCost run_counted(uint32_t entry, uint32_t sp, uint64_t max_instructions) = 0;
+    // Address of the 32-bit stage marker (load(): the image's hal_stage_reg, if it has one).
+    virtual void set_stage_marker(uint32_t addr) = 0;
+    // A core register: 0..12 r0-r12, 13 SP, 14 LR, 15 PC, 16 CPSR (R5F) / xPSR (M4F), 17 SPSR (R5F),
+    // 18 CONTROL (M4F).
+    virtual uint32_t reg(unsigned n) = 0;
+    // Everything the cycle model counted since load (ISRs and background), and the ISRs alone.
+    virtual StageCycles total() const = 0;
+    virtual StageCycles isr_total() const = 0;
+    // Remarks of the loader, e.g. the core told from the vector table for lack of build attributes.
+    virtual std::vector<std::string> notes() const = 0;
+    // The cycle model's view of code: each instruction in [addr, addr + size) with its class and
+    // cost (branch penalties excluded), in the given state (thumb true: Thumb).
+    virtual std::vector<InsnCost> explain(uint32_t addr, uint32_t size, bool thumb) = 0;
+    // The timing table in use ("Cortex-M4F", "Cortex-R5F").
+    virtual const char* timing_name() const = 0;
+    // Profiling of the ISRs by function (off by default): cleared when switched on; profile()
+    // sorted by cycles, largest first.
+    virtual void enable_profile(bool on) = 0;
+    virtual std::vector<ProfileEntry> profile() const = 0;
 };
 
 }  // namespace mcsim::pil
