@@ -61,7 +61,7 @@ struct Stats {
 
 class PilDrive final : public DriveTarget {
 public:
-    PilDrive(const std::string& elf, const DriveSetup& ds, double ts) : elf_(elf)
+    PilDrive(const std::string& elf, const DriveSetup& ds, double ts) : elf_(elf), ts_(ts)
     {
         try {
             t_ = pil::Target::load(elf);
@@ -94,6 +94,7 @@ public:
             }
         }
         t_->reset_and_run_to_idle(kBootBudget);
+        t_->enable_profile(true);   // the ISRs' cycles by function, for the report
         const uint32_t magic = word(offsetof(mc_monitor_t, magic));
         const uint32_t boot = word(offsetof(mc_monitor_t, boot));
         if (magic != MC_MONITOR_MAGIC || word(offsetof(mc_monitor_t, version)) != MC_MONITOR_VERSION)
@@ -150,6 +151,7 @@ public:
         }
         t_->run_background_to_idle(kBackgroundBudget);   // telemetry, background work
         last_ = c;
+        last_k_ = k;
         have_last_ = true;
     }
     mc_drive_telem_t telemetry() override
@@ -160,6 +162,11 @@ public:
         mc_monitor_unpack_telem(w, &tm);
         if (have_last_) {   // the ISR's cost, by the state it ran in
             have_last_ = false;
+            if (last_.cycles > all_.max) {
+                max_k_ = last_k_;
+                max_state_ = tm.state;
+                max_iters_ = tm.est_iters;
+            }
             all_.add(last_.cycles);
             instr_.add(static_cast<double>(last_.instructions));
             if (tm.state == MC_STATE_RUN) {
@@ -189,6 +196,9 @@ public:
         }
         m.emplace_back("isr_cycles_mean", json_number(all_.mean()));
         m.emplace_back("isr_cycles_max", json_number(all_.max));
+        m.emplace_back("isr_cycles_max_at_s", json_number(static_cast<double>(max_k_) * ts_));
+        m.emplace_back("isr_cycles_max_state", std::to_string(static_cast<int>(max_state_)));
+        m.emplace_back("isr_cycles_max_newton_iters", std::to_string(max_iters_));
         m.emplace_back("isr_instructions_mean", json_number(instr_.mean()));
         m.emplace_back("isr_instructions_max", json_number(instr_.max));
         m.emplace_back("isr_cycles_mean_run", json_number(run_.mean()));
@@ -199,6 +209,17 @@ public:
             mean += sep + json_string(kStageNames[s]) + ": " + json_number(stage_[s].mean());
             max += sep + json_string(kStageNames[s]) + ": " + json_number(stage_[s].max);
         }
+        // where the cycles go: the functions (self time) taking the most, per ISR on average
+        const std::vector<pil::ProfileEntry> prof = t_->profile();
+        double total = 0;
+        for (const auto& e : prof) total += e.cycles;
+        std::string top = "[";
+        for (size_t k = 0; k < prof.size() && k < 15; ++k) {
+            top += std::string(k > 0 ? ", " : "") + "{\"function\": " + json_string(prof[k].function) +
+                   ", \"cycles_per_isr\": " + json_number(all_.n > 0 ? prof[k].cycles / all_.n : 0.0) +
+                   ", \"share\": " + json_number(total > 0 ? prof[k].cycles / total : 0.0) + "}";
+        }
+        m.emplace_back("isr_profile_top", top + "]");
         m.emplace_back("isr_stage_cycles_mean_run", mean + "}");
         m.emplace_back("isr_stage_cycles_max_run", max + "}");
         return m;
@@ -220,6 +241,10 @@ private:
     static constexpr uint8_t kPaint = 0xA5;
     pil::IsrCost last_;
     bool have_last_ = false;
+    long last_k_ = 0, max_k_ = 0;
+    mc_state_t max_state_ = MC_STATE_IDLE;
+    int max_iters_ = 0;
+    double ts_ = 0;
     Stats all_, run_, instr_, stage_[HAL_STAGE_COUNT];
 };
 
