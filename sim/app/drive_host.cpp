@@ -21,6 +21,7 @@ public:
         if (sc.i("inverter.pwm_counts") > 0)
             hal_host_pwm_set_counts(&pwm_, static_cast<uint32_t>(sc.i("inverter.pwm_counts")),
                                     sc.s("inverter.pwm_compare") == "off_time");
+        hal_host_can_init(&can_);
         if (!mc_drive_init(drive_.get(), link_.get(), &ds.cfg, &adc_, &pwm_, &qep_))
             throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive_.get())));
     }
@@ -36,6 +37,7 @@ public:
         qep_.sample.index_count = in.qep_index_count;
     }
     void command(const mc_drive_cmd_t& cmd) override { mc_drive_command(drive_.get(), &cmd); }
+    hal_can_t* can() override { return &can_; }
     void isr(long k) override
     {
         mc_drive_isr(drive_.get());
@@ -66,6 +68,7 @@ private:
     }
 
     hal_pwm_t pwm_{};
+    hal_can_t can_{};
     hal_adc_t adc_{};
     hal_qep_t qep_{};
     std::unique_ptr<mc_drive_t> drive_ = std::make_unique<mc_drive_t>();

@@ -11,6 +11,7 @@
 #include "drive_setup.hpp"
 
 extern "C" {
+#include "hal/can.h"
 #include "mc/drive.h"
 }
 
@@ -47,6 +48,9 @@ public:
     virtual mc_drive_telem_t telemetry() = 0;
     // The duties in force over the period just started, and the enable.
     virtual PwmOut outputs() const = 0;
+    // The drive's CAN controller (the host port's rings), or nullptr where the target has none
+    // the simulator can reach.
+    virtual hal_can_t* can() { return nullptr; }
     // Extra metrics of this target (the PIL's cycle figures), as JSON fields.
     virtual std::vector<std::pair<std::string, std::string>> metrics() const { return {}; }
 };

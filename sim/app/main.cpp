@@ -1,5 +1,6 @@
 // mcsim: scenario runner CLI.
 //   mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet] [--pil IMAGE.elf]
+//             [--can socketcand:HOST:PORT | socketcan:IFACE] [--realtime[=SCALE]]
 //   mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]
 //   mcsim keys                      (the scenario key table, markdown)
 //   mcsim params                    (the firmware's parameter table, markdown)
@@ -48,6 +49,9 @@ double ns_per_call(F f)
 
 const char* kUsage =
     "usage: mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet] [--pil IMAGE.elf]\n"
+    "                 [--can socketcand:HOST:PORT | socketcan:IFACE] [--realtime[=SCALE]]\n"
+    "         --can socketcand:HOST:PORT | socketcan:IFACE: the drive on a CAN bus (python-can reaches it)\n"
+    "         --realtime[=SCALE]: pace simulated time to the wall clock (x SCALE)\n"
     "         --pil: run a cross-built firmware image (presets arm-cm4f, am263x) on an emulated core\n"
     "                against the plant instead of the host build; adds estimated ISR cycles to metrics.json\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
@@ -75,7 +79,8 @@ trace = false
 
 int cmd_run(int argc, char** argv, bool check_only)
 {
-    std::string file, out, pil;
+    std::string file, out, pil, can;
+    double realtime = 0.0;
     std::vector<std::string> sets;
     bool quiet = false;
     for (int k = 2; k < argc; ++k) {
@@ -85,6 +90,16 @@ int cmd_run(int argc, char** argv, bool check_only)
         else if (a == "--out" && k + 1 < argc) out = argv[++k];
         else if (a == "--quiet") quiet = true;
         else if (a == "--pil" && k + 1 < argc) pil = argv[++k];
+        else if (a == "--can" && k + 1 < argc) can = argv[++k];
+        else if (a == "--realtime") realtime = 1.0;
+        else if (a.rfind("--realtime=", 0) == 0) {
+            char* end = nullptr;
+            realtime = std::strtod(a.c_str() + 11, &end);
+            if (*end != '\0' || !(realtime > 0.0 && realtime <= 1000.0)) {
+                std::fprintf(stderr, "mcsim: --realtime=%s: expected a scale factor in (0, 1000]\n%s", a.c_str() + 11, kUsage);
+                return 2;
+            }
+        }
         else if (a.rfind("--pil=", 0) == 0) pil = a.substr(6);
         else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
         else {
@@ -108,6 +123,8 @@ int cmd_run(int argc, char** argv, bool check_only)
     opt.out_dir = out;
     opt.progress = !quiet;
     opt.pil_elf = pil;
+    opt.can = can;
+    opt.realtime = realtime;
     const mcsim::RunSummary r = mcsim::run_scenario(sc, opt);
     if (!quiet) {
         std::printf("%s", r.metrics_json.c_str());

@@ -11,9 +11,11 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "drive_setup.hpp"
+#include "can_link.hpp"
 #include "drive_target.hpp"
 #include "metrics.hpp"
 #include "mcsim/fluxmap.hpp"
@@ -435,6 +437,13 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         opt.pil_elf.empty() ? make_host_drive(sc, ds, r.ts) : make_pil_drive(opt.pil_elf, ds, r.ts);
     const mc_params_t& dp = ds.resolved;
     const bool estimator = ds.estimator;
+    std::unique_ptr<CanLink> can;
+    if (!opt.can.empty()) {
+        if (drive->can() == nullptr)
+            throw ScenarioError("--can: this target has no CAN the simulator reaches (use the host build, without --pil)");
+        can = make_can_link(opt.can);
+        if (opt.progress) std::fprintf(stderr, "mcsim: the drive is on CAN: %s\n", can->describe().c_str());
+    }
 
     // ---- commands and outputs
     const Commander commander(sc);
@@ -528,6 +537,13 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         plant.step_period(r.ts, now.duty, now.enabled);
         if (time_it) plant_ns += std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - p0).count();
 
+        if (can) can->pump(drive->can(), t + r.ts);
+        if (opt.realtime > 0 && (k % 10) == 0) {
+            // simulated time paced to the wall clock (a bus peer sees the drive in real time)
+            const auto due = wall0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                         std::chrono::duration<double>((t + r.ts) / opt.realtime));
+            std::this_thread::sleep_until(due);
+        }
         if ((k & 1023) == 0)
             progress.update(t, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count());
     }

@@ -12,6 +12,8 @@ struct RunOptions {
     std::string out_dir;      // trace.csv and metrics.json go here ("" = write nothing)
     bool progress = false;    // progress line on stderr
     std::string pil_elf;      // run this cross-built image under processor-in-the-loop ("" = host build)
+    std::string can;          // "socketcand:HOST:PORT" or "socketcan:IFACE": the drive on a CAN bus
+    double realtime = 0;      // > 0: pace simulated time to wall time x this factor (1 = real time)
 };
 
 struct RunSummary {
