@@ -1,30 +1,19 @@
 /* Monitor block packing (mc/monitor.h). */
 #include "mc/monitor.h"
 #include <string.h>
+#include "mc/bits.h"
 
-static uint32_t fb(float x)
-{
-    uint32_t w;
-    memcpy(&w, &x, sizeof w);
-    return w;
-}
 
-static float bf(uint32_t w)
-{
-    float x;
-    memcpy(&x, &w, sizeof x);
-    return x;
-}
 
 void mc_monitor_pack_cmd(const mc_drive_cmd_t *c, uint32_t w[MC_MONITOR_CMD_WORDS])
 {
     w[0] = c->enable ? 1u : 0u;
     w[1] = (uint32_t)c->mode;
-    w[2] = fb(c->i_ref.d);
-    w[3] = fb(c->i_ref.q);
-    w[4] = fb(c->torque_ref);
-    w[5] = fb(c->speed_ref);
-    w[6] = fb(c->theta_init);
+    w[2] = mc_f32_bits(c->i_ref.d);
+    w[3] = mc_f32_bits(c->i_ref.q);
+    w[4] = mc_f32_bits(c->torque_ref);
+    w[5] = mc_f32_bits(c->speed_ref);
+    w[6] = mc_f32_bits(c->theta_init);
 }
 
 void mc_monitor_unpack_cmd(const uint32_t w[MC_MONITOR_CMD_WORDS], mc_drive_cmd_t *c)
@@ -32,11 +21,11 @@ void mc_monitor_unpack_cmd(const uint32_t w[MC_MONITOR_CMD_WORDS], mc_drive_cmd_
     c->enable = w[0] != 0u;
     /* an unknown mode stays unknown: the drive refuses it at the hand-over (MC_CMD_BAD_MODE) */
     c->mode = w[1] < (uint32_t)MC_MODE_COUNT ? (mc_mode_t)w[1] : MC_MODE_COUNT;
-    c->i_ref.d = bf(w[2]);
-    c->i_ref.q = bf(w[3]);
-    c->torque_ref = bf(w[4]);
-    c->speed_ref = bf(w[5]);
-    c->theta_init = bf(w[6]);
+    c->i_ref.d = mc_bits_f32(w[2]);
+    c->i_ref.q = mc_bits_f32(w[3]);
+    c->torque_ref = mc_bits_f32(w[4]);
+    c->speed_ref = mc_bits_f32(w[5]);
+    c->theta_init = mc_bits_f32(w[6]);
 }
 
 /* One table for both directions: the telemetry's fields in word order (kind: U unsigned, I int,
@@ -55,7 +44,7 @@ void mc_monitor_pack_telem(const mc_drive_telem_t *t, uint32_t w[MC_MONITOR_TM_W
     unsigned k = 0u;
 #define PU(f) w[k++] = t->f;
 #define PI(f) w[k++] = (uint32_t)t->f;
-#define PF(f) w[k++] = fb(t->f);
+#define PF(f) w[k++] = mc_f32_bits(t->f);
 #define PB(f) w[k++] = t->f ? 1u : 0u;
 #define PE(f, type) w[k++] = (uint32_t)t->f;
     MC_TM_FIELDS(PU, PI, PF, PB, PE)
@@ -75,7 +64,7 @@ void mc_monitor_unpack_telem(const uint32_t w[MC_MONITOR_TM_WORDS], mc_drive_tel
     memset(t, 0, sizeof *t);
 #define UU(f) t->f = w[k++];
 #define UI(f) t->f = (int)w[k++];
-#define UF(f) t->f = bf(w[k++]);
+#define UF(f) t->f = mc_bits_f32(w[k++]);
 #define UB(f) t->f = w[k++] != 0u;
 #define UE(f, type) t->f = (type)w[k++];
     MC_TM_FIELDS(UU, UI, UF, UB, UE)

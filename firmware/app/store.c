@@ -2,6 +2,7 @@
 #include "mc/store.h"
 #include <math.h>
 #include <string.h>
+#include "mc/bits.h"
 
 uint32_t mc_crc32(const uint8_t *data, size_t n)
 {
@@ -31,19 +32,7 @@ static uint32_t get(const uint8_t *buf, size_t at)
            ((uint32_t)buf[at + 3u] << 24);
 }
 
-static uint32_t fbits(float x)
-{
-    uint32_t w;
-    memcpy(&w, &x, sizeof w);
-    return w;
-}
 
-static float bitsf(uint32_t w)
-{
-    float x;
-    memcpy(&x, &w, sizeof x);
-    return x;
-}
 
 static size_t close_record(uint8_t *buf, size_t at)
 {
@@ -65,7 +54,7 @@ size_t mc_store_params_encode(const mc_params_t *p, uint8_t *buf, size_t cap)
     for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
         const bool is_auto = mc_param_is_auto(p, id);
         put(buf, &at, (uint32_t)id | (is_auto ? MC_STORE_AUTO : 0u));
-        put(buf, &at, fbits(mc_param_get(p, id)));
+        put(buf, &at, mc_f32_bits(mc_param_get(p, id)));
     }
     return close_record(buf, at);
 }
@@ -82,23 +71,23 @@ size_t mc_store_model_encode(const mc_est_model_t *m, uint8_t *buf, size_t cap)
     size_t at = 0u;
     put(buf, &at, MC_STORE_MAGIC_MODEL);
     put(buf, &at, MC_STORE_VERSION);
-    put(buf, &at, fbits(m->rs));
-    put(buf, &at, fbits(m->ld));
-    put(buf, &at, fbits(m->lq));
-    put(buf, &at, fbits(m->psi_pm));
+    put(buf, &at, mc_f32_bits(m->rs));
+    put(buf, &at, mc_f32_bits(m->ld));
+    put(buf, &at, mc_f32_bits(m->lq));
+    put(buf, &at, mc_f32_bits(m->psi_pm));
     put(buf, &at, map != NULL ? 1u : 0u);
     if (map != NULL) {
         put(buf, &at, (uint32_t)map->n_d);
         put(buf, &at, (uint32_t)map->n_q);
-        put(buf, &at, fbits(map->id0));
-        put(buf, &at, fbits(map->did));
-        put(buf, &at, fbits(map->iq0));
-        put(buf, &at, fbits(map->diq));
+        put(buf, &at, mc_f32_bits(map->id0));
+        put(buf, &at, mc_f32_bits(map->did));
+        put(buf, &at, mc_f32_bits(map->iq0));
+        put(buf, &at, mc_f32_bits(map->diq));
         for (size_t k = 0; k < cells; ++k) {
-            put(buf, &at, fbits(map->psi_d[k]));
+            put(buf, &at, mc_f32_bits(map->psi_d[k]));
         }
         for (size_t k = 0; k < cells; ++k) {
-            put(buf, &at, fbits(map->psi_q[k]));
+            put(buf, &at, mc_f32_bits(map->psi_q[k]));
         }
     }
     return close_record(buf, at);
@@ -156,7 +145,7 @@ mc_store_status_t mc_store_params_decode(const uint8_t *buf, size_t n, mc_params
             mc_param_set_auto(&q, id, true);
         } else {
             /* the table's range here already: a stored set is refused whole, not at the build */
-            const float v = bitsf(get(buf, 20u + 8u * k));
+            const float v = mc_bits_f32(get(buf, 20u + 8u * k));
             const mc_param_info_t *e = &mc_param_table[id];
             if (!(v >= e->min && v <= e->max) || !mc_param_set(&q, id, v, NULL)) {
                 return MC_STORE_BAD_VALUE;
@@ -196,22 +185,22 @@ mc_store_status_t mc_store_model_decode(const uint8_t *buf, size_t n, mc_est_mod
     if (!crc_ok(buf, len)) {
         return MC_STORE_BAD_CRC;
     }
-    m->rs = bitsf(get(buf, 8u));
-    m->ld = bitsf(get(buf, 12u));
-    m->lq = bitsf(get(buf, 16u));
-    m->psi_pm = bitsf(get(buf, 20u));
+    m->rs = mc_bits_f32(get(buf, 8u));
+    m->ld = mc_bits_f32(get(buf, 12u));
+    m->lq = mc_bits_f32(get(buf, 16u));
+    m->psi_pm = mc_bits_f32(get(buf, 20u));
     m->map = NULL;
     if (has_map != 0u) {
         map_out->n_d = (int)nd;
         map_out->n_q = (int)nq;
-        map_out->id0 = bitsf(get(buf, 36u));
-        map_out->did = bitsf(get(buf, 40u));
-        map_out->iq0 = bitsf(get(buf, 44u));
-        map_out->diq = bitsf(get(buf, 48u));
+        map_out->id0 = mc_bits_f32(get(buf, 36u));
+        map_out->did = mc_bits_f32(get(buf, 40u));
+        map_out->iq0 = mc_bits_f32(get(buf, 44u));
+        map_out->diq = mc_bits_f32(get(buf, 48u));
         const size_t cells = (size_t)nd * nq;
         for (size_t k = 0; k < cells; ++k) {
-            map_out->psi_d[k] = bitsf(get(buf, 52u + 4u * k));
-            map_out->psi_q[k] = bitsf(get(buf, 52u + 4u * (cells + k)));
+            map_out->psi_d[k] = mc_bits_f32(get(buf, 52u + 4u * k));
+            map_out->psi_q[k] = mc_bits_f32(get(buf, 52u + 4u * (cells + k)));
         }
         m->map = map_out;
     }
