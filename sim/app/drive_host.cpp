@@ -6,6 +6,7 @@
 
 extern "C" {
 #include "hal_host/host.h"
+#include "mc/co.h"
 }
 
 namespace mcsim {
@@ -14,7 +15,7 @@ namespace {
 
 class HostDrive final : public DriveTarget {
 public:
-    HostDrive(const Scenario& sc, const DriveSetup& ds, double ts)
+    HostDrive(const Scenario& sc, const DriveSetup& ds, double ts) : ts_(ts)
     {
         hal_host_pwm_init(&pwm_, static_cast<float>(ts), static_cast<float>(sc.f("inverter.dead_time_s")));
         qep_.counts_per_rev = 4u * static_cast<uint32_t>(sc.i("sensors.encoder_lines"));
@@ -41,7 +42,16 @@ public:
     void isr(long k) override
     {
         mc_drive_isr(drive_.get());
-        if (k % 10 == 0) mc_drive_background(drive_.get());
+        if (k % 10 == 0) {
+            mc_drive_background(drive_.get());
+            if (co_) mc_co_step(co_.get(), static_cast<uint32_t>(static_cast<double>(k) * ts_ * 1000.0));
+        }
+    }
+    bool attach_canopen(uint8_t node_id, uint16_t heartbeat_ms) override
+    {
+        const mc_co_cfg_t c = {node_id, heartbeat_ms, 0x00000000u, 0x00000001u, 0x00010000u, 0x00000001u};
+        co_ = std::make_unique<mc_co_t>();
+        return mc_co_init(co_.get(), &c, &can_, drive_.get());
     }
     mc_drive_telem_t telemetry() override
     {
@@ -67,6 +77,8 @@ private:
         return o;
     }
 
+    double ts_;
+    std::unique_ptr<mc_co_t> co_;
     hal_pwm_t pwm_{};
     hal_can_t can_{};
     hal_adc_t adc_{};

@@ -51,6 +51,13 @@ public:
     // The drive's CAN controller (the host port's rings), or nullptr where the target has none
     // the simulator can reach.
     virtual hal_can_t* can() { return nullptr; }
+    // Run the drive's CANopen device (mc/co.h) in its background loop; false where there is none.
+    virtual bool attach_canopen(uint8_t node_id, uint16_t heartbeat_ms)
+    {
+        (void)node_id;
+        (void)heartbeat_ms;
+        return false;
+    }
     // Extra metrics of this target (the PIL's cycle figures), as JSON fields.
     virtual std::vector<std::pair<std::string, std::string>> metrics() const { return {}; }
 };

@@ -442,6 +442,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         if (drive->can() == nullptr)
             throw ScenarioError("--can: this target has no CAN the simulator reaches (use the host build, without --pil)");
         can = make_can_link(opt.can);
+        if (!drive->attach_canopen(static_cast<uint8_t>(sc.i("can.node_id")), static_cast<uint16_t>(sc.i("can.heartbeat_ms"))))
+            throw ScenarioError("--can: the drive's CANopen device refused its configuration");
         if (opt.progress) std::fprintf(stderr, "mcsim: the drive is on CAN: %s\n", can->describe().c_str());
     }
 

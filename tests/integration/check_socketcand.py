@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The simulated drive on CAN (mcsim run --can socketcand:HOST:PORT): python-can's own socketcand
-client connects (handshake `< hi >`, `< open can0 >` / `< ok >`, `< rawmode >` / `< ok >`), sends
-frames into the drive's CAN controller, and the raw protocol is checked for what python-can's
+client connects (handshake `< hi >`, `< open can0 >` / `< ok >`, `< rawmode >` / `< ok >`), reads
+the device type 0x1000 from the drive's CANopen device by SDO and sees its heartbeat, and the raw protocol is checked for what python-can's
 client is strict about: no `< error ... >` in raw mode, commands in any hex case accepted. Uses
 python-can when it is importable (the tools' venv), else the raw protocol only."""
 import argparse
@@ -80,10 +80,25 @@ def main():
         else:
             time.sleep(0.2)
             with can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="can0") as bus:
-                bus.send(can.Message(arbitration_id=0x601, data=[0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0], is_extended_id=False))
                 bus.send(can.Message(arbitration_id=0x12345, data=[1, 2], is_extended_id=True))
-                bus.recv(timeout=0.3)   # nothing answers yet (the CANopen device is the next step)
-            print(f"check_socketcand: python-can {can.__version__} connected, sent 2 frames")
+                # the drive's CANopen device (node 1): SDO upload of 0x1000, and its heartbeat
+                bus.send(can.Message(arbitration_id=0x601, data=[0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0], is_extended_id=False))
+                sdo, heartbeat = None, None
+                deadline = time.time() + 4.0
+                while time.time() < deadline and (sdo is None or heartbeat is None):
+                    m = bus.recv(timeout=0.5)
+                    if m is None:
+                        continue
+                    if m.arbitration_id == 0x581 and sdo is None:
+                        sdo = bytes(m.data)
+                    if m.arbitration_id == 0x701:
+                        heartbeat = bytes(m.data)
+                if sdo is None or sdo[0] != 0x43 or int.from_bytes(sdo[4:8], "little") != 0x00020192:
+                    bad.append(f"SDO upload of 0x1000 (device type): {sdo!r}")
+                if heartbeat is None or heartbeat[0] not in (0x7F, 0x05, 0x04):
+                    bad.append(f"heartbeat 0x701: {heartbeat!r}")
+            print(f"check_socketcand: python-can {can.__version__}: SDO 0x1000 = "
+                  f"{int.from_bytes(sdo[4:8], 'little') if sdo else None:#x}, heartbeat state {heartbeat!r}")
     finally:
         p.terminate()
         p.wait(timeout=10)

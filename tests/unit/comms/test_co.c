@@ -1,0 +1,273 @@
+/* CANopen device (mc/co.h) against the host CAN rings and a real drive: boot-up, heartbeat, NMT,
+ * SDO expedited and segmented transfers, parameters 0x2000 + id, and the abort codes. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <string.h>
+#include "hal_host/host.h"
+#include "mc/bits.h"
+#include "mc/co.h"
+
+typedef struct {
+    hal_pwm_t pwm;
+    hal_adc_t adc;
+    hal_qep_t qep;
+    hal_can_t can;
+    mc_drive_cfg_t cfg;
+    mc_drive_t d;
+    mc_drive_link_t link;
+    mc_co_t co;
+} rig_t;
+
+static rig_t rig;
+static uint32_t now;
+
+static void rig_init(void)
+{
+    memset(&rig, 0, sizeof rig);
+    hal_host_pwm_init(&rig.pwm, 1e-4f, 0.5e-6f);
+    rig.qep.counts_per_rev = 80000u;
+    hal_host_can_init(&rig.can);
+    mc_drive_cfg_default(&rig.cfg);
+    assert_true(mc_drive_init(&rig.d, &rig.link, &rig.cfg, &rig.adc, &rig.pwm, &rig.qep));
+    const mc_co_cfg_t c = {.node_id = 5, .heartbeat_ms = 100, .vendor_id = 0x12345678u, .product_code = 1u,
+                           .revision = 2u, .serial = 3u};
+    assert_true(mc_co_init(&rig.co, &c, &rig.can, &rig.d));
+    now = 0;
+}
+
+static void put(uint32_t id, const uint8_t *d, uint8_t n)
+{
+    hal_can_frame_t f = {.id = id, .dlc = n};
+    memcpy(f.data, d, n);
+    assert_true(hal_host_can_deliver(&rig.can, &f));
+}
+
+static bool take(hal_can_frame_t *f)
+{
+    return hal_host_can_take(&rig.can, f);
+}
+
+/* one SDO request -> its one response */
+static hal_can_frame_t sdo(uint8_t b0, uint16_t index, uint8_t sub, uint32_t data)
+{
+    const uint8_t r[8] = {b0, (uint8_t)index, (uint8_t)(index >> 8), sub,
+                          (uint8_t)data, (uint8_t)(data >> 8), (uint8_t)(data >> 16), (uint8_t)(data >> 24)};
+    put(0x605u, r, 8u);
+    mc_co_step(&rig.co, now);
+    hal_can_frame_t f;
+    assert_true(take(&f));
+    assert_int_equal(f.id, 0x585u);
+    assert_int_equal(f.dlc, 8u);
+    return f;
+}
+
+static uint32_t word(const hal_can_frame_t *f)
+{
+    return (uint32_t)f->data[4] | ((uint32_t)f->data[5] << 8) | ((uint32_t)f->data[6] << 16) |
+           ((uint32_t)f->data[7] << 24);
+}
+
+static void expect_abort(const hal_can_frame_t *f, uint32_t code)
+{
+    assert_int_equal(f->data[0], 0x80u);
+    assert_int_equal(word(f), code);
+}
+
+static void test_node_id_checked(void **state)
+{
+    (void)state;
+    rig_init();
+    mc_co_t co;
+    mc_co_cfg_t c = {.node_id = 0};
+    assert_false(mc_co_init(&co, &c, &rig.can, &rig.d));
+    c.node_id = 128;
+    assert_false(mc_co_init(&co, &c, &rig.can, &rig.d));
+}
+
+static void test_boot_heartbeat_nmt(void **state)
+{
+    (void)state;
+    rig_init();
+    mc_co_step(&rig.co, now);
+    hal_can_frame_t f;
+    assert_true(take(&f));   /* boot-up */
+    assert_int_equal(f.id, 0x705u);
+    assert_int_equal(f.dlc, 1u);
+    assert_int_equal(f.data[0], 0x00u);
+    assert_false(take(&f));
+    now = 99;
+    mc_co_step(&rig.co, now);
+    assert_false(take(&f));
+    now = 100;
+    mc_co_step(&rig.co, now);
+    assert_true(take(&f));   /* heartbeat, pre-operational */
+    assert_int_equal(f.id, 0x705u);
+    assert_int_equal(f.data[0], 0x7Fu);
+    const uint8_t start[2] = {0x01, 5}, stop[2] = {0x02, 0}, other[2] = {0x80, 6}, reset[2] = {0x82, 5};
+    put(0x000u, start, 2u);
+    now = 200;
+    mc_co_step(&rig.co, now);
+    assert_true(take(&f));
+    assert_int_equal(f.data[0], 0x05u);
+    put(0x000u, other, 2u);   /* another node's command: ignored */
+    put(0x000u, stop, 2u);    /* broadcast */
+    now = 300;
+    mc_co_step(&rig.co, now);
+    assert_true(take(&f));
+    assert_int_equal(f.data[0], 0x04u);
+    /* stopped: no SDO answer */
+    const uint8_t r[8] = {0x40, 0x00, 0x10, 0, 0, 0, 0, 0};
+    put(0x605u, r, 8u);
+    mc_co_step(&rig.co, now);
+    assert_false(take(&f));
+    put(0x000u, reset, 2u);   /* reset communication: boot-up again */
+    mc_co_step(&rig.co, now);
+    mc_co_step(&rig.co, now);
+    assert_true(take(&f));
+    assert_int_equal(f.id, 0x705u);
+    assert_int_equal(f.data[0], 0x00u);
+}
+
+static void test_sdo_expedited_and_segmented_upload(void **state)
+{
+    (void)state;
+    rig_init();
+    mc_co_step(&rig.co, now);
+    hal_can_frame_t f;
+    (void)take(&f);
+    f = sdo(0x40, 0x1000, 0, 0);
+    assert_int_equal(f.data[0], 0x43u);   /* expedited, 4 bytes */
+    assert_int_equal(word(&f), MC_CO_DEVICE_TYPE);
+    f = sdo(0x40, 0x1018, 1, 0);
+    assert_int_equal(word(&f), 0x12345678u);
+    f = sdo(0x40, 0x1018, 0, 0);
+    assert_int_equal(f.data[0], 0x4Fu);   /* 1 byte: n = 3 */
+    assert_int_equal(f.data[4], 4u);
+    /* 0x1008, 22 bytes: segmented, toggling */
+    f = sdo(0x40, 0x1008, 0, 0);
+    assert_int_equal(f.data[0], 0x41u);
+    const uint32_t size = word(&f);
+    assert_int_equal(size, strlen("ipmsm-sensorless-drive"));
+    char name[40] = {0};
+    uint32_t got = 0;
+    for (uint8_t t = 0;; t ^= 1u) {
+        f = sdo((uint8_t)(0x60 | (t << 4)), 0, 0, 0);
+        assert_int_equal((f.data[0] >> 4) & 1u, t);
+        const uint32_t n = 7u - ((f.data[0] >> 1) & 7u);
+        memcpy(name + got, f.data + 1, n);
+        got += n;
+        if (f.data[0] & 1u) {
+            break;
+        }
+    }
+    assert_int_equal(got, size);
+    assert_string_equal(name, "ipmsm-sensorless-drive");
+    /* a toggle error mid-transfer */
+    (void)sdo(0x40, 0x1008, 0, 0);
+    (void)sdo(0x60, 0, 0, 0);
+    f = sdo(0x60, 0, 0, 0);   /* toggle should be 1 */
+    expect_abort(&f, MC_SDO_ABORT_TOGGLE);
+    /* a timeout */
+    (void)sdo(0x40, 0x1008, 0, 0);
+    now += MC_CO_SDO_TIMEOUT_MS + 1u;
+    mc_co_step(&rig.co, now);
+    assert_true(take(&f));
+    expect_abort(&f, MC_SDO_ABORT_TIMEOUT);
+}
+
+static void test_sdo_parameters(void **state)
+{
+    (void)state;
+    rig_init();
+    mc_co_step(&rig.co, now);
+    hal_can_frame_t f;
+    (void)take(&f);
+    const int id = mc_param_find("control.current_bw_hz");
+    assert_true(id >= 0);
+    const uint16_t obj = (uint16_t)(0x2000 + id);
+    f = sdo(0x40, obj, 0, 0);
+    assert_true(mc_bits_f32(word(&f)) == mc_param_get(mc_drive_params(&rig.d), id));
+    /* write 300 Hz: taken by the ISR at the next period, then read back */
+    f = sdo(0x23, obj, 0, mc_f32_bits(300.0f));
+    assert_int_equal(f.data[0], 0x60u);
+    mc_drive_isr(&rig.d);
+    f = sdo(0x40, obj, 0, 0);
+    assert_true(mc_bits_f32(word(&f)) == 300.0f);
+    /* the table's limits: 10..5000 Hz */
+    f = sdo(0x23, obj, 0, mc_f32_bits(6000.0f));
+    expect_abort(&f, MC_SDO_ABORT_VALUE_HIGH);
+    f = sdo(0x23, obj, 0, mc_f32_bits(1.0f));
+    expect_abort(&f, MC_SDO_ABORT_VALUE_LOW);
+    f = sdo(0x2B, obj, 0, 0x1234);   /* 2 bytes for a 4-byte object */
+    expect_abort(&f, MC_SDO_ABORT_LENGTH_LOW);
+    /* an INIT-only parameter cannot be written now */
+    const int ts = mc_param_find("control.ts_s");
+    f = sdo(0x23, (uint16_t)(0x2000 + ts), 0, mc_f32_bits(1e-4f));
+    expect_abort(&f, MC_SDO_ABORT_STATE);
+    /* an integer parameter as INTEGER32 */
+    const int lines = mc_param_find("hw.encoder_lines");
+    f = sdo(0x40, (uint16_t)(0x2000 + lines), 0, 0);
+    assert_int_equal((int32_t)word(&f), (int32_t)mc_param_get(mc_drive_params(&rig.d), lines));
+}
+
+static void test_sdo_aborts(void **state)
+{
+    (void)state;
+    rig_init();
+    mc_co_step(&rig.co, now);
+    hal_can_frame_t f;
+    (void)take(&f);
+    f = sdo(0x40, 0x6789, 0, 0);
+    expect_abort(&f, MC_SDO_ABORT_NO_OBJECT);
+    f = sdo(0x40, 0x1018, 9, 0);
+    expect_abort(&f, MC_SDO_ABORT_NO_SUB);
+    f = sdo(0x40, (uint16_t)(0x2000 + MC_PARAM_COUNT), 0, 0);
+    expect_abort(&f, MC_SDO_ABORT_NO_OBJECT);
+    f = sdo(0x23, 0x1000, 0, 1);
+    expect_abort(&f, MC_SDO_ABORT_READ_ONLY);
+    f = sdo(0xE0, 0x1000, 0, 0);   /* ccs 7 */
+    expect_abort(&f, MC_SDO_ABORT_CS);
+    f = sdo(0x60, 0, 0, 0);        /* an upload segment with no transfer */
+    expect_abort(&f, MC_SDO_ABORT_CS);
+    /* 0x1017 is writable: the heartbeat follows */
+    f = sdo(0x2B, 0x1017, 0, 50);
+    assert_int_equal(f.data[0], 0x60u);
+    f = sdo(0x40, 0x1017, 0, 0);
+    assert_int_equal(f.data[0], 0x4Bu);
+    assert_int_equal(word(&f), 50u);
+}
+
+static void test_segmented_download(void **state)
+{
+    (void)state;
+    rig_init();
+    mc_co_step(&rig.co, now);
+    hal_can_frame_t f;
+    (void)take(&f);
+    /* 0x1017 (2 bytes) written segmented: initiate with size, one last segment */
+    f = sdo(0x21, 0x1017, 0, 2);
+    assert_int_equal(f.data[0], 0x60u);
+    const uint8_t seg[8] = {(uint8_t)(0x00 | (5u << 1) | 1u), 0x2C, 0x01, 0, 0, 0, 0, 0};   /* 300 ms, last */
+    put(0x605u, seg, 8u);
+    mc_co_step(&rig.co, now);
+    assert_true(take(&f));
+    assert_int_equal(f.data[0], 0x20u);
+    f = sdo(0x40, 0x1017, 0, 0);
+    assert_int_equal(word(&f), 300u);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_node_id_checked),
+        cmocka_unit_test(test_boot_heartbeat_nmt),
+        cmocka_unit_test(test_sdo_expedited_and_segmented_upload),
+        cmocka_unit_test(test_sdo_parameters),
+        cmocka_unit_test(test_sdo_aborts),
+        cmocka_unit_test(test_segmented_download),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
