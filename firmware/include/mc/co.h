@@ -4,7 +4,7 @@
  * parameter by its stable id, read as the value in force, written through mc_drive_param_write
  * (range-checked with the table's limits, handed to the ISR at a period boundary).
  * No heap, no globals; mc_co_step is called from the background loop with bounded work.
- * Not yet: PDOs, CiA 402, EMCY, 0x1010/0x1011 (mc/nvstore.h is ready), the scope, SDO block
+ * Not yet: PDOs, CiA 402, EMCY, 0x1010/0x1011 (mc/param_store.h is ready), the scope, SDO block
  * transfer. */
 #ifndef MC_CO_H
 #define MC_CO_H

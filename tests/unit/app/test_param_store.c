@@ -1,0 +1,474 @@
+/* The power-cut-safe configuration store (mc/param_store.h) on the host NVM (4 x 4 KiB, unit 8:
+ * two slots of 2 blocks, maps up to 915 points; the largest 41 x 41 map is dropped there and
+ * that path is tested too): the records on flash are mc/store.h's, bit for bit; round trip;
+ * erased NVM; fall-back; and the power-cut sweeps: from a committed set, a cut at EVERY step of
+ * a save (and of an erase) leaves exactly the old set or the new one, never a mix, never
+ * "corrupt" or "empty", and a later save still works. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <string.h>
+#include "hal_host/host.h"
+#include "mc/bits.h"
+#include "mc/param_store.h"
+
+/* large objects (the NVM, 13.5 KB maps) static: test state, not firmware */
+static hal_nvm_t nvm, snap;
+static uint8_t work[MC_PSTORE_WORK_MIN];   /* the smallest work buffer: the sweeps use it */
+enum { NSETS = 10 };
+static mc_flux_map_t maps[NSETS];
+static mc_drive_cfg_t sets[NSETS];
+static mc_flux_map_t got_map;
+static uint8_t rec[MC_STORE_MODEL_MAX];
+
+/* Set k: a few parameters moved, the model's scalars (one a NaN with a payload: bits count, not
+ * values), and an nd x nq map (0: none) with distinct values in every point. */
+static const mc_drive_cfg_t *make_cfg(int k, int nd, int nq)
+{
+    mc_drive_cfg_t *c = &sets[k];
+    mc_params_default(&c->p);
+    assert_true(mc_param_set(&c->p, mc_param_find("control.ts_s"), 1e-4f - 1e-6f * (float)(k % 40), NULL));
+    assert_true(mc_param_set(&c->p, mc_param_find("hw.encoder_lines"), (float)(1000 + k), NULL));
+    assert_true(mc_param_set(&c->p, mc_param_find("hw.dead_time_s"), 1e-7f * (float)(k % 50), NULL));
+    c->est.rs = 0.1f + 0.01f * (float)k;
+    c->est.ld = 1e-3f * (float)(k + 1);
+    c->est.lq = 2e-3f * (float)(k + 1);
+    c->est.psi_pm = k % 3 == 0 ? mc_bits_f32(0x7FC00000u + (uint32_t)k + 1u) : 0.05f + 0.001f * (float)k;
+    c->est.map = NULL;
+    if (nd > 0) {
+        mc_flux_map_t *m = &maps[k];
+        memset(m, 0, sizeof *m);
+        m->n_d = nd;
+        m->n_q = nq;
+        m->id0 = -10.0f - (float)k;
+        m->did = 0.5f;
+        m->iq0 = -20.0f;
+        m->diq = 0.25f + 0.01f * (float)k;
+        for (int i = 0; i < nd * nq; ++i) {
+            m->psi_d[i] = 0.001f * (float)i + (float)k;
+            m->psi_q[i] = -0.002f * (float)i - (float)k;
+        }
+        c->est.map = m;
+    }
+    return c;
+}
+
+static bool same_bits(float a, float b)
+{
+    return mc_f32_bits(a) == mc_f32_bits(b);
+}
+
+/* got (loaded, its map in got_map) is exactly want; dropped: want stored without its map */
+static bool same_cfg(const mc_drive_cfg_t *got, const mc_drive_cfg_t *want, bool dropped)
+{
+    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
+        if (mc_param_is_auto(&got->p, id) != mc_param_is_auto(&want->p, id) ||
+            !same_bits(mc_param_get(&got->p, id), mc_param_get(&want->p, id))) {
+            return false;
+        }
+    }
+    if (!same_bits(got->est.rs, want->est.rs) || !same_bits(got->est.ld, want->est.ld) ||
+        !same_bits(got->est.lq, want->est.lq) || !same_bits(got->est.psi_pm, want->est.psi_pm)) {
+        return false;
+    }
+    const mc_flux_map_t *w = dropped ? NULL : want->est.map;
+    if (w == NULL) {
+        return got->est.map == NULL;
+    }
+    const mc_flux_map_t *g = got->est.map;
+    if (g != &got_map || g->n_d != w->n_d || g->n_q != w->n_q || !same_bits(g->id0, w->id0) ||
+        !same_bits(g->did, w->did) || !same_bits(g->iq0, w->iq0) || !same_bits(g->diq, w->diq)) {
+        return false;
+    }
+    const size_t cells = (size_t)w->n_d * (size_t)w->n_q;
+    return memcmp(g->psi_d, w->psi_d, cells * sizeof(float)) == 0 &&
+           memcmp(g->psi_q, w->psi_q, cells * sizeof(float)) == 0;
+}
+
+static mc_pstore_status_t load(mc_drive_cfg_t *got, mc_pstore_info_t *info)
+{
+    memset(got, 0, sizeof *got);
+    mc_params_default(&got->p);
+    return mc_pstore_load(&nvm, got, &got_map, work, sizeof work, info);
+}
+
+static void test_geometry(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&nvm);
+    mc_pstore_geom_t g;
+    /* 2 blocks a slot: 8192 - 40 bytes of records; 772 of parameters, 56 + 8 per map point */
+    assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);
+    assert_int_equal(g.slot_first[0], 0u);
+    assert_int_equal(g.slot_first[1], 2u);
+    assert_int_equal(g.slot_blocks, 2u);
+    assert_int_equal(g.payload_max, 8152u);
+    assert_int_equal(g.map_cells_max, (8152u - MC_STORE_PARAMS_MAX - 56u) / 8u);
+    assert_int_equal(g.map_cells_max, 915u);
+    assert_int_equal(mc_pstore_geometry(NULL, &g), MC_PSTORE_BAD_ARGS);
+    assert_string_equal(mc_pstore_status_name(MC_PSTORE_FELL_BACK), "fell_back");
+    assert_string_equal(mc_pstore_status_name(MC_PSTORE_MAP_DROPPED), "map_dropped");
+    assert_string_equal(mc_pstore_status_name((mc_pstore_status_t)99), "?");
+}
+
+static void test_empty_and_bad_args(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&nvm);
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
+    assert_int_equal(info.slot, -1);
+    mc_params_t def;
+    mc_params_default(&def);
+    assert_memory_equal(&got.p, &def, sizeof def);   /* untouched */
+    /* garbage everywhere, no marker: still nothing committed */
+    for (uint32_t b = 0; b < HAL_HOST_NVM_BLOCKS; ++b) {
+        for (uint32_t k = 0; k < HAL_HOST_NVM_BLOCK_SIZE; ++k) {
+            nvm.mem[b][k] = (uint8_t)(k * 37u + b);
+        }
+    }
+    assert_int_equal(load(&got, NULL), MC_PSTORE_EMPTY);
+
+    hal_host_nvm_init(&nvm);
+    const mc_drive_cfg_t *a = make_cfg(0, 4, 3);
+    assert_int_equal(mc_pstore_save(NULL, a, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(mc_pstore_save(&nvm, NULL, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, MC_PSTORE_WORK_MIN - 1u, NULL), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(mc_pstore_load(&nvm, &got, NULL, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(mc_pstore_erase(&nvm, work, 8u), MC_PSTORE_BAD_ARGS);
+    /* a map no encoder takes, a value no load takes: refused before anything is erased */
+    mc_drive_cfg_t bad = *a;
+    mc_flux_map_t *m = &maps[NSETS - 1];
+    *m = maps[0];
+    m->n_d = 1;
+    bad.est.map = m;
+    const uint32_t steps = nvm.steps;
+    assert_int_equal(mc_pstore_save(&nvm, &bad, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
+    bad = *a;
+    const int id = mc_param_find("control.ts_s");
+    assert_true(mc_param_set(&bad.p, id, mc_param_table[id].max * 2.0f, NULL));
+    assert_int_equal(mc_pstore_save(&nvm, &bad, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(nvm.steps, steps);
+}
+
+static void test_round_trip_records_bit_exact(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&nvm);
+    const mc_drive_cfg_t *a = make_cfg(1, 5, 7);
+    mc_pstore_info_t info;
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, &info), MC_PSTORE_OK);
+    assert_int_equal(info.slot, 0);
+    assert_int_equal(info.seq, 1u);
+    mc_drive_cfg_t got;
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, a, false));
+    assert_int_equal(info.slot, 0);
+    assert_false(info.fell_back || info.defaults || info.map_dropped);
+
+    /* on flash: header "MCPS", marker at 32, then exactly mc/store.h's two records */
+    const uint8_t *s0 = nvm.mem[0];
+    assert_int_equal(s0[0], 'M');
+    assert_int_equal(s0[3], 'S');
+    assert_int_equal(s0[32], 0x5A);
+    assert_int_equal(s0[33], 0xA5);
+    const size_t pl = mc_store_params_encode(&a->p, rec, sizeof rec);
+    assert_int_equal(pl, MC_STORE_PARAMS_MAX);
+    assert_memory_equal(s0 + 40, rec, pl);
+    mc_params_t p;
+    assert_int_equal(mc_store_params_decode(s0 + 40, pl, &p), MC_STORE_OK);
+    const size_t ml = mc_store_model_encode(&a->est, rec, sizeof rec);
+    assert_memory_equal(s0 + 40 + pl, rec, ml);
+    mc_est_model_t m;
+    assert_int_equal(mc_store_model_decode(s0 + 40 + pl, ml, &m, &got_map), MC_STORE_OK);
+
+    /* the second copy goes to the other slot; the first stays as it was */
+    uint8_t before[HAL_HOST_NVM_BLOCK_SIZE];
+    memcpy(before, nvm.mem[0], sizeof before);
+    const mc_drive_cfg_t *b = make_cfg(2, 0, 0);
+    assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, &info), MC_PSTORE_OK);
+    assert_int_equal(info.slot, 1);
+    assert_int_equal(info.seq, 2u);
+    assert_memory_equal(nvm.mem[0], before, sizeof before);
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, b, false));
+    assert_int_equal(info.seq, 2u);
+
+    /* the largest map that fits (30 x 30, over both blocks of a slot); one row more is dropped */
+    const mc_drive_cfg_t *c = make_cfg(3, 30, 30);
+    assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, &info), MC_PSTORE_OK);
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, c, false));
+    const mc_drive_cfg_t *d = make_cfg(4, 31, 30);
+    assert_int_equal(mc_pstore_save(&nvm, d, work, sizeof work, &info), MC_PSTORE_MAP_DROPPED);
+    assert_true(info.map_dropped);
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, d, true));
+    assert_true(info.map_dropped);
+    const mc_drive_cfg_t *e = make_cfg(5, MC_FLUX_MAP_MAX, MC_FLUX_MAP_MAX);
+    assert_int_equal(mc_pstore_save(&nvm, e, work, sizeof work, NULL), MC_PSTORE_MAP_DROPPED);
+    assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, e, true));
+
+    /* the work buffer's size changes the number of calls, not one byte on flash */
+    static hal_nvm_t ref;
+    hal_host_nvm_init(&ref);
+    assert_int_equal(mc_pstore_save(&ref, c, work, sizeof work, NULL), MC_PSTORE_OK);
+    static uint8_t big[4099];
+    const size_t lens[] = {72u, 100u, 1000u, sizeof big};
+    for (size_t k = 0; k < sizeof lens / sizeof lens[0]; ++k) {
+        hal_host_nvm_init(&nvm);
+        assert_int_equal(mc_pstore_save(&nvm, c, big, lens[k], NULL), MC_PSTORE_OK);
+        assert_memory_equal(nvm.mem, ref.mem, sizeof ref.mem);
+        memset(&got, 0, sizeof got);
+        assert_int_equal(mc_pstore_load(&nvm, &got, &got_map, big, lens[k], NULL), MC_PSTORE_OK);
+        assert_true(same_cfg(&got, c, false));
+    }
+}
+
+static void test_corrupt_newest_falls_back(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&nvm);
+    const mc_drive_cfg_t *a = make_cfg(1, 6, 6), *b = make_cfg(2, 8, 5), *c = make_cfg(3, 0, 0);
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 0 */
+    assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 1 */
+    snap = nvm;
+    /* a bit of b's map flips: the older a, and the status says so */
+    nvm.mem[2][40 + MC_STORE_PARAMS_MAX + 100u] ^= 0x04u;
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, a, false));
+    assert_true(info.fell_back);
+    assert_int_equal(info.slot, 0);
+    /* the next save goes over the corrupt copy, never over the good one */
+    assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, &info), MC_PSTORE_OK);
+    assert_int_equal(info.slot, 1);
+    assert_int_equal(info.seq, 3u);
+    assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, c, false));
+    /* both copies damaged: corrupt, nothing applied */
+    nvm.mem[0][300] ^= 0x10u;
+    nvm.mem[2][300] ^= 0x10u;
+    assert_int_equal(load(&got, NULL), MC_PSTORE_CORRUPT);
+    mc_params_t def;
+    mc_params_default(&def);
+    assert_memory_equal(&got.p, &def, sizeof def);
+
+    /* a flipped bit in the newest's header (its sequence): marked, so possibly the newest */
+    nvm = snap;
+    nvm.mem[2][8] ^= 0x01u;
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, a, false));
+    /* a damaged older copy does not matter */
+    nvm = snap;
+    nvm.mem[0][1000] ^= 0x80u;
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, b, false));
+}
+
+static void test_erase_restores_defaults(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&nvm);
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_OK);   /* empty: stays empty */
+    assert_int_equal(load(&got, NULL), MC_PSTORE_EMPTY);
+    const mc_drive_cfg_t *a = make_cfg(1, 3, 3), *b = make_cfg(2, 4, 4), *c = make_cfg(3, 2, 2);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
+    assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, NULL), MC_PSTORE_OK);
+    assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_OK);
+    assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
+    assert_true(info.defaults);
+    mc_params_t def;
+    mc_params_default(&def);
+    assert_memory_equal(&got.p, &def, sizeof def);
+    /* the defaults copy damaged: no older set comes back (the other slot was erased) */
+    snap = nvm;
+    nvm.mem[info.slot == 0 ? 0 : 2][4] ^= 0x01u;
+    assert_int_equal(load(&got, NULL), MC_PSTORE_CORRUPT);
+    nvm = snap;
+    assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, NULL), MC_PSTORE_OK);
+    assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, c, false));
+}
+
+/* A dead device (after a cut, before power-on): every call fails at once. */
+static void test_failing_device(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&nvm);
+    const mc_drive_cfg_t *a = make_cfg(1, 10, 10);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
+    hal_host_nvm_cut_at(&nvm, nvm.steps + 1u);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_NVM_ERROR);
+    mc_drive_cfg_t got;
+    assert_int_equal(load(&got, NULL), MC_PSTORE_NVM_ERROR);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_NVM_ERROR);
+    assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_NVM_ERROR);
+    hal_host_nvm_power_on(&nvm);
+    assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, a, false));
+}
+
+/* ---- power cuts ---------------------------------------------------------------------------- */
+
+typedef struct {
+    const mc_drive_cfg_t *cfg;   /* NULL: nothing committed, or restored to defaults (EMPTY) */
+    bool dropped;                /* saved without its map */
+} expect_t;
+
+static bool is(mc_pstore_status_t st, const mc_drive_cfg_t *got, expect_t e)
+{
+    return e.cfg == NULL ? st == MC_PSTORE_EMPTY : st == MC_PSTORE_OK && same_cfg(got, e.cfg, e.dropped);
+}
+
+static mc_pstore_status_t run(const mc_drive_cfg_t *next)
+{
+    return next != NULL ? mc_pstore_save(&nvm, next, work, sizeof work, NULL)
+                        : mc_pstore_erase(&nvm, work, sizeof work);
+}
+
+/* From the store in snap (its last committed set: old), save next (NULL: erase) with a cut at
+ * every step 1..N of the operation and once after it; then the new state becomes snap. */
+static unsigned sweep(expect_t old, expect_t next, unsigned *recoveries)
+{
+    const mc_drive_cfg_t *r = make_cfg(NSETS - 2, 3, 2);   /* a save after the cut: it still works */
+    nvm = snap;
+    const uint32_t start = nvm.steps;
+    const mc_pstore_status_t done = next.dropped ? MC_PSTORE_MAP_DROPPED : MC_PSTORE_OK;
+    assert_int_equal(run(next.cfg), done);
+    const uint32_t total = nvm.steps - start;
+    static hal_nvm_t after;
+    after = nvm;
+    unsigned cuts = 0;
+    for (uint32_t s = 1; s <= total + 1u; ++s) {
+        nvm = snap;
+        nvm.rng = 0x9E3779B9u ^ (s * 0x85EBCA6Bu) ^ (total << 20);   /* a different scramble each */
+        if (nvm.rng == 0u) {
+            nvm.rng = 1u;
+        }
+        hal_host_nvm_cut_at(&nvm, start + s);
+        const mc_pstore_status_t st = run(next.cfg);
+        assert_int_equal(st, s <= total ? MC_PSTORE_NVM_ERROR : done);
+        hal_host_nvm_power_on(&nvm);
+        mc_drive_cfg_t got;
+        const mc_pstore_status_t ld = load(&got, NULL);
+        const bool was_old = is(ld, &got, old), was_new = is(ld, &got, next);
+        if (!(was_old || was_new)) {
+            fail_msg("%s cut at step %u of %u: load %s", next.cfg != NULL ? "save" : "erase", s, total,
+                     mc_pstore_status_name(ld));
+        }
+        if (s > total) {
+            assert_true(was_new);
+        }
+        if (s == total && next.cfg != NULL) {
+            assert_true(was_old);   /* the cut hit the marker: a half marker is no marker */
+        }
+        /* the store recovers: the next save goes over the half-written slot */
+        {
+            assert_int_equal(mc_pstore_save(&nvm, r, work, sizeof work, NULL), MC_PSTORE_OK);
+            assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
+            assert_true(same_cfg(&got, r, false));
+            ++*recoveries;
+        }
+        ++cuts;
+    }
+    snap = after;
+    return cuts;
+}
+
+static void test_power_cut_at_every_step(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&snap);
+    const expect_t none = {NULL, false};
+    /* maps of every size class: the largest that fits (over both blocks of a slot), small, none,
+     * dropped (41 x 41); erases over a one-block and a two-block copy */
+    const expect_t s0 = {make_cfg(0, 30, 30), false}, s1 = {make_cfg(1, 12, 9), false};
+    const expect_t s2 = {make_cfg(2, 29, 31), false}, s3 = {make_cfg(3, 0, 0), false};
+    const expect_t s4 = {make_cfg(4, MC_FLUX_MAP_MAX, MC_FLUX_MAP_MAX), true};
+    const expect_t s5 = {make_cfg(5, 25, 28), false}, s6 = {make_cfg(6, 2, 2), false};
+    const expect_t s7 = {make_cfg(7, 30, 30), false};
+    const expect_t chain[][2] = {
+        {none, s0},   /* the first save ever: empty or s0 (slot 0)        */
+        {s0, s1},     /* slot 1, the other slot still erased              */
+        {s1, s2},     /* slot 0 over s0: a long copy over a long one      */
+        {s2, none},   /* 0x1011 over a two-block copy: s2 or defaults     */
+        {none, s3},   /* after a restore: defaults or s3                  */
+        {s3, s4},     /* saved without its map                            */
+        {s4, s5},
+        {s5, s6},     /* a short copy over a long one                     */
+        {s6, none},   /* 0x1011 over a one-block copy                     */
+        {none, s7},
+        {s7, s1},
+    };
+    unsigned cuts = 0, erase_cuts = 0, rec_n = 0;
+    for (size_t k = 0; k < sizeof chain / sizeof chain[0]; ++k) {
+        const unsigned n = sweep(chain[k][0], chain[k][1], &rec_n);
+        cuts += n;
+        erase_cuts += chain[k][1].cfg == NULL ? n : 0u;
+    }
+    print_message("power cuts tested: %u (%u in erases), each followed by a load, %u by a save\n", cuts, erase_cuts,
+                  rec_n);
+    assert_true(cuts > 4000u);
+}
+
+/* Two cuts in a row (a save cut, then the next save cut too): never anything but the last
+ * committed set or the one whose marker completed. */
+static void test_double_cuts(void **state)
+{
+    (void)state;
+    const mc_drive_cfg_t *a = make_cfg(0, 20, 20), *b = make_cfg(1, 15, 15), *c = make_cfg(2, 0, 0);
+    hal_host_nvm_init(&nvm);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);   /* both slots */
+    snap = nvm;
+    uint32_t t0 = nvm.steps;
+    assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, NULL), MC_PSTORE_OK);
+    const uint32_t nb = nvm.steps - t0;
+    t0 = nvm.steps;
+    assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, NULL), MC_PSTORE_OK);
+    const uint32_t nc = nvm.steps - t0;
+    uint32_t rnd = 12345u;
+    for (int i = 0; i < 300; ++i) {
+        nvm = snap;
+        rnd = rnd * 1664525u + 1013904223u;
+        hal_host_nvm_cut_at(&nvm, nvm.steps + 1u + (rnd >> 8) % nb);
+        assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, NULL), MC_PSTORE_NVM_ERROR);
+        hal_host_nvm_power_on(&nvm);
+        rnd = rnd * 1664525u + 1013904223u;
+        const uint32_t s2 = 1u + (rnd >> 8) % (nc + 2u);
+        hal_host_nvm_cut_at(&nvm, nvm.steps + s2);
+        (void)mc_pstore_save(&nvm, c, work, sizeof work, NULL);
+        hal_host_nvm_power_on(&nvm);
+        mc_drive_cfg_t got;
+        const mc_pstore_status_t ld = load(&got, NULL);
+        assert_int_equal(ld, MC_PSTORE_OK);
+        if (s2 > nc) {
+            assert_true(same_cfg(&got, c, false));
+        } else {
+            assert_true(same_cfg(&got, a, false));
+        }
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_geometry),
+        cmocka_unit_test(test_empty_and_bad_args),
+        cmocka_unit_test(test_round_trip_records_bit_exact),
+        cmocka_unit_test(test_corrupt_newest_falls_back),
+        cmocka_unit_test(test_erase_restores_defaults),
+        cmocka_unit_test(test_failing_device),
+        cmocka_unit_test(test_power_cut_at_every_step),
+        cmocka_unit_test(test_double_cuts),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
