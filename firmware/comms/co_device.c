@@ -243,6 +243,7 @@ void mc_co_step(mc_co_t *co, uint32_t now_ms)
             return;
         }
     }
+    mc_co_emcy_step(co);
     if (co->sdo.active && now_ms - co->sdo.t0_ms > MC_CO_SDO_TIMEOUT_MS) {
         sdo_abort(co, co->sdo.index, co->sdo.sub, MC_SDO_ABORT_TIMEOUT);
     }

@@ -82,11 +82,14 @@ uint32_t mc_co_od_read(mc_co_t *co, uint16_t index, uint8_t sub, uint8_t *data, 
     switch (index) {
     case 0x1000u:
         return sub == 0u ? put_u(data, cap, len, MC_CO_DEVICE_TYPE, 4u) : MC_SDO_ABORT_NO_SUB;
-    case 0x1001u: {
-        /* error register (§7.5.2.2): bit 0 generic, set while a fault is latched */
-        const uint32_t f = mc_drive_faults(co->drive);
-        return sub == 0u ? put_u(data, cap, len, f != 0u ? 1u : 0u, 1u) : MC_SDO_ABORT_NO_SUB;
-    }
+    case 0x1001u:   /* error register (§7.5.2.2) of the latched faults */
+        return sub == 0u ? put_u(data, cap, len, mc_co_error_register(mc_drive_faults(co->drive)), 1u)
+                         : MC_SDO_ABORT_NO_SUB;
+    case 0x1003u:   /* pre-defined error field (§7.5.2.3), newest first */
+        if (sub == 0u) {
+            return put_u(data, cap, len, co->err_count, 1u);
+        }
+        return sub <= co->err_count ? put_u(data, cap, len, co->err_hist[sub - 1u], 4u) : MC_SDO_ABORT_NO_SUB;
     case 0x1008u: {
         const uint32_t n = (uint32_t)strlen(DEVICE_NAME);
         if (sub != 0u) {
@@ -116,6 +119,18 @@ uint32_t mc_co_od_write(mc_co_t *co, uint16_t index, uint8_t sub, const uint8_t 
         return sub == 0u ? param_write(co, (int)(index - 0x2000u), data, len) : MC_SDO_ABORT_NO_SUB;
     }
     switch (index) {
+    case 0x1003u:   /* writing 0 to sub 0 clears the history; anything else is refused */
+        if (sub != 0u) {
+            return sub <= 8u ? MC_SDO_ABORT_READ_ONLY : MC_SDO_ABORT_NO_SUB;
+        }
+        if (len != 1u) {
+            return len > 1u ? MC_SDO_ABORT_LENGTH_HIGH : MC_SDO_ABORT_LENGTH_LOW;
+        }
+        if (data[0] != 0u) {
+            return MC_SDO_ABORT_VALUE;
+        }
+        co->err_count = 0u;
+        return 0u;
     case 0x1017u:
         if (sub != 0u) {
             return MC_SDO_ABORT_NO_SUB;

@@ -4,7 +4,9 @@
  * parameter by its stable id, read as the value in force, written through mc_drive_param_write
  * (range-checked with the table's limits, handed to the ISR at a period boundary).
  * No heap, no globals; mc_co_step is called from the background loop with bounded work.
- * Not yet: PDOs, CiA 402, EMCY, 0x1010/0x1011 (mc/param_store.h is ready), the scope, SDO block
+ * EMCY (co_emcy.c): a message on every newly latched drive fault, the 0x1003 history, and "error
+ * reset" when the faults clear.
+ * Not yet: PDOs, CiA 402, 0x1010/0x1011 (mc/param_store.h is ready), the scope, SDO block
  * transfer. */
 #ifndef MC_CO_H
 #define MC_CO_H
@@ -69,12 +71,22 @@ typedef struct {
     bool boot_pending;           /* the boot-up message goes out at the next step */
     mc_co_sdo_t sdo;
     uint32_t tx_dropped;         /* responses hal_can_send refused */
+    uint32_t faults_seen;        /* the drive's fault bits already reported by EMCY */
+    uint32_t err_hist[8];        /* 0x1003, newest first: error code | fault bit number << 16 */
+    uint8_t err_count;
 } mc_co_t;
 
 /* false: node id outside 1..127 (nothing started). */
 bool mc_co_init(mc_co_t *co, const mc_co_cfg_t *cfg, hal_can_t *can, mc_drive_t *drive);
 /* Background: up to MC_CO_RX_PER_STEP received frames, the SDO timeout, the heartbeat. */
 void mc_co_step(mc_co_t *co, uint32_t now_ms);
+
+/* EMCY (CiA 301 §7.2.7) for a drive fault bit: the error code (CiA 301 / CiA 402 tables) and
+ * the error register bits 0x1001 it sets. */
+uint16_t mc_co_emcy_code(uint32_t fault_bit);
+uint8_t mc_co_error_register(uint32_t faults);
+/* Background: compare the drive's faults with those reported; send what changed (co_emcy.c). */
+void mc_co_emcy_step(mc_co_t *co);
 
 /* The object dictionary (co_od.c), also for tools and tests. Values little-endian as on the bus.
  * Return 0 or an SDO abort code. */

@@ -259,6 +259,74 @@ static void test_segmented_download(void **state)
     assert_int_equal(word(&f), 300u);
 }
 
+static void drive_inputs(float vdc)
+{
+    const mc_drive_blk_t *b = &rig.d.cfg->blk;
+    for (int k = 0; k < 3; ++k) {
+        rig.adc.sample.i[k] = (uint16_t)(b->offset_nominal + 0.5f);
+    }
+    rig.adc.sample.vdc = (uint16_t)(vdc / b->volts_per_count + 0.5f);
+}
+
+static void drive_run(int n, bool enable)
+{
+    const mc_drive_cmd_t c = {.enable = enable, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&rig.d, &c);
+    for (int k = 0; k < n; ++k) {
+        hal_host_pwm_latch(&rig.pwm);
+        mc_drive_isr(&rig.d);
+    }
+}
+
+static void test_emcy_on_fault(void **state)
+{
+    (void)state;
+    rig_init();
+    mc_co_step(&rig.co, now);
+    hal_can_frame_t f;
+    (void)take(&f);   /* boot-up */
+    drive_inputs(300.0f);
+    drive_run((int)rig.d.cfg->p.offset_cal_samples + 2, true);
+    mc_co_step(&rig.co, now);
+    assert_false(take(&f));   /* no fault, no EMCY */
+    drive_inputs(rig.d.cfg->p.vdc_max + 20.0f);
+    drive_run(1, true);
+    assert_true(mc_drive_faults(&rig.d) & MC_FAULT_OVERVOLTAGE);
+    mc_co_step(&rig.co, now);
+    assert_true(take(&f));
+    assert_int_equal(f.id, 0x085u);
+    assert_int_equal(f.dlc, 8u);
+    assert_int_equal(f.data[0] | (f.data[1] << 8), 0x3210);   /* DC link over-voltage */
+    assert_int_equal(f.data[2], 0x05u);                        /* generic + voltage */
+    assert_int_equal(f.data[3], 1u);                           /* MC_FAULT_OVERVOLTAGE's bit */
+    assert_false(take(&f));   /* once */
+    mc_co_step(&rig.co, now);
+    assert_false(take(&f));
+    f = sdo(0x40, 0x1001, 0, 0);
+    assert_int_equal(f.data[4], 0x05u);
+    f = sdo(0x40, 0x1003, 0, 0);
+    assert_int_equal(f.data[4], 1u);
+    f = sdo(0x40, 0x1003, 1, 0);
+    assert_int_equal(word(&f), 0x3210u | (1u << 16));
+    f = sdo(0x40, 0x1003, 2, 0);
+    expect_abort(&f, MC_SDO_ABORT_NO_SUB);
+    /* disable and enable: the fault clears, EMCY "error reset" */
+    drive_inputs(300.0f);
+    drive_run(2, false);
+    drive_run(2, true);
+    assert_int_equal(mc_drive_faults(&rig.d), 0u);
+    mc_co_step(&rig.co, now);
+    assert_true(take(&f));
+    assert_int_equal(f.id, 0x085u);
+    assert_int_equal(f.data[0] | f.data[1] | f.data[2], 0);
+    /* 0x1003 cleared by writing 0 */
+    f = sdo(0x2F, 0x1003, 0, 0);
+    assert_int_equal(f.data[0], 0x60u);
+    f = sdo(0x40, 0x1003, 0, 0);
+    assert_int_equal(f.data[4], 0u);
+    assert_int_equal(mc_co_emcy_code(11u), 0x7300u);   /* loss of lock: the angle's plausibility */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -268,6 +336,7 @@ int main(void)
         cmocka_unit_test(test_sdo_parameters),
         cmocka_unit_test(test_sdo_aborts),
         cmocka_unit_test(test_segmented_download),
+        cmocka_unit_test(test_emcy_on_fault),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
