@@ -1,35 +1,56 @@
 #!/usr/bin/env python3
-"""Regenerate (or with --check, verify) the generated tables of the docs: the scenario key table in
-docs/simulator.md from `mcsim keys`, and the drive's parameter table in docs/parameters.md from
-`mcsim params` (both come from one source each: the schema and the firmware's params_table.h)."""
+"""Regenerate (or with --check, verify) the generated parts of the docs, each from one source:
+the scenario key table in docs/simulator.md (`mcsim keys`, the schema), the drive's parameter
+table in docs/parameters.md (`mcsim params`, the firmware's params_table.h), the CANopen object
+tables in docs/can.md and the EDS tools/mctools/data/drive.eds (`co-gen`, the firmware's object
+dictionary). co-gen is looked for beside mcsim's build tree (BUILD/sim/tools/co-gen)."""
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 BEGIN, END = "<!-- keys:begin -->", "<!-- keys:end -->"
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def splice(text, table):
+    a, b = text.index(BEGIN) + len(BEGIN), text.index(END)
+    return text[:a] + "\n" + table + text[b:]
 
 
 def main():
     args = sys.argv[1:]
     check = "--check" in args
     args = [a for a in args if a != "--check"]
-    mcsim = args[0] if args else "build/host/sim/app/mcsim"
-    docs = Path(__file__).resolve().parent.parent / "docs"
+    mcsim = Path(args[0] if args else "build/host/sim/app/mcsim")
+    co_gen = mcsim.resolve().parent.parent / "tools" / "co-gen"
+    docs = ROOT / "docs"
     status = 0
+    outputs = []   # (path, new text, what it comes from)
     for name, cmd in (("simulator.md", "keys"), ("parameters.md", "params")):
+        table = subprocess.run([str(mcsim), cmd], check=True, capture_output=True, text=True).stdout
         doc = docs / name
-        table = subprocess.run([mcsim, cmd], check=True, capture_output=True, text=True).stdout
-        text = doc.read_text()
-        a, b = text.index(BEGIN) + len(BEGIN), text.index(END)
-        new = text[:a] + "\n" + table + text[b:]
+        outputs.append((doc, splice(doc.read_text(), table), f"`mcsim {cmd}`"))
+    table = subprocess.run([str(co_gen), "md"], check=True, capture_output=True, text=True).stdout
+    doc = docs / "can.md"
+    outputs.append((doc, splice(doc.read_text(), table), "`co-gen md`"))
+    with tempfile.TemporaryDirectory() as tmp:
+        eds = Path(tmp) / "drive.eds"
+        subprocess.run([str(co_gen), "eds", str(eds)], check=True)
+        outputs.append((ROOT / "tools" / "mctools" / "data" / "drive.eds", eds.read_text(), "`co-gen eds`"))
+    for path, new, source in outputs:
+        rel = path.relative_to(ROOT)
+        old = path.read_text() if path.exists() else ""
         if check:
-            if new != text:
-                print(f"docs/{name}: the table differs from `mcsim {cmd}`; run scripts/gen_docs.py")
+            if new != old:
+                print(f"{rel}: differs from {source}; run scripts/gen_docs.py {mcsim}")
                 status = 1
             else:
-                print(f"docs/{name}: table in sync with `mcsim {cmd}`")
-        else:
-            doc.write_text(new)
+                print(f"{rel}: in sync with {source}")
+        elif new != old:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(new)
+            print(f"{rel}: regenerated from {source}")
     return status
 
 

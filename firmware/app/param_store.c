@@ -709,7 +709,7 @@ mc_pstore_status_t mc_pstore_load(const hal_nvm_t *nvm, mc_drive_cfg_t *cfg, mc_
                                   size_t work_len, mc_pstore_info_t *info)
 {
     info_clear(info);
-    if (nvm == NULL || cfg == NULL || map_out == NULL || work == NULL) {
+    if (nvm == NULL || cfg == NULL || work == NULL) {
         return MC_PSTORE_BAD_ARGS;
     }
     geom_t g;

@@ -1,4 +1,5 @@
-/* CANopen device: NMT slave, heartbeat producer and the SDO server (mc/co.h; CiA 301 §7.2). */
+/* CANopen device: NMT slave, heartbeat producer, the SDO server, the step that runs the PDOs and
+ * the CiA 402 layer (mc/co.h; CiA 301 §7.2). */
 #include <string.h>
 #include "mc/co.h"
 
@@ -24,38 +25,121 @@ static void sdo_abort(mc_co_t *co, uint16_t index, uint8_t sub, uint32_t code)
     co->sdo.active = false;
 }
 
+/* The 402 block's configuration from the drive's parameters in force. The default ramps give 5 %
+ * of the rated torque's acceleration on the inertia (1090 rpm/s on the thesis motor: the demo's
+ * ramps), so that a sensorless start at light load follows them with little torque. */
+static void ds_cfg(const mc_co_t *co, mc_402_cfg_t *c)
+{
+    const mc_params_t *p = mc_drive_params(co->drive);
+    const float accel = 0.05f * p->torque_rated / p->inertia * (60.0f / 6.2831853f);   /* [rpm/s] */
+    *c = (mc_402_cfg_t){.dt = co->cfg.step_s, .pole_pairs = p->pole_pairs, .rated_torque = p->torque_rated,
+                        .rated_current = p->i_rated, .psi_pm = p->psi_pm, .ld = p->ld, .lq = p->lq,
+                        .vdc_on = p->vdc_min, .max_speed_rpm = 0.95f * p->overspeed_rpm,
+                        .accel_rpm_s = accel > 1.0f ? accel : 1.0f};
+}
+
+/* Communication reset (§7.2.8.3.2): the communication objects to their defaults, boot-up, then
+ * pre-operational. */
 static void reset_comm(mc_co_t *co)
 {
     co->heartbeat_ms = co->cfg.heartbeat_ms;
+    co->cob_sync = 0x080u;
     co->sdo.active = false;
+    mc_co_pdo_defaults(co);
     co->nmt = MC_NMT_INITIALISING;
-    co->boot_pending = true;   /* §7.2.8.3.2: boot-up, then pre-operational */
+    co->boot_pending = true;
 }
 
-bool mc_co_init(mc_co_t *co, const mc_co_cfg_t *cfg, hal_can_t *can, mc_drive_t *drive)
+/* Application reset: also the 402 objects and state (the drive's parameters are kept: they are
+ * the configuration in force, and a power-on takes the stored set). */
+static void reset_app(mc_co_t *co)
 {
-    if (cfg == NULL || cfg->node_id < 1u || cfg->node_id > 127u || can == NULL || drive == NULL) {
+    mc_402_cfg_t c;
+    ds_cfg(co, &c);
+    mc_402_init(&co->ds, &c);
+    co->scope_cfg = (mc_scope_cfg_t){.decimation = 1u};
+    co->scope_ctrl = 0u;
+    if (co->scope != NULL) {
+        mc_scope_stop(co->scope);
+    }
+    reset_comm(co);
+}
+
+bool mc_co_init(mc_co_t *co, const mc_co_cfg_t *cfg, hal_can_t *can, mc_drive_t *drive, hal_nvm_t *nvm,
+                mc_scope_t *scope, mc_pstore_status_t cfg_source)
+{
+    if (cfg == NULL || cfg->node_id < 1u || cfg->node_id > 127u || can == NULL || drive == NULL ||
+        !(cfg->step_s > 0.0f && cfg->step_s < 1.0f)) {
         return false;
     }
     memset(co, 0, sizeof *co);
     co->cfg = *cfg;
     co->can = can;
     co->drive = drive;
-    reset_comm(co);
+    co->nvm = nvm;
+    co->scope = scope;
+    co->ds_on = true;
+    co->cfg_source = (uint8_t)cfg_source;
+    (void)mc_drive_telemetry_read(drive, &co->tm);
+    reset_app(co);
     return true;
 }
 
-/* Initiate upload (§7.2.4.3.5): expedited up to 4 bytes, else segmented with the size. */
+void mc_co_emcy_send(mc_co_t *co, uint16_t code, uint8_t reg, const uint8_t info[5])
+{
+    const hal_can_frame_t f = {.id = 0x080u + co->cfg.node_id, .dlc = 8u,
+                               .data = {(uint8_t)code, (uint8_t)(code >> 8), reg, info[0], info[1], info[2], info[3],
+                                        info[4]}};
+    if (!hal_can_send(co->can, &f)) {
+        co->tx_dropped++;
+    }
+}
+
+mc_pstore_status_t mc_co_boot_config(const hal_nvm_t *nvm, const mc_drive_cfg_t *base, mc_drive_cfg_t *out,
+                                     mc_flux_map_t *map_out)
+{
+    *out = *base;
+    if (nvm == NULL) {
+        return MC_PSTORE_EMPTY;
+    }
+    uint8_t work[MC_CO_STORE_WORK];
+    mc_pstore_info_t info;
+    mc_drive_cfg_t stored = *base;
+    const mc_pstore_status_t st = mc_pstore_load(nvm, &stored, map_out, work, sizeof work, &info);
+    if (st == MC_PSTORE_OK || st == MC_PSTORE_FELL_BACK) {
+        if (stored.est.map == NULL) {
+            /* saved without it (too large for the slot), or not loaded (map_out NULL): the
+             * integrator's map of the same machine */
+            stored.est.map = base->est.map;
+        }
+        *out = stored;
+    }
+    return st;
+}
+
+/* Initiate upload (§7.2.4.3.5): expedited up to 4 bytes, else segmented with the size. A DOMAIN
+ * is streamed from the object as the segments go; anything else is copied now. */
 static void sdo_upload(mc_co_t *co, uint16_t index, uint8_t sub)
 {
+    mc_co_entry_t e;
+    bool miss;
     uint32_t len = 0u;
-    const uint32_t a = mc_co_od_read(co, index, sub, co->sdo.buf, sizeof co->sdo.buf, &len);
-    if (a != 0u) {
-        sdo_abort(co, index, sub, a);
-        return;
+    const bool domain = mc_co_od_lookup(index, sub, &e, &miss) && e.type == MC_CO_DOMAIN;
+    if (domain) {
+        len = mc_co_od_domain_size(co, index, sub);
+        if (len == 0u) {
+            sdo_abort(co, index, sub, co->scope == NULL ? MC_SDO_ABORT_NO_OBJECT : MC_SDO_ABORT_NO_DATA);
+            return;
+        }
+    } else {
+        const uint32_t a = mc_co_od_read(co, index, sub, co->sdo.buf, sizeof co->sdo.buf, &len);
+        if (a != 0u) {
+            sdo_abort(co, index, sub, a);
+            return;
+        }
     }
     uint8_t d[8] = {0u, (uint8_t)index, (uint8_t)(index >> 8), sub, 0u, 0u, 0u, 0u};
-    if (len <= 4u) {
+    if (!domain && len <= 4u) {
         d[0] = (uint8_t)(0x43u | ((4u - len) << 2));   /* scs 2, n, e, s */
         memcpy(d + 4, co->sdo.buf, len);
         sdo_send(co, d);
@@ -64,10 +148,18 @@ static void sdo_upload(mc_co_t *co, uint16_t index, uint8_t sub)
     d[0] = 0x41u;   /* scs 2, s: size in d[4..7] */
     d[4] = (uint8_t)len;
     d[5] = (uint8_t)(len >> 8);
+    d[6] = (uint8_t)(len >> 16);
+    d[7] = (uint8_t)(len >> 24);
     sdo_send(co, d);
-    co->sdo = (mc_co_sdo_t){.active = true, .upload = true, .index = index, .sub = sub, .toggle = 0u,
-                                .len = len, .pos = 0u, .t0_ms = co->now_ms};
-    (void)mc_co_od_read(co, index, sub, co->sdo.buf, sizeof co->sdo.buf, &co->sdo.len);
+    co->sdo.active = true;
+    co->sdo.upload = true;
+    co->sdo.domain = domain;
+    co->sdo.index = index;
+    co->sdo.sub = sub;
+    co->sdo.toggle = 0u;
+    co->sdo.len = len;
+    co->sdo.pos = 0u;
+    co->sdo.t0_ms = co->now_ms;
 }
 
 /* Upload segment (§7.2.4.3.6). */
@@ -86,9 +178,17 @@ static void sdo_upload_segment(mc_co_t *co, uint8_t cmd)
     if (n > 7u) {
         n = 7u;
     }
+    uint8_t d[8] = {0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u};
+    if (co->sdo.domain) {
+        if (mc_co_od_domain_read(co, co->sdo.index, co->sdo.sub, co->sdo.pos, d + 1, n) != n) {
+            sdo_abort(co, co->sdo.index, co->sdo.sub, MC_SDO_ABORT_NO_DATA);   /* re-armed meanwhile */
+            return;
+        }
+    } else {
+        memcpy(d + 1, co->sdo.buf + co->sdo.pos, n);
+    }
     const bool last = co->sdo.pos + n >= co->sdo.len;
-    uint8_t d[8] = {(uint8_t)((t << 4) | ((7u - n) << 1) | (last ? 1u : 0u)), 0u, 0u, 0u, 0u, 0u, 0u, 0u};
-    memcpy(d + 1, co->sdo.buf + co->sdo.pos, n);
+    d[0] = (uint8_t)((t << 4) | ((7u - n) << 1) | (last ? 1u : 0u));
     sdo_send(co, d);
     co->sdo.pos += n;
     co->sdo.toggle ^= 1u;
@@ -107,6 +207,9 @@ static void sdo_download(mc_co_t *co, const uint8_t *r, uint16_t index, uint8_t 
     if (e) {
         const uint32_t n = s ? 4u - ((cmd >> 2) & 3u) : 4u;
         const uint32_t a = mc_co_od_write(co, index, sub, r + 4, n);
+        if (index == 0x6040u) {
+            co->cw_written = true;
+        }
         if (a != 0u) {
             sdo_abort(co, index, sub, a);
             return;
@@ -120,17 +223,27 @@ static void sdo_download(mc_co_t *co, const uint8_t *r, uint16_t index, uint8_t 
         sdo_abort(co, index, sub, MC_SDO_ABORT_LENGTH_HIGH);
         return;
     }
-    /* the object must exist before the segments come (its own checks run at the end) */
-    uint8_t tmp[MC_CO_SDO_BUF];
-    uint32_t n;
-    const uint32_t a = mc_co_od_read(co, index, sub, tmp, sizeof tmp, &n);
-    if (a == MC_SDO_ABORT_NO_OBJECT || a == MC_SDO_ABORT_NO_SUB) {
-        sdo_abort(co, index, sub, a);
+    /* the object must exist and be writable before the segments come (the rest is checked at the end) */
+    mc_co_entry_t ent;
+    bool miss;
+    if (!mc_co_od_lookup(index, sub, &ent, &miss)) {
+        sdo_abort(co, index, sub, miss ? MC_SDO_ABORT_NO_SUB : MC_SDO_ABORT_NO_OBJECT);
+        return;
+    }
+    if (ent.access == MC_CO_RO || ent.access == MC_CO_CONST) {
+        sdo_abort(co, index, sub, MC_SDO_ABORT_READ_ONLY);
         return;
     }
     sdo_send(co, d);
-    co->sdo = (mc_co_sdo_t){.active = true, .upload = false, .index = index, .sub = sub, .toggle = 0u,
-                                .len = 0u, .size = size, .t0_ms = co->now_ms};
+    co->sdo.active = true;
+    co->sdo.upload = false;
+    co->sdo.domain = false;
+    co->sdo.index = index;
+    co->sdo.sub = sub;
+    co->sdo.toggle = 0u;
+    co->sdo.len = 0u;
+    co->sdo.size = size;
+    co->sdo.t0_ms = co->now_ms;
 }
 
 /* Download segment (§7.2.4.3.4). */
@@ -165,6 +278,9 @@ static void sdo_download_segment(mc_co_t *co, const uint8_t *r)
         return;
     }
     const uint32_t a = mc_co_od_write(co, co->sdo.index, co->sdo.sub, co->sdo.buf, co->sdo.len);
+    if (co->sdo.index == 0x6040u) {
+        co->cw_written = true;
+    }
     if (a != 0u) {
         sdo_abort(co, co->sdo.index, co->sdo.sub, a);
         return;
@@ -213,21 +329,48 @@ static void nmt_command(mc_co_t *co, const hal_can_frame_t *f)
     case 0x01u: co->nmt = MC_NMT_OPERATIONAL; break;
     case 0x02u: co->nmt = MC_NMT_STOPPED; co->sdo.active = false; break;
     case 0x80u: co->nmt = MC_NMT_PRE_OPERATIONAL; break;
-    case 0x81u:   /* reset node: the application's parameters are the drive's, kept; comm restarts */
+    case 0x81u: reset_app(co); break;
     case 0x82u: reset_comm(co); break;
     default: break;
+    }
+}
+
+/* The 402 layer: its step on the telemetry, its command to the drive. */
+/* The 402 layer: its step on the telemetry (advance: a period; else only the new controlword's
+ * transition), its command to the drive. */
+static void ds_step(mc_co_t *co, bool advance)
+{
+    if (co->motor_changed) {
+        mc_402_cfg_t c;
+        ds_cfg(co, &c);
+        mc_402_configure(&co->ds, &c);
+        co->motor_changed = false;
+    }
+    mc_drive_cmd_t cmd;
+    if (advance) {
+        mc_402_step(&co->ds, &co->tm, &cmd);
+    } else {
+        mc_402_controlword(&co->ds, &co->tm, &cmd);
+    }
+    if (co->ds_on) {
+        mc_drive_command(co->drive, &cmd);
     }
 }
 
 void mc_co_step(mc_co_t *co, uint32_t now_ms)
 {
     co->now_ms = now_ms;
+    (void)mc_drive_telemetry_read(co->drive, &co->tm);   /* on failure: the last one */
     if (co->boot_pending) {
         const uint8_t b = 0u;
         send(co, 0x700u + co->cfg.node_id, &b, 1u);
         co->boot_pending = false;
         co->nmt = MC_NMT_PRE_OPERATIONAL;
         co->hb_last_ms = now_ms;
+        if (co->cfg_source == (uint8_t)MC_PSTORE_CORRUPT || co->cfg_source == (uint8_t)MC_PSTORE_NVM_ERROR) {
+            const uint8_t info[5] = {co->cfg_source, 0u, 0u, 0u, 0u};
+            mc_co_emcy_send(co, MC_EMCY_PARAMS_LOST, 0x01u, info);   /* defaults in force */
+        }
     }
     hal_can_frame_t f;
     for (uint32_t k = 0u; k < MC_CO_RX_PER_STEP && hal_can_receive(co->can, &f); ++k) {
@@ -236,13 +379,24 @@ void mc_co_step(mc_co_t *co, uint32_t now_ms)
         }
         if (f.id == 0x000u) {
             nmt_command(co, &f);
-        } else if (f.id == 0x600u + co->cfg.node_id && co->nmt != MC_NMT_STOPPED) {
-            sdo_request(co, &f);
+        } else if (f.id == 0x600u + co->cfg.node_id) {
+            if (co->nmt != MC_NMT_STOPPED) {
+                sdo_request(co, &f);
+            }
+        } else {
+            (void)mc_co_pdo_rx(co, &f);
         }
-        if (co->boot_pending) {   /* a reset communication in this batch */
+        if (co->boot_pending) {   /* a reset in this batch */
             return;
         }
+        if (co->cw_written) {
+            /* every controlword takes its transition, also two in one batch (CiA 402 §6.3) */
+            co->cw_written = false;
+            ds_step(co, false);
+        }
     }
+    ds_step(co, true);
+    mc_co_pdo_tx(co);
     mc_co_emcy_step(co);
     if (co->sdo.active && now_ms - co->sdo.t0_ms > MC_CO_SDO_TIMEOUT_MS) {
         sdo_abort(co, co->sdo.index, co->sdo.sub, MC_SDO_ABORT_TIMEOUT);

@@ -42,14 +42,13 @@ uint8_t mc_co_error_register(uint32_t faults)
     return r;
 }
 
+/* A drive fault's EMCY: the manufacturer bytes carry the fault bit number and the low 32 bits
+ * of the fault word less its top byte (a tool names the reason from the bit). */
 static void emcy(mc_co_t *co, uint16_t code, uint8_t reg, uint8_t bit, uint32_t faults)
 {
-    const hal_can_frame_t f = {.id = 0x080u + co->cfg.node_id, .dlc = 8u,
-                               .data = {(uint8_t)code, (uint8_t)(code >> 8), reg, bit, (uint8_t)faults,
-                                        (uint8_t)(faults >> 8), (uint8_t)(faults >> 16), (uint8_t)(faults >> 24)}};
-    if (!hal_can_send(co->can, &f)) {
-        co->tx_dropped++;
-    }
+    const uint8_t info[5] = {bit, (uint8_t)faults, (uint8_t)(faults >> 8), (uint8_t)(faults >> 16),
+                             (uint8_t)(faults >> 24)};
+    mc_co_emcy_send(co, code, reg, info);
 }
 
 void mc_co_emcy_step(mc_co_t *co)

@@ -12,6 +12,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -59,7 +60,7 @@ public:
         lfd_ = socket(AF_INET, SOCK_STREAM, 0);
         const int one = 1;
         setsockopt(lfd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-        if (lfd_ < 0 || bind(lfd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || listen(lfd_, 1) != 0) {
+        if (lfd_ < 0 || bind(lfd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || listen(lfd_, 8) != 0) {
             const std::string why = std::strerror(errno);
             if (lfd_ >= 0) close(lfd_);
             throw ScenarioError("--can socketcand:" + host + ":" + std::to_string(port) + ": cannot listen (" + why + ")");
@@ -68,26 +69,37 @@ public:
     }
     ~Socketcand() override
     {
-        if (cfd_ >= 0) close(cfd_);
+        for (Client& c : clients_)
+            if (c.fd >= 0) close(c.fd);
         if (lfd_ >= 0) close(lfd_);
     }
 
+    // Like a bus (and the real socketcand): every raw-mode client sees the drive's frames and
+    // the other clients' frames, so a monitor and a tuning tool can be connected at once.
     void pump(hal_can_t* can, double t) override
     {
-        accept_client();
-        read_client(can);
+        accept_clients();
+        for (size_t k = 0; k < clients_.size(); ++k) read_client(k, can, t);
         hal_can_frame_t f;
-        while (hal_host_can_take(can, &f)) {
-            if (cfd_ >= 0 && raw_) send_line(frame_line(f, t));
-        }
+        while (hal_host_can_take(can, &f)) broadcast(frame_line(f, t), clients_.size());
+        clients_.erase(std::remove_if(clients_.begin(), clients_.end(), [](const Client& c) { return c.fd < 0; }),
+                       clients_.end());
     }
 
     std::string describe() const override
     {
-        return "socketcand on " + host_ + ":" + std::to_string(port_) + " (channel can0, raw mode)";
+        return "socketcand on " + host_ + ":" + std::to_string(port_) + " (channel can0, raw mode, up to " +
+               std::to_string(kMaxClients) + " clients)";
     }
 
 private:
+    static constexpr size_t kMaxClients = 8;
+    struct Client {
+        int fd = -1;
+        bool raw = false;
+        std::string in;
+    };
+
     static std::string frame_line(const hal_can_frame_t& f, double t)
     {
         char id[16];
@@ -105,93 +117,106 @@ private:
         return std::string("< frame ") + id + " " + ts + " " + data + " >";
     }
 
-    void accept_client()
+    void accept_clients()
     {
-        if (cfd_ >= 0) return;
-        const int fd = accept(lfd_, nullptr, nullptr);
-        if (fd < 0) return;
-        set_nonblocking(fd);
-        const int one = 1;
-        setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-        cfd_ = fd;
-        raw_ = false;
-        in_.clear();
-        send_line("< hi >");
+        for (;;) {
+            const int fd = accept(lfd_, nullptr, nullptr);
+            if (fd < 0) return;
+            if (clients_.size() >= kMaxClients) {
+                close(fd);   // refused: the client sees the connection closed
+                continue;
+            }
+            set_nonblocking(fd);
+            const int one = 1;
+            setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+            clients_.push_back(Client{fd, false, {}});
+            send_line(clients_.back(), "< hi >");
+        }
     }
 
-    void drop_client()
+    static void drop(Client& c)
     {
-        close(cfd_);
-        cfd_ = -1;
-        raw_ = false;
-        in_.clear();
+        close(c.fd);
+        c.fd = -1;
+        c.raw = false;
+        c.in.clear();
     }
 
     // A line goes out whole; a client that stops reading for a second is dropped rather than
     // stalling the simulation.
-    void send_line(const std::string& line)
+    static void send_line(Client& c, const std::string& line)
     {
         size_t off = 0;
-        while (off < line.size()) {
-            const ssize_t n = ::send(cfd_, line.data() + off, line.size() - off, MSG_NOSIGNAL);
+        while (c.fd >= 0 && off < line.size()) {
+            const ssize_t n = ::send(c.fd, line.data() + off, line.size() - off, MSG_NOSIGNAL);
             if (n < 0) {
-                pollfd p{cfd_, POLLOUT, 0};
+                pollfd p{c.fd, POLLOUT, 0};
                 if ((errno == EAGAIN || errno == EWOULDBLOCK) && poll(&p, 1, 1000) == 1) continue;
-                drop_client();
+                drop(c);
                 return;
             }
             off += static_cast<size_t>(n);
         }
     }
 
-    void read_client(hal_can_t* can)
+    // To every raw-mode client but `except` (an index; clients_.size(): none).
+    void broadcast(const std::string& line, size_t except)
     {
-        if (cfd_ < 0) return;
+        for (size_t k = 0; k < clients_.size(); ++k)
+            if (k != except && clients_[k].fd >= 0 && clients_[k].raw) send_line(clients_[k], line);
+    }
+
+    void read_client(size_t k, hal_can_t* can, double t)
+    {
+        if (clients_[k].fd < 0) return;
         char buf[4096];
         for (;;) {
-            const ssize_t n = recv(cfd_, buf, sizeof buf, 0);
+            const ssize_t n = recv(clients_[k].fd, buf, sizeof buf, 0);
             if (n == 0) {
-                drop_client();
+                drop(clients_[k]);
                 return;
             }
             if (n < 0) break;
-            in_.append(buf, static_cast<size_t>(n));
+            clients_[k].in.append(buf, static_cast<size_t>(n));
         }
         // complete commands: "< ... >"
         for (;;) {
-            const size_t a = in_.find('<');
+            std::string& in = clients_[k].in;
+            const size_t a = in.find('<');
             if (a == std::string::npos) {
-                in_.clear();
+                in.clear();
                 return;
             }
-            const size_t b = in_.find('>', a);
+            const size_t b = in.find('>', a);
             if (b == std::string::npos) {
-                in_.erase(0, a);
+                in.erase(0, a);
                 return;
             }
-            command(in_.substr(a + 1, b - a - 1), can);
-            if (cfd_ < 0) return;
-            in_.erase(0, b + 1);
+            const std::string body = in.substr(a + 1, b - a - 1);
+            in.erase(0, b + 1);
+            command(k, body, can, t);
+            if (clients_[k].fd < 0) return;
         }
     }
 
-    void command(const std::string& body, hal_can_t* can)
+    void command(size_t k, const std::string& body, hal_can_t* can, double t)
     {
         std::vector<std::string> w;
-        size_t k = 0;
-        while (k < body.size()) {
-            while (k < body.size() && body[k] == ' ') ++k;
-            size_t e = k;
+        size_t i = 0;
+        while (i < body.size()) {
+            while (i < body.size() && body[i] == ' ') ++i;
+            size_t e = i;
             while (e < body.size() && body[e] != ' ') ++e;
-            if (e > k) w.push_back(body.substr(k, e - k));
-            k = e;
+            if (e > i) w.push_back(body.substr(i, e - i));
+            i = e;
         }
         if (w.empty()) return;
+        Client& c = clients_[k];
         if (w[0] == "open" && w.size() == 2) {
-            send_line("< ok >");
+            send_line(c, "< ok >");
         } else if (w[0] == "rawmode") {
-            raw_ = true;   // subscribed first, then acknowledged
-            send_line("< ok >");
+            c.raw = true;   // subscribed first, then acknowledged
+            send_line(c, "< ok >");
         } else if (w[0] == "send" && w.size() >= 3) {
             hal_can_frame_t f{};
             char* end = nullptr;
@@ -206,7 +231,12 @@ private:
             f.dlc = static_cast<uint8_t>(dlc);
             for (unsigned long j = 0; j < dlc; ++j)
                 f.data[j] = static_cast<uint8_t>(std::strtoul(w[3 + j].c_str(), nullptr, 16));
-            if (!hal_host_can_deliver(can, &f)) ++bad_;
+            if (!hal_can_frame_valid(&f)) {
+                ++bad_;
+                return;
+            }
+            if (!hal_host_can_deliver(can, &f)) ++bad_;   // the drive's RX ring full: lost for it
+            broadcast(frame_line(f, t), k);               // the other clients see it on the bus
         } else {
             ++bad_;   // not for raw mode (bcm, echo, ...): ignored, never answered with < error >
         }
@@ -214,9 +244,8 @@ private:
 
     std::string host_;
     int port_;
-    int lfd_ = -1, cfd_ = -1;
-    bool raw_ = false;
-    std::string in_;
+    int lfd_ = -1;
+    std::vector<Client> clients_;
     unsigned long bad_ = 0;
 };
 

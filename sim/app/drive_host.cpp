@@ -1,6 +1,11 @@
 // The firmware on the host HAL port (drive_target.hpp).
 #include <algorithm>
+#include <cstring>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <stdexcept>
+#include <vector>
 
 #include "drive_target.hpp"
 
@@ -15,7 +20,8 @@ namespace {
 
 class HostDrive final : public DriveTarget {
 public:
-    HostDrive(const Scenario& sc, const DriveSetup& ds, double ts) : ts_(ts)
+    HostDrive(const Scenario& sc, const DriveSetup& ds, double ts, const std::string& nvm_file)
+        : ts_(ts), nvm_file_(nvm_file)
     {
         hal_host_pwm_init(&pwm_, static_cast<float>(ts), static_cast<float>(sc.f("inverter.dead_time_s")));
         qep_.counts_per_rev = 4u * static_cast<uint32_t>(sc.i("sensors.encoder_lines"));
@@ -23,8 +29,22 @@ public:
             hal_host_pwm_set_counts(&pwm_, static_cast<uint32_t>(sc.i("inverter.pwm_counts")),
                                     sc.s("inverter.pwm_compare") == "off_time");
         hal_host_can_init(&can_);
-        if (!mc_drive_init(drive_.get(), link_.get(), &ds.cfg, &adc_, &pwm_, &qep_))
-            throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive_.get())));
+        // The configuration the drive boots with: the set stored in its NVM (0x1010), else the
+        // scenario's, as the firmware image does with its store.
+        hal_host_nvm_init(nvm_.get());
+        mc_drive_cfg_t cfg = ds.cfg;
+        if (!nvm_file_.empty()) {
+            load_nvm();
+            boot_status_ = mc_co_boot_config(nvm_.get(), &ds.cfg, &cfg, map_.get());
+            nvm_steps_ = nvm_->steps;
+        }
+        if (!mc_drive_init(drive_.get(), link_.get(), &cfg, &adc_, &pwm_, &qep_))
+            throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive_.get())) +
+                                (boot_status_ == MC_PSTORE_OK || boot_status_ == MC_PSTORE_FELL_BACK
+                                     ? " (the configuration stored in " + nvm_file_ + ")"
+                                     : ""));
+        scope_buf_.assign(static_cast<size_t>(sc.i("can.scope_values")), 0.0f);
+        mc_scope_init(&scope_, scope_buf_.data(), static_cast<uint32_t>(scope_buf_.size()), static_cast<float>(ts));
     }
     PwmOut pending() const override { return duties(pwm_.shadow, pwm_.cmp_shadow); }
     void boundary(const DriveInputs& in) override
@@ -42,16 +62,29 @@ public:
     void isr(long k) override
     {
         mc_drive_isr(drive_.get());
+        if (co_) mc_scope_sample(&scope_, mc_drive_telemetry(drive_.get()));   // the scope runs in the ISR
         if (k % 10 == 0) {
             mc_drive_background(drive_.get());
-            if (co_) mc_co_step(co_.get(), static_cast<uint32_t>(static_cast<double>(k) * ts_ * 1000.0));
+            if (co_) {
+                mc_co_step(co_.get(), static_cast<uint32_t>(static_cast<double>(k) * ts_ * 1000.0));
+                if (nvm_->steps != nvm_steps_) save_nvm();   // a store or restore wrote the NVM
+            }
         }
     }
-    bool attach_canopen(uint8_t node_id, uint16_t heartbeat_ms) override
+    bool attach_canopen(uint8_t node_id, uint16_t heartbeat_ms, bool commands) override
     {
-        const mc_co_cfg_t c = {node_id, heartbeat_ms, 0x00000000u, 0x00000001u, 0x00010000u, 0x00000001u};
+        mc_co_cfg_t c{};
+        c.node_id = node_id;
+        c.heartbeat_ms = heartbeat_ms;
+        c.step_s = static_cast<float>(10.0 * ts_);   // mc_co_step every 10th period
+        c.vendor_id = 0x00000000u;
+        c.product_code = 0x00000001u;
+        c.revision = 0x00020000u;
+        c.serial = 0x00000001u;
         co_ = std::make_unique<mc_co_t>();
-        return mc_co_init(co_.get(), &c, &can_, drive_.get());
+        if (!mc_co_init(co_.get(), &c, &can_, drive_.get(), nvm_.get(), &scope_, boot_status_)) return false;
+        co_->ds_on = commands;
+        return true;
     }
     mc_drive_telem_t telemetry() override
     {
@@ -77,7 +110,39 @@ private:
         return o;
     }
 
+    // The NVM file holds the blocks as they are (hal_host's layout); a file of another size is
+    // refused rather than guessed at.
+    void load_nvm()
+    {
+        std::ifstream f(nvm_file_, std::ios::binary);
+        if (!f) return;   // none yet: an erased NVM
+        std::vector<char> b((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+        if (b.size() != sizeof nvm_->mem)
+            throw ScenarioError("--nvm " + nvm_file_ + ": " + std::to_string(b.size()) + " bytes, expected " +
+                                std::to_string(sizeof nvm_->mem) + " (not an NVM image of this drive)");
+        std::memcpy(nvm_->mem, b.data(), b.size());
+    }
+    void save_nvm()
+    {
+        nvm_steps_ = nvm_->steps;
+        if (nvm_file_.empty()) return;
+        const std::string tmp = nvm_file_ + ".tmp";
+        {
+            std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+            f.write(reinterpret_cast<const char*>(nvm_->mem), sizeof nvm_->mem);
+            if (!f) throw std::runtime_error("--nvm: cannot write " + tmp);
+        }
+        std::filesystem::rename(tmp, nvm_file_);   // whole or not at all
+    }
+
     double ts_;
+    std::string nvm_file_;
+    std::unique_ptr<hal_nvm_t> nvm_ = std::make_unique<hal_nvm_t>();
+    std::unique_ptr<mc_flux_map_t> map_ = std::make_unique<mc_flux_map_t>();
+    uint32_t nvm_steps_ = 0;
+    mc_pstore_status_t boot_status_ = MC_PSTORE_EMPTY;
+    mc_scope_t scope_{};
+    std::vector<float> scope_buf_;
     std::unique_ptr<mc_co_t> co_;
     hal_pwm_t pwm_{};
     hal_can_t can_{};
@@ -89,9 +154,10 @@ private:
 
 }  // namespace
 
-std::unique_ptr<DriveTarget> make_host_drive(const Scenario& sc, const DriveSetup& ds, double ts)
+std::unique_ptr<DriveTarget> make_host_drive(const Scenario& sc, const DriveSetup& ds, double ts,
+                                             const std::string& nvm_file)
 {
-    return std::make_unique<HostDrive>(sc, ds, ts);
+    return std::make_unique<HostDrive>(sc, ds, ts, nvm_file);
 }
 
 }  // namespace mcsim

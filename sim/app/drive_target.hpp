@@ -52,10 +52,12 @@ public:
     // the simulator can reach.
     virtual hal_can_t* can() { return nullptr; }
     // Run the drive's CANopen device (mc/co.h) in its background loop; false where there is none.
-    virtual bool attach_canopen(uint8_t node_id, uint16_t heartbeat_ms)
+    // commands: the CiA 402 layer commands the drive (else the scenario does).
+    virtual bool attach_canopen(uint8_t node_id, uint16_t heartbeat_ms, bool commands)
     {
         (void)node_id;
         (void)heartbeat_ms;
+        (void)commands;
         return false;
     }
     // Extra metrics of this target (the PIL's cycle figures), as JSON fields.
@@ -63,7 +65,10 @@ public:
 };
 
 // The firmware built for the host, through the host HAL port.
-std::unique_ptr<DriveTarget> make_host_drive(const Scenario& sc, const DriveSetup& ds, double ts);
+// nvm_file: the drive's NVM (the CANopen store 0x1010) kept in this file across runs ("" = a fresh
+// erased NVM per run); the drive boots with the set stored there, as a real one does.
+std::unique_ptr<DriveTarget> make_host_drive(const Scenario& sc, const DriveSetup& ds, double ts,
+                                             const std::string& nvm_file = "");
 // A firmware image under PIL: the scenario's configuration written into the image's
 // configuration area, reset, booted to its idle loop. Bad images: ScenarioError (exit 2).
 std::unique_ptr<DriveTarget> make_pil_drive(const std::string& elf, const DriveSetup& ds, double ts);

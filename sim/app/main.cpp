@@ -1,6 +1,6 @@
 // mcsim: scenario runner CLI.
 //   mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet] [--pil IMAGE.elf]
-//             [--can socketcand:HOST:PORT | socketcan:IFACE] [--realtime[=SCALE]]
+//             [--can socketcand:HOST:PORT | socketcan:IFACE] [--realtime[=SCALE]] [--nvm FILE]
 //   mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]
 //   mcsim keys                      (the scenario key table, markdown)
 //   mcsim params                    (the firmware's parameter table, markdown)
@@ -49,9 +49,11 @@ double ns_per_call(F f)
 
 const char* kUsage =
     "usage: mcsim run SCENARIO.toml [--set key=value]... [--out DIR] [--quiet] [--pil IMAGE.elf]\n"
-    "                 [--can socketcand:HOST:PORT | socketcan:IFACE] [--realtime[=SCALE]]\n"
+    "                 [--can socketcand:HOST:PORT | socketcan:IFACE] [--realtime[=SCALE]] [--nvm FILE]\n"
     "         --can socketcand:HOST:PORT | socketcan:IFACE: the drive on a CAN bus (python-can reaches it)\n"
     "         --realtime[=SCALE]: pace simulated time to the wall clock (x SCALE)\n"
+    "         --nvm FILE: the drive's NVM (CANopen store 0x1010) kept in FILE across runs; the drive boots\n"
+    "                     with the set stored there\n"
     "         --pil: run a cross-built firmware image (presets arm-cm4f, am263x) on an emulated core\n"
     "                against the plant instead of the host build; adds estimated ISR cycles to metrics.json\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
@@ -79,7 +81,7 @@ trace = false
 
 int cmd_run(int argc, char** argv, bool check_only)
 {
-    std::string file, out, pil, can;
+    std::string file, out, pil, can, nvm;
     double realtime = 0.0;
     std::vector<std::string> sets;
     bool quiet = false;
@@ -91,6 +93,7 @@ int cmd_run(int argc, char** argv, bool check_only)
         else if (a == "--quiet") quiet = true;
         else if (a == "--pil" && k + 1 < argc) pil = argv[++k];
         else if (a == "--can" && k + 1 < argc) can = argv[++k];
+        else if (a == "--nvm" && k + 1 < argc) nvm = argv[++k];
         else if (a == "--realtime") realtime = 1.0;
         else if (a.rfind("--realtime=", 0) == 0) {
             char* end = nullptr;
@@ -125,6 +128,7 @@ int cmd_run(int argc, char** argv, bool check_only)
     opt.pil_elf = pil;
     opt.can = can;
     opt.realtime = realtime;
+    opt.nvm_file = nvm;
     const mcsim::RunSummary r = mcsim::run_scenario(sc, opt);
     if (!quiet) {
         std::printf("%s", r.metrics_json.c_str());

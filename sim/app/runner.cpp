@@ -434,15 +434,19 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
 
     // ---- the firmware: built for the host, or a cross-built image under PIL
     std::unique_ptr<DriveTarget> drive =
-        opt.pil_elf.empty() ? make_host_drive(sc, ds, r.ts) : make_pil_drive(opt.pil_elf, ds, r.ts);
+        opt.pil_elf.empty() ? make_host_drive(sc, ds, r.ts, opt.nvm_file) : make_pil_drive(opt.pil_elf, ds, r.ts);
+    if (!opt.nvm_file.empty() && !opt.pil_elf.empty())
+        throw ScenarioError("--nvm: the PIL image keeps its configuration in its configuration area (mcsim image-config), not in an NVM file");
     const mc_params_t& dp = ds.resolved;
     const bool estimator = ds.estimator;
     std::unique_ptr<CanLink> can;
+    const bool can_commands = !opt.can.empty() && sc.s("can.commands") == "canopen";
     if (!opt.can.empty()) {
         if (drive->can() == nullptr)
             throw ScenarioError("--can: this target has no CAN the simulator reaches (use the host build, without --pil)");
         can = make_can_link(opt.can);
-        if (!drive->attach_canopen(static_cast<uint8_t>(sc.i("can.node_id")), static_cast<uint16_t>(sc.i("can.heartbeat_ms"))))
+        if (!drive->attach_canopen(static_cast<uint8_t>(sc.i("can.node_id")), static_cast<uint16_t>(sc.i("can.heartbeat_ms")),
+                                   can_commands))
             throw ScenarioError("--can: the drive's CANopen device refused its configuration");
         if (opt.progress) std::fprintf(stderr, "mcsim: the drive is on CAN: %s\n", can->describe().c_str());
     }
@@ -490,8 +494,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         drive->boundary(in);
 
         const double theta = plant.theta_e();
-        const mc_drive_cmd_t cmd = commander.at(t, theta);
-        drive->command(cmd);
+        if (!can_commands) drive->command(commander.at(t, theta));   // else CiA 402 commands
 
         // The ISR / plant split is timed on every 17th period: a clock read costs about a tenth
         // of a simulated period, so timing all of them would slow down what it measures; 17 is
@@ -513,7 +516,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         const Vec2 idq = plant.i_dq();
         double sref = NAN;
         if (is_dyno) sref = dyno.at(t);
-        else if (commander.mode == MC_MODE_SPEED && !is_locked) sref = commander.speed_ref.at(t);
+        else if (!can_commands && commander.mode == MC_MODE_SPEED && !is_locked) sref = commander.speed_ref.at(t);
         Sample smp{t, running, running ? wrap_pi(tm.theta - theta) * deg : NAN, plant.omega_m() * kRpm, sref,
                    idq.x(), idq.y(), tm.i_ref.d, tm.i_ref.q, plant.torque(), ipk,
                    running && estimator ? tm.est_iters : -1};

@@ -14,6 +14,7 @@ struct RunOptions {
     std::string pil_elf;      // run this cross-built image under processor-in-the-loop ("" = host build)
     std::string can;          // "socketcand:HOST:PORT" or "socketcan:IFACE": the drive on a CAN bus
     double realtime = 0;      // > 0: pace simulated time to wall time x this factor (1 = real time)
+    std::string nvm_file;     // the drive's NVM kept in this file across runs (host build)
 };
 
 struct RunSummary {

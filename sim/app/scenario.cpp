@@ -43,6 +43,8 @@ const std::vector<KeySpec>& scenario_schema()
     {"can.node_id", KeyType::Int, "1", nullptr, 1, 127, "", "", "CANopen node id of the drive (mcsim run --can)."},
     {"can.heartbeat_ms", KeyType::Int, "1000", nullptr, 0, 65535, "ms", "", "CANopen producer heartbeat time 0x1017 at start (0: off)."},
     {"can.bitrate", KeyType::Int, "500000", nullptr, 10000, 1000000, "bit/s", "", "Classic CAN bit rate (a real bus's; the TCP and virtual links do not pace to it)."},
+    {"can.commands", KeyType::Enum, "\"canopen\"", nullptr, 0, 0, "", "canopen|scenario", "With --can: the drive takes its commands from CANopen (CiA 402: enable, mode, targets) like a real one and the scenario's control.* profiles are not sent; or from the scenario (CANopen then only reads, tunes and scopes)."},
+    {"can.scope_values", KeyType::Int, "16384", nullptr, 64, 1048576, "values", "", "The scope's buffer (0x2308): samples x channels it holds."},
     {"inverter.pwm_counts", KeyType::Int, "0", nullptr, 0, 65535, "counts", "", "Compare resolution of the host build's modulator: 0 ideal (the firmware's duties as computed); N: each duty becomes a whole number of counts of a half period of N counts, as a timer compare does (a --pil run: the image's own timer does it; check_pil.py sets this to the port's, e.g. 5000 generic, 10000 AM263x at 10 kHz)."},
     {"inverter.pwm_compare", KeyType::Enum, "\"on_time\"", nullptr, 0, 0, "", "on_time|off_time", "With inverter.pwm_counts: the compare value counts the high side's on-time (round(d N), the generic port) or its off-time (N - round((1 - d) N), the AM263x ePWM)."},
     {"inverter.integrator", KeyType::Enum, "\"taylor\"", nullptr, 0, 0, "", "taylor|hermite|rk4",

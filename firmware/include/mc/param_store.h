@@ -100,8 +100,10 @@ mc_pstore_status_t mc_pstore_geometry(const hal_nvm_t *nvm, mc_pstore_geom_t *ge
 mc_pstore_status_t mc_pstore_save(hal_nvm_t *nvm, const mc_drive_cfg_t *cfg, uint8_t *work, size_t work_len,
                                   mc_pstore_info_t *info);
 /* The stored set into cfg (OK, FELL_BACK; cfg is unchanged on any other status): cfg->p, and
- * cfg->est with est.map = map_out if the set has a map, else NULL. map_out (required: the
- * caller's storage, it must outlive the drive) is scratch unless est.map points to it. */
+ * cfg->est with est.map = map_out if the set has a map, else NULL. map_out (the caller's storage,
+ * it must outlive the drive) is scratch unless est.map points to it; NULL: a stored map is
+ * checked (CRC, sizes) but not loaded and est.map is NULL (an image whose RAM cannot hold a map
+ * keeps the one of its flash configuration area). */
 mc_pstore_status_t mc_pstore_load(const hal_nvm_t *nvm, mc_drive_cfg_t *cfg, mc_flux_map_t *map_out, uint8_t *work,
                                   size_t work_len, mc_pstore_info_t *info);
 /* 0x1011: commit a defaults copy into the slot a load does not take, then erase the other slot,

@@ -137,8 +137,15 @@ static void test_empty_and_bad_args(void **state)
     assert_int_equal(mc_pstore_save(NULL, a, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
     assert_int_equal(mc_pstore_save(&nvm, NULL, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
     assert_int_equal(mc_pstore_save(&nvm, a, work, MC_PSTORE_WORK_MIN - 1u, NULL), MC_PSTORE_BAD_ARGS);
-    assert_int_equal(mc_pstore_load(&nvm, &got, NULL, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(mc_pstore_load(NULL, &got, &maps[0], work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
     assert_int_equal(mc_pstore_erase(&nvm, work, 8u), MC_PSTORE_BAD_ARGS);
+    /* map_out NULL: a stored map is checked, not loaded */
+    assert_true(a->est.map != NULL);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
+    assert_int_equal(mc_pstore_load(&nvm, &got, NULL, work, sizeof work, NULL), MC_PSTORE_OK);
+    assert_null(got.est.map);
+    assert_memory_equal(&got.p, &a->p, sizeof got.p);
+    hal_host_nvm_init(&nvm);
     /* a map no encoder takes, a value no load takes: refused before anything is erased */
     mc_drive_cfg_t bad = *a;
     mc_flux_map_t *m = &maps[NSETS - 1];

@@ -18,6 +18,9 @@ typedef struct {
     mc_drive_cfg_t cfg;
     mc_drive_t d;
     mc_drive_link_t link;
+    hal_nvm_t nvm;
+    mc_scope_t scope;
+    float scope_buf[256];
     mc_co_t co;
 } rig_t;
 
@@ -32,9 +35,12 @@ static void rig_init(void)
     hal_host_can_init(&rig.can);
     mc_drive_cfg_default(&rig.cfg);
     assert_true(mc_drive_init(&rig.d, &rig.link, &rig.cfg, &rig.adc, &rig.pwm, &rig.qep));
-    const mc_co_cfg_t c = {.node_id = 5, .heartbeat_ms = 100, .vendor_id = 0x12345678u, .product_code = 1u,
-                           .revision = 2u, .serial = 3u};
-    assert_true(mc_co_init(&rig.co, &c, &rig.can, &rig.d));
+    hal_host_nvm_init(&rig.nvm);
+    mc_scope_init(&rig.scope, rig.scope_buf, 256u, 1e-4f);
+    const mc_co_cfg_t c = {.node_id = 5, .heartbeat_ms = 100, .step_s = 1e-3f, .vendor_id = 0x12345678u,
+                           .product_code = 1u, .revision = 2u, .serial = 3u};
+    assert_true(mc_co_init(&rig.co, &c, &rig.can, &rig.d, &rig.nvm, &rig.scope, MC_PSTORE_EMPTY));
+    rig.co.ds_on = false;   /* these tests command the drive themselves */
     now = 0;
 }
 
@@ -45,9 +51,15 @@ static void put(uint32_t id, const uint8_t *d, uint8_t n)
     assert_true(hal_host_can_deliver(&rig.can, &f));
 }
 
+/* The next frame that is not a TPDO (operational sends them on their timers). */
 static bool take(hal_can_frame_t *f)
 {
-    return hal_host_can_take(&rig.can, f);
+    while (hal_host_can_take(&rig.can, f)) {
+        if (f->id < 0x180u || f->id > 0x4FFu) {
+            return true;
+        }
+    }
+    return false;
 }
 
 /* one SDO request -> its one response */
@@ -76,15 +88,23 @@ static void expect_abort(const hal_can_frame_t *f, uint32_t code)
     assert_int_equal(word(f), code);
 }
 
+static void drive_inputs(float vdc);
+static void drive_run(int n, bool enable);
+
 static void test_node_id_checked(void **state)
 {
     (void)state;
     rig_init();
     mc_co_t co;
-    mc_co_cfg_t c = {.node_id = 0};
-    assert_false(mc_co_init(&co, &c, &rig.can, &rig.d));
+    mc_co_cfg_t c = {.node_id = 0, .step_s = 1e-3f};
+    assert_false(mc_co_init(&co, &c, &rig.can, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
     c.node_id = 128;
-    assert_false(mc_co_init(&co, &c, &rig.can, &rig.d));
+    assert_false(mc_co_init(&co, &c, &rig.can, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
+    c.node_id = 1;
+    c.step_s = 0.0f;   /* the 402 ramps need the step period */
+    assert_false(mc_co_init(&co, &c, &rig.can, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
+    c.step_s = 1e-3f;
+    assert_true(mc_co_init(&co, &c, &rig.can, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
 }
 
 static void test_boot_heartbeat_nmt(void **state)
@@ -203,10 +223,18 @@ static void test_sdo_parameters(void **state)
     expect_abort(&f, MC_SDO_ABORT_VALUE_LOW);
     f = sdo(0x2B, obj, 0, 0x1234);   /* 2 bytes for a 4-byte object */
     expect_abort(&f, MC_SDO_ABORT_LENGTH_LOW);
-    /* an INIT-only parameter cannot be written now */
+    /* an INIT-only parameter is read-only on the bus */
     const int ts = mc_param_find("control.ts_s");
     f = sdo(0x23, (uint16_t)(0x2000 + ts), 0, mc_f32_bits(1e-4f));
+    expect_abort(&f, MC_SDO_ABORT_READ_ONLY);
+    /* a STANDSTILL parameter while the outputs are on: not in the present state */
+    const int rs = mc_param_find("motor.rs_ohm");
+    drive_inputs(300.0f);
+    drive_run(3, true);
+    assert_true(mc_drive_state(&rig.d) != MC_STATE_IDLE);
+    f = sdo(0x23, (uint16_t)(0x2000 + rs), 0, mc_f32_bits(0.5f));
     expect_abort(&f, MC_SDO_ABORT_STATE);
+    drive_run(1, false);
     /* an integer parameter as INTEGER32 */
     const int lines = mc_param_find("hw.encoder_lines");
     f = sdo(0x40, (uint16_t)(0x2000 + lines), 0, 0);
@@ -308,7 +336,9 @@ static void test_emcy_on_fault(void **state)
     assert_int_equal(f.data[4], 1u);
     f = sdo(0x40, 0x1003, 1, 0);
     assert_int_equal(word(&f), 0x3210u | (1u << 16));
-    f = sdo(0x40, 0x1003, 2, 0);
+    f = sdo(0x40, 0x1003, 2, 0);   /* an empty entry reads 0 */
+    assert_int_equal(word(&f), 0u);
+    f = sdo(0x40, 0x1003, 9, 0);
     expect_abort(&f, MC_SDO_ABORT_NO_SUB);
     /* disable and enable: the fault clears, EMCY "error reset" */
     drive_inputs(300.0f);

@@ -1,0 +1,198 @@
+/* The object dictionary (co_od.c): its description is consistent and every object answers; the
+ * write checks of the fixed objects; 0x1010 / 0x1011 on the power-cut-safe store and the boot
+ * that follows; the scope over SDO with the segmented upload of its record. */
+#include "rig.h"
+#include "mc/telem_channels.h"
+
+static void test_every_object(void **state)
+{
+    (void)state;
+    rig_init();
+    const uint32_t n = mc_co_od_count();
+    assert_true(n > 200u);
+    uint32_t prev = 0u;
+    for (uint32_t k = 0; k < n; ++k) {
+        mc_co_entry_t e, l;
+        bool miss = true;
+        assert_true(mc_co_od_at(k, &e));
+        assert_true(mc_co_od_lookup(e.index, e.sub, &l, &miss));
+        assert_false(miss);
+        assert_int_equal(l.type, e.type);
+        assert_int_equal(l.access, e.access);
+        assert_non_null(e.oname);
+        assert_true(e.oname[0] != '\0');
+        assert_true(e.min <= e.max || e.type == MC_CO_REAL32 || e.type == MC_CO_VSTRING || e.type == MC_CO_DOMAIN);
+        const uint32_t key = ((uint32_t)e.index << 8) | e.sub;
+        (void)prev;
+        prev = key;
+        if (e.type == MC_CO_DOMAIN || e.access == MC_CO_WO) {
+            continue;
+        }
+        uint8_t buf[MC_CO_SDO_BUF];
+        uint32_t len = 0u;
+        const uint32_t a = mc_co_od_read(&rig.co, e.index, e.sub, buf, sizeof buf, &len);
+        if (a != 0u) {
+            fail_msg("0x%04X sub %u: abort 0x%08X", e.index, e.sub, a);
+        }
+        if (e.type != MC_CO_VSTRING) {
+            assert_int_equal(len, e.type == MC_CO_U8 || e.type == MC_CO_I8 ? 1u : e.type == MC_CO_U16 || e.type == MC_CO_I16 ? 2u : 4u);
+        }
+    }
+    assert_false(mc_co_od_at(n, &(mc_co_entry_t){0}));
+    bool miss = false;
+    mc_co_entry_t e;
+    assert_false(mc_co_od_lookup(0x1018, 5, &e, &miss));
+    assert_true(miss);
+    assert_false(mc_co_od_lookup(0x1019, 0, &e, &miss));
+    assert_false(miss);
+    /* the parameter-table hash */
+    uint32_t a;
+    assert_int_equal(sdo_read(0x2FF0, 0, &a), mc_params_table_hash());
+}
+
+static void test_write_checks(void **state)
+{
+    (void)state;
+    rig_init();
+    assert_int_equal(sdo_write(0x6060, 0, 1, 1), MC_SDO_ABORT_VALUE);   /* profile position: not here */
+    assert_int_equal(sdo_write(0x6060, 0, MC_402_MODE_CSV, 1), 0u);
+    assert_int_equal(sdo_write(0x605A, 0, 3, 2), MC_SDO_ABORT_VALUE);
+    assert_int_equal(sdo_write(0x605A, 0, 7, 2), MC_SDO_ABORT_VALUE_HIGH);
+    assert_int_equal(sdo_write(0x605A, 0, 0xFFFF, 2), MC_SDO_ABORT_VALUE_LOW);   /* -1 */
+    assert_int_equal(sdo_write(0x605A, 0, 5, 2), 0u);
+    assert_int_equal(sdo_write(0x6041, 0, 0, 2), MC_SDO_ABORT_READ_ONLY);
+    assert_int_equal(sdo_write(0x6040, 0, 6, 4), MC_SDO_ABORT_LENGTH_HIGH);
+    assert_int_equal(sdo_write(0x60FF, 0, 6, 2), MC_SDO_ABORT_LENGTH_LOW);
+    assert_int_equal(sdo_write(0x6083, 0, 0, 4), MC_SDO_ABORT_VALUE_LOW);
+    assert_int_equal(sdo_write(0x2301, 3, 3, 1), MC_SDO_ABORT_VALUE_HIGH);
+    assert_int_equal(sdo_write(0x2301, 4, 0, 2), MC_SDO_ABORT_VALUE_LOW);
+    assert_int_equal(sdo_write(0x2301, 2, 0x7FC00000u, 4), MC_SDO_ABORT_VALUE);   /* NaN level */
+    assert_int_equal(sdo_write(0x2300, 1, MC_TELEM_CHANNEL_COUNT + 1u, 1), MC_SDO_ABORT_VALUE_HIGH);
+    assert_int_equal(sdo_write(0x1005, 0, 0x40000080u, 4), MC_SDO_ABORT_VALUE);   /* SYNC producer */
+    assert_int_equal(sdo_write(0x1005, 0, 0x81u, 4), 0u);
+    /* a refused write changes nothing */
+    uint32_t a;
+    assert_int_equal(sdo_read(0x605A, 0, &a), 5u);
+    assert_int_equal(sdo_read(0x6060, 0, &a), (uint32_t)MC_402_MODE_CSV);
+}
+
+static void test_store_restore(void **state)
+{
+    (void)state;
+    rig_init();
+    rig.co.ds_on = false;
+    const int bw = mc_param_find("control.current_bw_hz");
+    const uint16_t obj = (uint16_t)(0x2000 + bw);
+    assert_int_equal(sdo_write(obj, 0, mc_f32_bits(321.0f), 4), 0u);
+    mc_drive_isr(&rig.d);
+    assert_int_equal(sdo_write(0x1010, 1, 0x12345678u, 4), MC_SDO_ABORT_STORE);   /* not "save" */
+    /* not while the outputs are on */
+    drive_inputs(300.0f);
+    const mc_drive_cmd_t on = {.enable = true, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&rig.d, &on);
+    run_ms(1);
+    assert_true(mc_drive_state(&rig.d) != MC_STATE_IDLE);
+    assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), MC_SDO_ABORT_STATE);
+    const mc_drive_cmd_t off = {.enable = false, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&rig.d, &off);
+    run_ms(1);
+    assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), 0u);
+    uint32_t a;
+    assert_int_equal(sdo_read(0x1010, 1, &a), 1u);
+    /* power-on: the stored set */
+    hal_nvm_t nvm = rig.nvm;
+    mc_drive_cfg_t base;
+    mc_drive_cfg_default(&base);
+    static mc_flux_map_t map;
+    memset(&rig, 0, sizeof rig);
+    rig.nvm = nvm;
+    assert_int_equal(mc_co_boot_config(&rig.nvm, &base, &rig.cfg, &map), MC_PSTORE_OK);
+    rig_start(MC_PSTORE_OK);
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == 321.0f);
+    assert_int_equal(sdo_read(0x2FF1, 0, &a), 0u);
+    /* restore defaults: the next power-on has none stored */
+    assert_int_equal(sdo_write(0x1011, 1, 0x1234u, 4), MC_SDO_ABORT_STORE);
+    assert_int_equal(sdo_write(0x1011, 1, MC_CO_LOAD_SIGNATURE, 4), 0u);
+    nvm = rig.nvm;
+    assert_int_equal(mc_co_boot_config(&nvm, &base, &rig.cfg, &map), MC_PSTORE_EMPTY);
+    assert_true(rig.cfg.p.cc_bw_hz == base.p.cc_bw_hz);
+    /* a corrupt store: the defaults and EMCY 0x6310 with the boot-up */
+    assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), 0u);
+    nvm = rig.nvm;
+    for (uint32_t b = 0; b < HAL_HOST_NVM_BLOCKS; ++b) {
+        for (uint32_t k = 8; k < 32; ++k) {   /* both copies' headers (the markers stay) */
+            nvm.mem[b][k] ^= 0x5Au;
+        }
+    }
+    memset(&rig, 0, sizeof rig);
+    rig.nvm = nvm;
+    const mc_pstore_status_t st = mc_co_boot_config(&rig.nvm, &base, &rig.cfg, &map);
+    assert_int_equal(st, MC_PSTORE_CORRUPT);
+    assert_true(rig.cfg.p.cc_bw_hz == base.p.cc_bw_hz);
+    rig_start(st);
+    mc_co_step(&rig.co, rig.now);
+    hal_can_frame_t f;
+    assert_true(take_id(0x080u + NODE, &f));
+    assert_int_equal(f.data[0] | (f.data[1] << 8), MC_EMCY_PARAMS_LOST);
+    assert_int_equal(sdo_read(0x2FF1, 0, &a), (uint32_t)MC_PSTORE_CORRUPT);
+    /* no NVM: cannot be stored */
+    rig.co.nvm = NULL;
+    assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), MC_SDO_ABORT_STORE);
+}
+
+static void test_scope_upload(void **state)
+{
+    (void)state;
+    rig_init();
+    rig.co.ds_on = false;
+    drive_inputs(300.0f);
+    uint32_t a;
+    (void)sdo(0x40, 0x2307, 0, 0);   /* nothing recorded */
+    const hal_can_frame_t none = sdo(0x40, 0x2307, 0, 0);
+    assert_int_equal(word(&none), MC_SDO_ABORT_NO_DATA);
+    assert_int_equal(sdo_write(0x2302, 0, 1, 1), MC_SDO_ABORT_VALUE);   /* no channel chosen */
+    assert_int_equal(sdo_write(0x2300, 1, 6, 1), 0u);    /* vdc */
+    assert_int_equal(sdo_write(0x2300, 3, 1, 1), 0u);    /* state */
+    assert_int_equal(sdo_write(0x2301, 4, 2, 2), 0u);    /* every 2nd period */
+    assert_int_equal(sdo_write(0x2301, 6, 9, 4), 0u);    /* 9 samples */
+    assert_int_equal(sdo_write(0x2302, 0, 1, 1), 0u);    /* arm: no trigger channel, at once */
+    run_ms(3);
+    assert_int_equal(sdo_read(0x2303, 0, &a), 3u);
+    assert_int_equal(sdo_read(0x2304, 0, &a), 9u);
+    assert_true(mc_bits_f32(sdo_read(0x2306, 0, &a)) == 2.0f * rig.cfg.p.ts);
+    /* segmented upload: 9 samples x 2 channels x 4 bytes */
+    hal_can_frame_t f = sdo(0x40, 0x2307, 0, 0);
+    assert_int_equal(f.data[0], 0x41u);
+    assert_int_equal(word(&f), 72u);
+    uint8_t data[80];
+    uint32_t got = 0;
+    for (uint8_t t = 0;; t ^= 1u) {
+        f = sdo((uint8_t)(0x60 | (t << 4)), 0, 0, 0);
+        assert_int_equal((f.data[0] >> 4) & 1u, t);
+        const uint32_t n = 7u - ((f.data[0] >> 1) & 7u);
+        memcpy(data + got, f.data + 1, n);
+        got += n;
+        if (f.data[0] & 1u) {
+            break;
+        }
+    }
+    assert_int_equal(got, 72u);
+    for (uint32_t s = 0; s < 9; ++s) {
+        uint32_t w0, w1;
+        memcpy(&w0, data + 8 * s, 4);
+        memcpy(&w1, data + 8 * s + 4, 4);
+        assert_float_equal(mc_bits_f32(w0), 300.0f, 1.0f);   /* vdc */
+        assert_float_equal(mc_bits_f32(w1), (float)MC_STATE_IDLE, 0.0f);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_every_object),
+        cmocka_unit_test(test_write_checks),
+        cmocka_unit_test(test_store_restore),
+        cmocka_unit_test(test_scope_upload),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
