@@ -24,7 +24,7 @@ const std::vector<KeySpec>& scenario_schema()
     static const std::vector<KeySpec> k = {
     {"scenario.name", KeyType::String, "\"\"", nullptr, 0, 0, "", "", "Short name, used in plot titles."},
     {"scenario.description", KeyType::String, "\"\"", nullptr, 0, 0, "", "", "What the scenario reproduces."},
-    {"scenario.duration_s", KeyType::Float, "1.0", nullptr, 1e-3, 600, "s", "", "Simulated time."},
+    {"scenario.duration_s", KeyType::Float, "1.0", nullptr, 1e-3, 86400, "s", "", "Simulated time (a drive on CAN may run for hours: nothing is kept per period but the trace, output.trace)."},
     {"scenario.seed", KeyType::Int, "1", nullptr, 0, 2147483647, "", "", "Seed of the sensor noise."},
     {"scenario.profile", KeyType::Enum, "\"realistic\"", nullptr, 0, 0, "", "realistic|ideal|harsh",
      "Realism profile: sets the defaults of the inverter and sensor keys (the table's profile column): ideal for debugging, harsh for robustness (long dead time, device drop, gain errors, more noise, ADC delay, DC-link ripple)."},
