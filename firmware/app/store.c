@@ -156,7 +156,8 @@ mc_store_status_t mc_store_params_decode(const uint8_t *buf, size_t n, mc_params
     return MC_STORE_OK;
 }
 
-mc_store_status_t mc_store_model_decode(const uint8_t *buf, size_t n, mc_est_model_t *m, mc_flux_map_t *map_out)
+/* The model record's header checks and its length; nd, nq of its map (0 without one). */
+static mc_store_status_t model_head(const uint8_t *buf, size_t n, uint32_t *nd, uint32_t *nq)
 {
     mc_store_status_t st = check_head(buf, n, MC_STORE_MAGIC_MODEL);
     if (st != MC_STORE_OK) {
@@ -165,32 +166,47 @@ mc_store_status_t mc_store_model_decode(const uint8_t *buf, size_t n, mc_est_mod
     if (n < 32u) {
         return MC_STORE_BAD_SIZE;
     }
-    const uint32_t has_map = get(buf, 24u);
     size_t len = 32u;
-    uint32_t nd = 0u, nq = 0u;
-    if (has_map != 0u) {
+    *nd = 0u;
+    *nq = 0u;
+    if (get(buf, 24u) != 0u) {
         if (n < 56u) {
             return MC_STORE_BAD_SIZE;
         }
-        nd = get(buf, 28u);
-        nq = get(buf, 32u);
-        if (nd < 2u || nq < 2u || nd > MC_FLUX_MAP_MAX || nq > MC_FLUX_MAP_MAX || map_out == NULL) {
+        *nd = get(buf, 28u);
+        *nq = get(buf, 32u);
+        if (*nd < 2u || *nq < 2u || *nd > MC_FLUX_MAP_MAX || *nq > MC_FLUX_MAP_MAX) {
             return MC_STORE_BAD_SIZE;
         }
-        len = 4u * (14u + 2u * (size_t)nd * nq);
+        len = 4u * (14u + 2u * (size_t)*nd * *nq);
         if (len > n) {
             return MC_STORE_BAD_SIZE;
         }
     }
-    if (!crc_ok(buf, len)) {
-        return MC_STORE_BAD_CRC;
-    }
+    return crc_ok(buf, len) ? MC_STORE_OK : MC_STORE_BAD_CRC;
+}
+
+static void model_scalars(const uint8_t *buf, mc_est_model_t *m)
+{
     m->rs = mc_bits_f32(get(buf, 8u));
     m->ld = mc_bits_f32(get(buf, 12u));
     m->lq = mc_bits_f32(get(buf, 16u));
     m->psi_pm = mc_bits_f32(get(buf, 20u));
     m->map = NULL;
-    if (has_map != 0u) {
+}
+
+mc_store_status_t mc_store_model_decode(const uint8_t *buf, size_t n, mc_est_model_t *m, mc_flux_map_t *map_out)
+{
+    uint32_t nd, nq;
+    const mc_store_status_t st = model_head(buf, n, &nd, &nq);
+    if (st != MC_STORE_OK) {
+        return st;
+    }
+    if (nd != 0u && map_out == NULL) {
+        return MC_STORE_BAD_SIZE;
+    }
+    model_scalars(buf, m);
+    if (nd != 0u) {
         map_out->n_d = (int)nd;
         map_out->n_q = (int)nq;
         map_out->id0 = mc_bits_f32(get(buf, 36u));
@@ -207,9 +223,37 @@ mc_store_status_t mc_store_model_decode(const uint8_t *buf, size_t n, mc_est_mod
     return MC_STORE_OK;
 }
 
+mc_store_status_t mc_store_model_view(const uint8_t *buf, size_t n, mc_est_model_t *m,
+                                      const mc_flux_map_t *map_in_place)
+{
+    uint32_t nd, nq;
+    const mc_store_status_t st = model_head(buf, n, &nd, &nq);
+    if (st != MC_STORE_OK) {
+        return st;
+    }
+    if (nd != 0u) {
+        const mc_flux_map_t *p = map_in_place;
+        if (p == NULL || p->n_d != (int)nd || p->n_q != (int)nq || mc_f32_bits(p->id0) != get(buf, 36u) ||
+            mc_f32_bits(p->did) != get(buf, 40u) || mc_f32_bits(p->iq0) != get(buf, 44u) ||
+            mc_f32_bits(p->diq) != get(buf, 48u)) {
+            return MC_STORE_MAP_MISMATCH;
+        }
+        const size_t cells = (size_t)nd * nq;
+        for (size_t k = 0; k < cells; ++k) {
+            if (mc_f32_bits(p->psi_d[k]) != get(buf, 52u + 4u * k) ||
+                mc_f32_bits(p->psi_q[k]) != get(buf, 52u + 4u * (cells + k))) {
+                return MC_STORE_MAP_MISMATCH;
+            }
+        }
+    }
+    model_scalars(buf, m);
+    m->map = nd != 0u ? map_in_place : NULL;
+    return MC_STORE_OK;
+}
+
 const char *mc_store_status_name(mc_store_status_t s)
 {
     static const char *const names[] = {"ok", "empty", "bad_magic", "bad_version", "other_table",
-                                        "bad_size", "bad_crc", "bad_value"};
+                                        "bad_size", "bad_crc", "bad_value", "map_mismatch"};
     return (unsigned)s < sizeof names / sizeof names[0] ? names[s] : "?";
 }

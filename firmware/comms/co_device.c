@@ -209,6 +209,7 @@ static void sdo_download(mc_co_t *co, const uint8_t *r, uint16_t index, uint8_t 
         const uint32_t a = mc_co_od_write(co, index, sub, r + 4, n);
         if (index == 0x6040u) {
             co->cw_written = true;
+            co->cw_count++;
         }
         if (a != 0u) {
             sdo_abort(co, index, sub, a);
@@ -280,6 +281,7 @@ static void sdo_download_segment(mc_co_t *co, const uint8_t *r)
     const uint32_t a = mc_co_od_write(co, co->sdo.index, co->sdo.sub, co->sdo.buf, co->sdo.len);
     if (co->sdo.index == 0x6040u) {
         co->cw_written = true;
+            co->cw_count++;
     }
     if (a != 0u) {
         sdo_abort(co, co->sdo.index, co->sdo.sub, a);

@@ -9,6 +9,14 @@
 #include "mc/telem_channels.h"
 #include "co_objects.h"
 
+/* A target image carries no texts: names, units and descriptions are for co-gen (the EDS, the
+ * docs) and the tests, on the host. */
+#ifdef MC_CO_NO_TEXT
+#define TXT(s) ""
+#else
+#define TXT(s) s
+#endif
+
 #define DEVICE_NAME "ipmsm-sensorless-drive"
 #define SW_VERSION  "0.2.0 (CiA 301, CiA 402)"
 #define PARAM_BASE  0x2000u
@@ -41,29 +49,29 @@ MC_CO_OBJECTS(SIZE_CHECK)
 #define FLD(m) offsetof(mc_co_t, m)
 #define HK(n) H_##n
 #define ENTRY(i, s, T, A, F, K, ARG, MIN, MAX, on, sn, u, doc) \
-    {i, s, MC_CO_##T, MC_CO_##A, F, MC_CO_K_##K, (uint16_t)(ARG), MIN, MAX, on, sn, u, doc},
+    {i, s, MC_CO_##T, MC_CO_##A, F, MC_CO_K_##K, (uint16_t)(ARG), MIN, MAX, TXT(on), TXT(sn), TXT(u), TXT(doc)},
 static const mc_co_entry_t fixed[] = {MC_CO_OBJECTS(ENTRY)};
 #define N_FIXED (sizeof fixed / sizeof fixed[0])
 
-#define TNAME(id, name, unit, expr, doc) "telem." #name,
-#define TUNIT(id, name, unit, expr, doc) unit,
-#define TDOC(id, name, unit, expr, doc) doc,
+#define TNAME(id, name, unit, expr, doc) TXT("telem." #name),
+#define TUNIT(id, name, unit, expr, doc) TXT(unit),
+#define TDOC(id, name, unit, expr, doc) TXT(doc),
 static const char *const telem_name[] = {MC_TELEM_CHANNELS(TNAME)};
 static const char *const telem_unit[] = {MC_TELEM_CHANNELS(TUNIT)};
 static const char *const telem_doc[] = {MC_TELEM_CHANNELS(TDOC)};
 
 static const char *const pdo_name[4][4] = {
-    {"RPDO 1 communication parameter", "RPDO 2 communication parameter", "RPDO 3 communication parameter",
-     "RPDO 4 communication parameter"},
-    {"RPDO 1 mapping parameter", "RPDO 2 mapping parameter", "RPDO 3 mapping parameter", "RPDO 4 mapping parameter"},
-    {"TPDO 1 communication parameter", "TPDO 2 communication parameter", "TPDO 3 communication parameter",
-     "TPDO 4 communication parameter"},
-    {"TPDO 1 mapping parameter", "TPDO 2 mapping parameter", "TPDO 3 mapping parameter", "TPDO 4 mapping parameter"}};
-static const char *const comm_sub[7] = {"Highest sub-index supported", "COB-ID", "Transmission type", "Inhibit time",
-                                        "", "Event timer", "SYNC start value"};
-static const char *const map_sub[9] = {"Number of mapped objects", "Mapped object 1", "Mapped object 2",
-                                       "Mapped object 3", "Mapped object 4", "Mapped object 5", "Mapped object 6",
-                                       "Mapped object 7", "Mapped object 8"};
+    {TXT("RPDO 1 communication parameter"), TXT("RPDO 2 communication parameter"), TXT("RPDO 3 communication parameter"),
+     TXT("RPDO 4 communication parameter")},
+    {TXT("RPDO 1 mapping parameter"), TXT("RPDO 2 mapping parameter"), TXT("RPDO 3 mapping parameter"), TXT("RPDO 4 mapping parameter")},
+    {TXT("TPDO 1 communication parameter"), TXT("TPDO 2 communication parameter"), TXT("TPDO 3 communication parameter"),
+     TXT("TPDO 4 communication parameter")},
+    {TXT("TPDO 1 mapping parameter"), TXT("TPDO 2 mapping parameter"), TXT("TPDO 3 mapping parameter"), TXT("TPDO 4 mapping parameter")}};
+static const char *const comm_sub[7] = {TXT("Highest sub-index supported"), TXT("COB-ID"), TXT("Transmission type"), TXT("Inhibit time"),
+                                        TXT(""), TXT("Event timer"), TXT("SYNC start value")};
+static const char *const map_sub[9] = {TXT("Number of mapped objects"), TXT("Mapped object 1"), TXT("Mapped object 2"),
+                                       TXT("Mapped object 3"), TXT("Mapped object 4"), TXT("Mapped object 5"), TXT("Mapped object 6"),
+                                       TXT("Mapped object 7"), TXT("Mapped object 8")};
 static const uint8_t tpdo_comm_subs[6] = {0u, 1u, 2u, 3u, 5u, 6u};
 
 /* The PDO parameter objects: group g (0 RPDO comm, 1 RPDO map, 2 TPDO comm, 3 TPDO map). */
@@ -112,8 +120,11 @@ static void param_entry(int id, mc_co_entry_t *e)
     *e = (mc_co_entry_t){.index = (uint16_t)(PARAM_BASE + (uint32_t)id), .sub = 0u,
                          .type = p->type == MC_PT_F32 ? MC_CO_REAL32 : MC_CO_I32,
                          .access = p->access == MC_PA_INIT ? MC_CO_RO : MC_CO_RW, .kind = MC_CO_K_PARAM,
-                         .arg = (uint16_t)id, .min = (int64_t)p->min, .max = (int64_t)p->max, .oname = p->name,
-                         .sname = "", .unit = p->unit, .doc = p->doc};
+                         .arg = (uint16_t)id,
+                         /* the range of the INTEGER32 ones (F32: the table's, checked in param_write) */
+                         .min = p->type == MC_PT_F32 ? 0 : (int64_t)(int32_t)p->min,
+                         .max = p->type == MC_PT_F32 ? 0 : (int64_t)(int32_t)p->max, .oname = p->name,
+                         .sname = "", .unit = p->unit, .doc = TXT(p->doc)};
 }
 
 static void telem_entry(uint32_t ch, mc_co_entry_t *e)

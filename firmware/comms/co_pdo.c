@@ -207,6 +207,7 @@ static void rpdo_apply(mc_co_t *co, const mc_co_pdo_t *p, const uint8_t *data)
         off += n;
         if (p->map[k] >> 16 == 0x6040u) {
             co->cw_written = true;
+            co->cw_count++;
         }
     }
     co->rpdo_rx++;

@@ -4,30 +4,44 @@
  *
  * Boot: the board with the default timing (so the outputs are held off), the configuration from
  * the image's configuration area (mc/store.h; the defaults where it is erased or refused, with
- * the reason in the monitor), the board again with the configured PWM frequency and dead time,
- * the drive, then the ISR. The background loop sleeps until an interrupt; after each control
- * ISR it runs the drive's background work every 10th period, publishes the telemetry to the
- * monitor block (mc/monitor.h) and hands the drive a command written there. */
+ * the reason in the monitor), over it the set stored by CANopen 0x1010 in the NVM (mc/co.h; its
+ * map stays in the NVM: the area's map is used), the board again with the configured PWM
+ * frequency and dead time, the drive, the CANopen device, then the ISR. The ISR runs the drive
+ * and the scope. The background loop sleeps until an interrupt; after each control ISR it runs
+ * the drive's background work and the CANopen device every 10th period, publishes the telemetry
+ * to the monitor block (mc/monitor.h) and hands the drive a command written there.
+ * Two commanders: the monitor (a debugger, the PIL) and CiA 402 over CAN. The last one heard
+ * wins: a monitor command takes the drive from CANopen, a controlword gives it to CANopen. */
 #include <math.h>
 #include "hal/board.h"
+#include "mc/co.h"
 #include "mc/drive.h"
 #include "mc/monitor.h"
+#include "mc/scope.h"
 #include "mc/store.h"
 
-/* The configuration area: erased in the image, written by a tool before flashing. */
-__attribute__((section(".mc_config"), used, aligned(4)))
-const uint8_t mc_config_area[MC_CONFIG_AREA_SIZE] = {[0 ... MC_CONFIG_AREA_SIZE - 1] = 0xFFu};
+#define SCOPE_VALUES 1536u   /* 6 KB: e.g. 4 channels x 384 samples */
+
+/* The configuration area: erased records in the image, written by a tool before flashing; the
+ * estimator uses the map where it lies (mc_store_model_view), so no RAM holds a copy. */
+__attribute__((section(".mc_config"), used, aligned(8)))
+const mc_config_area_t mc_config_area = {.records = {[0 ... MC_CONFIG_RECORDS_SIZE - 1] = 0xFFu}};
 
 /* Read and written by a debugger (or the PIL) while the drive runs. */
 volatile mc_monitor_t mc_monitor;
 
 static mc_drive_t drive;
 static mc_drive_link_t drive_link;
-static mc_flux_map_t est_map;
+static mc_co_t co;
+static mc_scope_t scope;
+static float scope_buf[SCOPE_VALUES];
+static hal_time_t *clock;
 
 static void control_isr(void *ctx)
 {
-    mc_drive_isr((mc_drive_t *)ctx);
+    mc_drive_t *d = (mc_drive_t *)ctx;
+    mc_drive_isr(d);
+    mc_scope_sample(&scope, mc_drive_telemetry(d));
     mc_monitor.isr_count = mc_monitor.isr_count + 1u;
 }
 
@@ -45,21 +59,26 @@ static void board_cfg_from(const mc_params_t *p, hal_board_cfg_t *b)
 
 static void load_config(mc_drive_cfg_t *cfg)
 {
-    const mc_store_status_t sp = mc_store_params_decode(mc_config_area, MC_CONFIG_MODEL_OFFSET, &cfg->p);
-    const mc_store_status_t sm = mc_store_model_decode(mc_config_area + MC_CONFIG_MODEL_OFFSET,
-                                                       MC_CONFIG_AREA_SIZE - MC_CONFIG_MODEL_OFFSET, &cfg->est,
-                                                       &est_map);
+    const mc_store_status_t sp = mc_store_params_decode(mc_config_area.records, MC_CONFIG_MODEL_OFFSET, &cfg->p);
+    const mc_store_status_t sm =
+        mc_store_model_view(mc_config_area.records + MC_CONFIG_MODEL_OFFSET,
+                            MC_CONFIG_RECORDS_SIZE - MC_CONFIG_MODEL_OFFSET, &cfg->est, &mc_config_area.map);
     mc_monitor.store_params = (uint32_t)sp;
     mc_monitor.store_model = (uint32_t)sm;
 }
 
-static void service(uint32_t *seen_isr, uint32_t *seen_cmd)
+static void service(uint32_t *seen_isr, uint32_t *seen_cmd, uint32_t *seen_cw)
 {
     const uint32_t n = mc_monitor.isr_count;
     if (n != *seen_isr) {
         *seen_isr = n;
         if ((n - 1u) % 10u == 0u) {
             mc_drive_background(&drive);
+            mc_co_step(&co, hal_time_us(clock) / 1000u);
+            if (co.cw_count != *seen_cw) {
+                *seen_cw = co.cw_count;
+                co.ds_on = true;   /* a controlword: CANopen commands the drive */
+            }
         }
         mc_drive_telem_t tm;
         if (mc_drive_telemetry_read(&drive, &tm)) {
@@ -80,6 +99,7 @@ static void service(uint32_t *seen_isr, uint32_t *seen_cmd)
         }
         mc_drive_cmd_t cmd;
         mc_monitor_unpack_cmd(w, &cmd);
+        co.ds_on = false;   /* the monitor commands the drive */
         mc_drive_command(&drive, &cmd);
     }
 }
@@ -101,10 +121,24 @@ int main(void)
             hal_board_idle();
         }
     }
-    load_config(&cfg);
+    static mc_drive_cfg_t base;
+    base = cfg;
+    load_config(&base);
+    mc_pstore_status_t src = mc_co_boot_config(board.nvm, &base, &cfg, NULL);
+    mc_monitor.store_nvm = (uint32_t)src;
     board_cfg_from(&cfg.p, &bcfg);
-    const bool board_ok = hal_board_init(&bcfg, &board);
-    if (!board_ok || !mc_drive_init(&drive, &drive_link, &cfg, board.adc, board.pwm, board.qep)) {
+    bool board_ok = hal_board_init(&bcfg, &board);
+    bool drive_ok = board_ok && mc_drive_init(&drive, &drive_link, &cfg, board.adc, board.pwm, board.qep);
+    if (board_ok && !drive_ok && (src == MC_PSTORE_OK || src == MC_PSTORE_FELL_BACK)) {
+        /* the stored set does not start this drive: the configuration area's, and say so */
+        src = MC_PSTORE_CORRUPT;
+        mc_monitor.store_nvm = (uint32_t)src;
+        cfg = base;
+        board_cfg_from(&cfg.p, &bcfg);
+        board_ok = hal_board_init(&bcfg, &board);
+        drive_ok = board_ok && mc_drive_init(&drive, &drive_link, &cfg, board.adc, board.pwm, board.qep);
+    }
+    if (!drive_ok) {
         const mc_param_err_t *e = mc_drive_config_error(&drive);
         mc_monitor.cfg_err_kind = board_ok ? (uint32_t)e->kind : 0xFFFFFFFFu;
         mc_monitor.cfg_err_param = board_ok ? (uint32_t)e->param : 0xFFFFFFFFu;
@@ -113,13 +147,19 @@ int main(void)
             hal_board_idle();   /* outputs off: the board came up with them off */
         }
     }
+    clock = board.time;
+    mc_scope_init(&scope, scope_buf, SCOPE_VALUES, cfg.p.ts);
+    const mc_co_cfg_t cc = {.node_id = 1u, .heartbeat_ms = 1000u, .step_s = 10.0f * cfg.p.ts, .vendor_id = 0u,
+                            .product_code = 1u, .revision = 0x00020000u, .serial = 0u};
+    (void)mc_co_init(&co, &cc, board.can, &drive, board.nvm, &scope, src);
+    co.ds_on = false;   /* until a controlword comes */
     hal_board_attach_isr(control_isr, &drive);
     mc_monitor.boot = 1u;
     hal_board_start();
 
-    uint32_t seen_isr = 0u, seen_cmd = 0u;
+    uint32_t seen_isr = 0u, seen_cmd = 0u, seen_cw = 0u;
     for (;;) {
         hal_board_idle();
-        service(&seen_isr, &seen_cmd);
+        service(&seen_isr, &seen_cmd, &seen_cw);
     }
 }

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "drive_target.hpp"
+#include "image_config.hpp"
 #include "metrics.hpp"
 
 extern "C" {
@@ -73,11 +74,11 @@ public:
                 throw ScenarioError("--pil " + elf + ": not a drive image (no symbol '" + sym +
                                     "'; build firmware/image with the arm-cm4f or am263x preset)");
         // The configuration a tool writes before flashing.
-        std::vector<uint8_t> area(MC_CONFIG_AREA_SIZE, 0xFF);
-        if (mc_store_params_encode(&ds.cfg.p, area.data(), MC_CONFIG_MODEL_OFFSET) == 0 ||
-            mc_store_model_encode(&ds.cfg.est, area.data() + MC_CONFIG_MODEL_OFFSET,
-                                  MC_CONFIG_AREA_SIZE - MC_CONFIG_MODEL_OFFSET) == 0)
-            throw std::runtime_error("pil: the configuration does not fit the image's configuration area");
+        const std::vector<uint8_t> area = config_area_bytes(ds.cfg, "pil");
+        if (t_->symbol_size("mc_config_area") != area.size())
+            throw ScenarioError("--pil " + elf + ": its configuration area is " +
+                                std::to_string(t_->symbol_size("mc_config_area")) + " bytes, expected " +
+                                std::to_string(area.size()) + " (an image of another firmware version)");
         t_->write(t_->symbol("mc_config_area"), area.data(), area.size());
         mon_ = t_->symbol("mc_monitor");
         // The stack is not initialised by the startup code: painted here, its high-water mark

@@ -1,6 +1,7 @@
 // mcsim image-config (image_config.hpp).
 #include "image_config.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -15,15 +16,24 @@ extern "C" {
 
 namespace mcsim {
 
+std::vector<uint8_t> config_area_bytes(const mc_drive_cfg_t& cfg, const std::string& origin)
+{
+    // records (erased where unused), then the map in its own layout (mc_config_area_t; zero
+    // without a map, where the records say there is none)
+    std::vector<uint8_t> area(MC_CONFIG_AREA_SIZE, 0x00);
+    std::fill(area.begin(), area.begin() + MC_CONFIG_RECORDS_SIZE, 0xFF);
+    if (mc_store_params_encode(&cfg.p, area.data(), MC_CONFIG_MODEL_OFFSET) == 0 ||
+        mc_store_model_encode(&cfg.est, area.data() + MC_CONFIG_MODEL_OFFSET,
+                              MC_CONFIG_RECORDS_SIZE - MC_CONFIG_MODEL_OFFSET) == 0)
+        throw ScenarioError(origin + ": the configuration does not fit the image's configuration area");
+    if (cfg.est.map != nullptr) std::memcpy(area.data() + MC_CONFIG_MAP_OFFSET, cfg.est.map, sizeof(mc_flux_map_t));
+    return area;
+}
+
 std::vector<uint8_t> config_area_bytes(const Scenario& sc)
 {
     const DriveSetup ds = drive_setup_for(sc);
-    std::vector<uint8_t> area(MC_CONFIG_AREA_SIZE, 0xFF);
-    if (mc_store_params_encode(&ds.cfg.p, area.data(), MC_CONFIG_MODEL_OFFSET) == 0 ||
-        mc_store_model_encode(&ds.cfg.est, area.data() + MC_CONFIG_MODEL_OFFSET,
-                              MC_CONFIG_AREA_SIZE - MC_CONFIG_MODEL_OFFSET) == 0)
-        throw ScenarioError(sc.origin() + ": the configuration does not fit the image's configuration area");
-    return area;
+    return config_area_bytes(ds.cfg, sc.origin());
 }
 
 namespace {

@@ -8,10 +8,16 @@
 
 #include "scenario.hpp"
 
+extern "C" {
+#include "mc/drive.h"
+}
+
 namespace mcsim {
 
 // The configuration area's bytes for a scenario (the records the image decodes at boot).
 std::vector<uint8_t> config_area_bytes(const Scenario& sc);
+// The area (mc_config_area_t) for a drive configuration: the records, then the map in place.
+std::vector<uint8_t> config_area_bytes(const mc_drive_cfg_t& cfg, const std::string& origin);
 // Copy the ELF at in_elf to out_elf with its .mc_config section replaced by `area`. Throws
 // ScenarioError naming the file when it is not a 32-bit little-endian ELF with that section of
 // the right size.

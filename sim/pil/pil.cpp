@@ -208,6 +208,12 @@ public:
         return it->second.type == 2 ? (it->second.value & ~1u) : it->second.value;   // STT_FUNC: Thumb bit
     }
     bool has_symbol(const std::string& name) const override { return syms_.count(name) != 0; }
+    uint32_t symbol_size(const std::string& name) const override
+    {
+        auto it = syms_.find(name);
+        if (it == syms_.end()) throw LoadError(origin_ + ": no symbol '" + name + "'");
+        return it->second.size;
+    }
 
     void read(uint32_t addr, void* out, size_t n) override
     {

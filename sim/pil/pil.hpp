@@ -71,6 +71,8 @@ public:
     // Address of a symbol (STT_OBJECT or STT_FUNC, Thumb bit cleared); throws LoadError if absent.
     virtual uint32_t symbol(const std::string& name) const = 0;
     virtual bool has_symbol(const std::string& name) const = 0;
+    // Its size in bytes (st_size); throws LoadError if absent.
+    virtual uint32_t symbol_size(const std::string& name) const = 0;
     // Memory of the emulated core (RAM, flash, TCM: whatever the image maps).
     virtual void read(uint32_t addr, void* out, size_t n) = 0;
     virtual void write(uint32_t addr, const void* in, size_t n) = 0;

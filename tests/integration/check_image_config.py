@@ -36,7 +36,9 @@ def main():
             sys.exit(f"check_image_config: image-config exited {p.returncode}: {p.stderr}")
         area = section(a.objcopy, out, ".mc_config", os.path.join(d, "area.bin"))
         blank = section(a.objcopy, a.image, ".mc_config", os.path.join(d, "blank.bin"))
-        if blank != b"\xff" * len(blank):
+        # mc_config_area_t: the records (erased: 0xFF), then the map in place (zero: none)
+        records = 4096 + 14336
+        if blank[:records] != b"\xff" * records or blank[records:] != b"\x00" * (len(blank) - records):
             bad.append("the built image's configuration area is not erased")
         if len(area) != len(blank):
             bad.append(f"area size {len(area)} != {len(blank)}")
@@ -59,6 +61,13 @@ def main():
             bad.append(f"the demo's estimator uses a flux map: has_map {has_map}, {nd} x {nq}")
         elif struct.unpack_from("<I", m, mlen - 4)[0] != zlib.crc32(m[:mlen - 4]):
             bad.append("model record CRC")
+        else:   # the map in place (int n_d, n_q; float id0, did, iq0, diq, psi_d[41*41], psi_q[41*41])
+            mp = area[records:]
+            cells = nd * nq
+            if (struct.unpack_from("<2i", mp, 0) != (nd, nq) or mp[8:24] != m[36:52]
+                    or mp[24:24 + 4 * cells] != m[52:52 + 4 * cells]
+                    or mp[24 + 4 * 41 * 41:24 + 4 * 41 * 41 + 4 * cells] != m[52 + 4 * cells:52 + 8 * cells]):
+                bad.append("the map in place differs from the model record's map")
         with open(a.image, "rb") as f1, open(out, "rb") as f2:
             x, y = f1.read(), f2.read()
         changed = sum(1 for u, v in zip(x, y) if u != v)

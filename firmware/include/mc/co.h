@@ -169,6 +169,7 @@ typedef struct {
     uint8_t cfg_source;          /* 0x2FF1: mc_pstore_status_t of the boot's load           */
     uint32_t store_status;       /* mc_pstore_status_t of the last 0x1010 / 0x1011          */
     bool cw_written;             /* the controlword was written since the 402 step        */
+    uint32_t cw_count;           /* controlwords received (SDO or RPDO)                   */
     bool motor_changed;          /* a motor parameter was written: the 402 rated values follow */
 } mc_co_t;
 

@@ -13,7 +13,7 @@
 #include "mc/drive.h"
 
 #define MC_MONITOR_MAGIC   0x4E4D434Du   /* "MCMN" */
-#define MC_MONITOR_VERSION 1u
+#define MC_MONITOR_VERSION 2u
 #define MC_MONITOR_CMD_WORDS 7u
 #define MC_MONITOR_TM_WORDS  48u
 
@@ -27,6 +27,7 @@ typedef struct {
     uint32_t cmd[MC_MONITOR_CMD_WORDS];
     uint32_t tm_seq;
     uint32_t tm[MC_MONITOR_TM_WORDS];
+    uint32_t store_nvm;          /* mc_pstore_status_t of the set stored by CANopen 0x1010     */
 } mc_monitor_t;
 
 void mc_monitor_pack_cmd(const mc_drive_cmd_t *c, uint32_t w[MC_MONITOR_CMD_WORDS]);

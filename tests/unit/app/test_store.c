@@ -8,6 +8,7 @@
 #include <math.h>
 #include <string.h>
 #include "mc/monitor.h"
+#include "mc/bits.h"
 #include "mc/store.h"
 
 static uint8_t buf[MC_CONFIG_AREA_SIZE];
@@ -130,6 +131,54 @@ static void test_model_round_trip_with_map(void **state)
     assert_null(r.map);
 }
 
+/* The image's way: the map used where it lies, checked against the record. */
+static void test_model_view_in_place(void **state)
+{
+    (void)state;
+    static mc_flux_map_t map, place;
+    memset(&map, 0, sizeof map);
+    map.n_d = 4;
+    map.n_q = 3;
+    map.id0 = -10.0f;
+    map.did = 5.0f;
+    map.iq0 = 0.0f;
+    map.diq = 4.0f;
+    for (int k = 0; k < 12; ++k) {
+        map.psi_d[k] = 0.2f + 0.01f * (float)k;
+        map.psi_q[k] = 0.003f * (float)k;
+    }
+    const mc_est_model_t m = {0.5f, 0.01f, 0.02f, 0.3f, &map};
+    const size_t n = mc_store_model_encode(&m, buf, sizeof buf);
+    mc_est_model_t r = {0};
+    place = map;
+    for (int k = 12; k < 40; ++k) {
+        place.psi_d[k] = NAN;   /* beyond n_d n_q: not looked at */
+    }
+    assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_OK);
+    assert_ptr_equal(r.map, &place);
+    assert_true(r.rs == 0.5f && r.ld == 0.01f && r.lq == 0.02f && r.psi_pm == 0.3f);
+    /* one cell off by one bit */
+    place.psi_q[11] = mc_bits_f32(mc_f32_bits(place.psi_q[11]) ^ 1u);
+    r.map = &map;
+    assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_MAP_MISMATCH);
+    assert_ptr_equal(r.map, &map);   /* unchanged on a failure */
+    place = map;
+    place.n_q = 4;   /* other dimensions */
+    assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_MAP_MISMATCH);
+    place = map;
+    place.did = 5.5f;
+    assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_MAP_MISMATCH);
+    assert_int_equal(mc_store_model_view(buf, n, &r, NULL), MC_STORE_MAP_MISMATCH);
+    buf[8] ^= 1u;   /* the record itself corrupt */
+    assert_int_equal(mc_store_model_view(buf, n, &r, &map), MC_STORE_BAD_CRC);
+    /* a record without a map: NULL, map_in_place not read */
+    const mc_est_model_t nomap = {0.5f, 0.01f, 0.02f, 0.3f, NULL};
+    const size_t n2 = mc_store_model_encode(&nomap, buf, sizeof buf);
+    assert_int_equal(mc_store_model_view(buf, n2, &r, NULL), MC_STORE_OK);
+    assert_null(r.map);
+    assert_string_equal(mc_store_status_name(MC_STORE_MAP_MISMATCH), "map_mismatch");
+}
+
 static void test_monitor_telemetry_round_trip(void **state)
 {
     (void)state;
@@ -179,6 +228,7 @@ int main(void)
         cmocka_unit_test(test_params_corruption_refused),
         cmocka_unit_test(test_params_out_of_range_refused),
         cmocka_unit_test(test_model_round_trip_with_map),
+        cmocka_unit_test(test_model_view_in_place),
         cmocka_unit_test(test_monitor_telemetry_round_trip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
