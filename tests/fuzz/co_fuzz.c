@@ -36,6 +36,8 @@ typedef struct {
 } rig_t;
 
 static rig_t R;
+static uint32_t cob_before[MC_CO_PDO_N];   /* the TPDO COB-IDs before the last step: a frame sent
+                                              before a reset in the same step used them */
 static float scope_buf[512];   /* its own object: ASan's redzones around it */
 uint64_t co_fuzz_frames;   /* frames delivered, for the drivers' reports */
 /* Inputs that reached a deep state (the report shows the campaign is not stuck at the surface):
@@ -44,12 +46,15 @@ uint64_t co_fuzz_frames;   /* frames delivered, for the drivers' reports */
 uint64_t co_fuzz_reached[8];
 static uint32_t reached;
 
-static void check(int ok)
+#include <stdio.h>
+static void check_at(int ok, const char *what, int line)
 {
     if (!ok) {
+        fprintf(stderr, "co_fuzz: invariant violated (line %d): %s\n", line, what);
         abort();
     }
 }
+#define check(x) check_at((x) ? 1 : 0, #x, __LINE__)
 
 static void invariants(void)
 {
@@ -81,10 +86,23 @@ static void drain(void)
         check(hal_can_frame_valid(&f) && !f.ext && f.dlc <= 8u);
         bool ok = f.id == 0x080u + NODE || f.id == 0x580u + NODE || f.id == 0x700u + NODE;
         for (uint32_t k = 0; k < MC_CO_PDO_N; ++k) {
-            ok = ok || f.id == (R.co.tpdo[k].cob_id & 0x7FFu);
+            ok = ok || f.id == (R.co.tpdo[k].cob_id & 0x7FFu) || f.id == (cob_before[k] & 0x7FFu);
+        }
+        if (!ok) {
+            fprintf(stderr, "co_fuzz: a frame on 0x%03X (dlc %u), TPDO COB-IDs 0x%08X 0x%08X 0x%08X 0x%08X\n",
+                    (unsigned)f.id, (unsigned)f.dlc, (unsigned)R.co.tpdo[0].cob_id, (unsigned)R.co.tpdo[1].cob_id,
+                    (unsigned)R.co.tpdo[2].cob_id, (unsigned)R.co.tpdo[3].cob_id);
         }
         check(ok);
     }
+}
+
+static void co_step(void)
+{
+    for (uint32_t k = 0; k < MC_CO_PDO_N; ++k) {
+        cob_before[k] = R.co.tpdo[k].cob_id;
+    }
+    mc_co_step(&R.co, R.now);
 }
 
 static void set_inputs(uint8_t sel)
@@ -107,7 +125,7 @@ static void run_ms(uint32_t ms)
         }
         mc_drive_background(&R.d);
         R.now++;
-        mc_co_step(&R.co, R.now);
+        co_step();
         drain();   /* the TX ring is small: a real bus takes the frames away */
     }
 }
@@ -337,7 +355,6 @@ size_t co_fuzz_seed(int k, uint8_t *buf, size_t cap)
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 #ifdef CO_FUZZ_LIBFUZZER
-#include <stdio.h>
 /* libFuzzer has its own main: the frame count at exit. */
 __attribute__((destructor)) static void report(void)
 {
@@ -368,13 +385,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const uint8_t op = next(&s);
         switch (op % 12u) {
         case 8: run_ms(1u + next(&s) % 8u); break;
-        case 9: mc_co_step(&R.co, R.now); drain(); break;
+        case 9: co_step(); drain(); break;
         case 10: set_inputs(next(&s)); break;
         case 11: drain(); break;
         default:
             frame(&s);
             if ((op & 0x80u) != 0u) {   /* often a step right after, as a real loop would */
-                mc_co_step(&R.co, R.now);
+                co_step();
                 drain();
             }
             break;

@@ -3,11 +3,13 @@
  * or spliced from another seed, random operations appended - or purely random, from a fixed
  * seed, until a budget of delivered frames is spent. A crash is the sanitizers' abort (the run
  * exits non-zero); a clean run prints the counts.
- *   co_fuzz [--frames N] [--seed S] [--write-seeds DIR] [--quiet] */
+ *   co_fuzz [--frames N] [--seed S] [--write-seeds DIR] [--replay FILE] [--quiet]
+ * A crashing input is saved to co_fuzz_crash.bin (the current directory) for --replay. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <time.h>
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -16,6 +18,29 @@ extern uint64_t co_fuzz_frames;
 extern uint64_t co_fuzz_reached[8];
 
 static uint64_t rng_state;
+static const uint8_t *cur_in;   /* the input being run, saved if it crashes */
+static size_t cur_len;
+
+static void save_crash(int sig)
+{
+    (void)sig;
+    FILE *f = fopen("co_fuzz_crash.bin", "wb");
+    if (f != NULL) {
+        fwrite(cur_in, 1, cur_len, f);
+        fclose(f);
+        fprintf(stderr, "co_fuzz: the input is in co_fuzz_crash.bin (%zu bytes); replay: co_fuzz --replay co_fuzz_crash.bin\n",
+                cur_len);
+    }
+    signal(SIGABRT, SIG_DFL);
+    abort();
+}
+
+static int run(const uint8_t *in, size_t n)
+{
+    cur_in = in;
+    cur_len = n;
+    return LLVMFuzzerTestOneInput(in, n);
+}
 
 static uint64_t rnd(void)   /* splitmix64 */
 {
@@ -93,10 +118,22 @@ int main(int argc, char **argv)
             seed = strtoull(argv[++k], NULL, 10);
         } else if (strcmp(argv[k], "--write-seeds") == 0 && k + 1 < argc) {
             seed_dir = argv[++k];
+        } else if (strcmp(argv[k], "--replay") == 0 && k + 1 < argc) {
+            static uint8_t rb[1u << 16];
+            FILE *f = fopen(argv[++k], "rb");
+            if (f == NULL) {
+                perror(argv[k]);
+                return 2;
+            }
+            const size_t n = fread(rb, 1, sizeof rb, f);
+            fclose(f);
+            LLVMFuzzerTestOneInput(rb, n);
+            printf("co_fuzz: %s (%zu bytes) ran clean\n", argv[k], n);
+            return 0;
         } else if (strcmp(argv[k], "--quiet") == 0) {
             quiet = 1;
         } else {
-            fprintf(stderr, "usage: co_fuzz [--frames N] [--seed S] [--write-seeds DIR] [--quiet]\n");
+            fprintf(stderr, "usage: co_fuzz [--frames N] [--seed S] [--write-seeds DIR] [--replay FILE] [--quiet]\n");
             return 2;
         }
     }
@@ -121,11 +158,12 @@ int main(int argc, char **argv)
         return 0;
     }
     rng_state = seed;
+    signal(SIGABRT, save_crash);
     static uint8_t in[MAXLEN];
     uint64_t inputs = 0;
     const clock_t t0 = clock();
     for (int s = 0; s < n_seeds; ++s) {   /* the seeds as they are */
-        LLVMFuzzerTestOneInput(seeds[s], seed_len[s]);
+        run(seeds[s], seed_len[s]);
         inputs++;
     }
     uint64_t next_report = budget / 10u;
@@ -141,7 +179,7 @@ int main(int argc, char **argv)
             memcpy(in, seeds[s], seed_len[s]);
             n = mutate(in, seed_len[s]);
         }
-        LLVMFuzzerTestOneInput(in, n);
+        run(in, n);
         inputs++;
         if (!quiet && co_fuzz_frames >= next_report) {
             fprintf(stderr, "co_fuzz: %llu frames, %llu inputs\n", (unsigned long long)co_fuzz_frames,
