@@ -333,9 +333,21 @@ def cmd_scope(args, drive: Drive) -> int:
     pre = args.pre
     tty = sys.stdout.isatty()
     progress = (lambda s: print("\r" + s.ljust(40), end="", flush=True)) if tty else None
+    then = []
+    for item in args.then:
+        name, sep, value = item.partition("=")
+        if not sep or not name or not value:
+            raise InputError(f"scope --then {item!r}: expected NAME=VALUE (e.g. 0x60FF=600)")
+        then.append((name.strip(), value.strip()))
+
+    def after_arm():
+        for name, value in then:
+            e, _old, new = drive.set(name, value)
+            print(f"  then {e.label} = {format_value(e, new)}")
+
     rec = run_scope(drive, channels, trigger=trigger, level=args.level, edge=args.edge, pre=pre,
                     length=args.length, decimation=args.decimation, timeout=args.scope_timeout,
-                    progress=progress)
+                    progress=progress, after_arm=after_arm if then else None)
     if tty:
         print()
     title = (f"node {drive.node_id} scope: {rec.samples} samples every {fmt_period(rec.period)}"
@@ -475,6 +487,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="scope", metavar="PREFIX", help="output files (default scope)")
     p.add_argument("--timeout", dest="scope_timeout", type=_positive, default=10.0, metavar="S",
                    help="wait for the trigger and the record at most S s (default 10)")
+    p.add_argument("--then", action="append", default=[], metavar="NAME=VALUE",
+                   help="after arming, write this (a parameter or object, as `set` does; e.g. "
+                        "0x60FF=600 for a speed step): the event to capture, from the same SDO client "
+                        "(a drive serves one SDO client at a time); repeatable")
     p.set_defaults(func=cmd_scope)
 
     p = sub.add_parser("nmt", help="NMT command to the node (no SDO)")

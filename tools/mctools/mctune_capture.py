@@ -239,7 +239,7 @@ class LivePlot:
 
 def run_scope(drive: Drive, channels: list[ScopeChannel], *, trigger: ScopeChannel | None,
               level: float, edge: str, pre: int | None, length: int, decimation: int, timeout: float,
-              report=print, progress=None) -> ScopeRecord:
+              report=print, progress=None, after_arm=None) -> ScopeRecord:
     """Configure (0x2300, 0x2301), arm (0x2302 = 1), wait for done (0x2303), read the record's
     size, trigger index and period (0x2304..0x2306) and upload it (0x2307). pre None: a tenth
     of the record with a trigger, else 0."""
@@ -276,6 +276,8 @@ def run_scope(drive: Drive, channels: list[ScopeChannel], *, trigger: ScopeChann
     trig_text = (f"{trigger.name} {edge} through {level:g}{(' ' + trigger.unit) if trigger.unit else ''}"
                  if trigger else "at once")
     report(f"scope armed: {', '.join(c.name for c in channels)}; trigger {trig_text}")
+    if after_arm is not None:
+        after_arm()   # the event to capture (a step), from this SDO client
     t0 = time.monotonic()
     last = None
     try:
@@ -329,7 +331,7 @@ def upload_domain(drive: Drive, index: int, what: str, progress=None) -> bytes:
                     progress(f"upload {len(out)}/{size or '?'} bytes")
         return bytes(out)
 
-    return drive._sdo(go, drive.entry(index), what + "upload: ")
+    return drive._sdo(go, drive.entry(index), what + "upload: ", idempotent=True)
 
 
 def scope_outputs(rec: ScopeRecord, prefix: Path, title: str, trigger: ScopeChannel | None,

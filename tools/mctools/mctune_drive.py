@@ -663,23 +663,43 @@ class Drive:
         return CommError(f"{what}node {self.node_id} does not answer on {bus} (heartbeats seen from "
                          f"nodes []: is the drive powered, on this bus, at this bit rate?)")
 
-    def _sdo(self, fn, e: Entry | None, what: str, *args):
+    def _sdo(self, fn, e: Entry | None, what: str, *args, idempotent: bool = False):
+        """One SDO transfer. idempotent (reads): when another SDO client's answer got in the way
+        (CiA 301 has one SDO channel per server: a second mctune, a PLC), drop the queued answers
+        and try again, at most 3 times; writes are never repeated."""
         from canopen.sdo import SdoAbortedError, SdoCommunicationError
 
-        try:
-            return fn(*args)
-        except SdoAbortedError as exc:
-            raise self.abort_error(exc.code, e, what) from None
-        except SdoCommunicationError as exc:
-            if "No SDO response" in str(exc) or "timeout" in str(exc).lower():
-                raise self._no_answer(what) from None
-            raise CommError(f"{what}SDO transfer failed: {exc}") from None
-        except Exception as exc:  # python-can send errors (bus off, socket closed)
-            import can
+        for attempt in range(4):
+            try:
+                return self._sdo_once(fn, *args)
+            except SdoCommunicationError as exc:
+                if not (idempotent and "another SDO client" in str(exc) and attempt < 3):
+                    raise self._sdo_error(exc, e, what) from None
+                responses = getattr(self.node.sdo, "responses", None)
+                time.sleep(0.02)
+                while responses is not None and not responses.empty():
+                    responses.get_nowait()
+            except SdoAbortedError as exc:
+                raise self._sdo_error(exc, e, what) from None
+            except Exception as exc:  # python-can send errors (bus off, socket closed)
+                import can
 
-            if isinstance(exc, (can.CanError, OSError)):
-                raise CommError(f"{what}bus {self.bus_spec}: {exc}") from None
-            raise
+                if isinstance(exc, (can.CanError, OSError)):
+                    raise CommError(f"{what}bus {self.bus_spec}: {exc}") from None
+                raise
+
+    @staticmethod
+    def _sdo_once(fn, *args):
+        return fn(*args)
+
+    def _sdo_error(self, exc, e: Entry | None, what: str) -> Exception:
+        from canopen.sdo import SdoAbortedError
+
+        if isinstance(exc, SdoAbortedError):
+            return self.abort_error(exc.code, e, what)
+        if "No SDO response" in str(exc) or "timeout" in str(exc).lower():
+            return self._no_answer(what)
+        return CommError(f"{what}SDO transfer failed: {exc}")
 
     def abort_error(self, code: int, e: Entry | None, what: str) -> MctuneError:
         text = f"{what}refused by the drive: {abort_text(code)} (SDO abort 0x{code:08X})"
@@ -694,7 +714,7 @@ class Drive:
         return cls(text)
 
     def read(self, e: Entry, what: str = ""):
-        data = self._sdo(self.node.sdo.upload, e, what, e.index, e.sub)
+        data = self._sdo(self.node.sdo.upload, e, what, e.index, e.sub, idempotent=True)
         if e.var is None:
             return bytes(data)
         try:

@@ -368,6 +368,20 @@ def test_scope_upload_and_csv(capsys, bus, drive, tmp_path):
     assert drive.writes[-1] == (0x2302, 0, b"\x00")
     assert drive.value(0x2300, 1) == 13   # a channel by id
 
+    # --then: the step written after the arm, by the same client
+    drive._on_read = lambda index, subindex, od: 3 if index == 0x2303 else None
+    drive.node._read_callbacks[:] = [drive._on_read]
+    n0 = len(drive.writes)
+    rc, out, err = run(capsys, bus, "scope", "--channels", "i_q", "--length", "100",
+                       "--then", "0x60FF=600", "--out", str(tmp_path / "then"))
+    assert rc == 0, err
+    w = drive.writes[n0:]
+    arm = w.index((0x2302, 0, b"\x01"))
+    assert (0x60FF, 0, struct.pack("<i", 600)) in w[arm + 1:]
+    assert "then 0x60FF" in out
+    rc, out, err = run(capsys, bus, "scope", "--channels", "i_q", "--then", "600")
+    assert rc == 2 and "NAME=VALUE" in err
+
     rc, out, err = run(capsys, bus, "scope", "--channels", "i_q", "--length", "5000")
     assert rc == 2 and "holds 4096" in err
     rc, out, err = run(capsys, bus, "scope", "--channels", "nope")
