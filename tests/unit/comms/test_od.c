@@ -135,9 +135,45 @@ static void test_store_restore(void **state)
     assert_true(take_id(0x080u + NODE, &f));
     assert_int_equal(f.data[0] | (f.data[1] << 8), MC_EMCY_PARAMS_LOST);
     assert_int_equal(sdo_read(0x2FF1, 0, &a), (uint32_t)MC_PSTORE_CORRUPT);
+    /* the NVM fails during the store (a power cut at its 3rd step): hardware error, EMCY 0x5530,
+     * and the set committed before is what a load returns */
+    drain();
+    hal_host_nvm_cut_at(&rig.nvm, rig.nvm.steps + 3u);
+    const uint8_t save[8] = {0x23, 0x10, 0x10, 0x01, 0x73, 0x61, 0x76, 0x65};
+    put(0x600u + NODE, save, 8u);
+    mc_co_step(&rig.co, rig.now);
+    bool emcy = false, abort_hw = false;
+    while (take_any(&f)) {
+        emcy = emcy || (f.id == 0x080u + NODE && (f.data[0] | (f.data[1] << 8)) == MC_EMCY_NVM);
+        abort_hw = abort_hw || (f.id == 0x580u + NODE && f.data[0] == 0x80u && word(&f) == MC_SDO_ABORT_HW);
+    }
+    assert_true(emcy);
+    assert_true(abort_hw);
+    assert_int_equal(sdo_read(0x2FF2, 0, &a), (uint32_t)MC_PSTORE_NVM_ERROR);
+    hal_host_nvm_power_on(&rig.nvm);
     /* no NVM: cannot be stored */
     rig.co.nvm = NULL;
     assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), MC_SDO_ABORT_STORE);
+}
+
+/* A segmented download whose data does not match the size it announced. */
+static void test_segmented_size_mismatch(void **state)
+{
+    (void)state;
+    rig_init();
+    hal_can_frame_t f = sdo(0x21, 0x1017, 0, 4);   /* announces 4 bytes for a 2-byte object */
+    assert_int_equal(f.data[0], 0x60u);
+    const uint8_t seg[8] = {(uint8_t)((5u << 1) | 1u), 0x2C, 0x01, 0, 0, 0, 0, 0};   /* 2 bytes, last */
+    put(0x600u + NODE, seg, 8u);
+    mc_co_step(&rig.co, rig.now);
+    assert_true(take_id(0x580u + NODE, &f));
+    assert_int_equal(f.data[0], 0x80u);
+    assert_int_equal(word(&f), MC_SDO_ABORT_LENGTH);
+    uint32_t a;
+    assert_int_equal(sdo_read(0x1017, 0, &a), 0u);   /* unchanged */
+    /* a segmented download longer than any object */
+    f = sdo(0x21, 0x1017, 0, 100);
+    assert_int_equal(word(&f), MC_SDO_ABORT_LENGTH_HIGH);
 }
 
 static void test_scope_upload(void **state)
@@ -193,6 +229,7 @@ int main(void)
         cmocka_unit_test(test_write_checks),
         cmocka_unit_test(test_store_restore),
         cmocka_unit_test(test_scope_upload),
+        cmocka_unit_test(test_segmented_size_mismatch),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
