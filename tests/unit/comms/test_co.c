@@ -1,85 +1,29 @@
 /* CANopen device (mc/co.h) against the host CAN rings and a real drive: boot-up, heartbeat, NMT,
  * SDO expedited and segmented transfers, parameters 0x2000 + id, and the abort codes. */
-#include <setjmp.h>
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <cmocka.h>
-#include <string.h>
-#include "hal_host/host.h"
-#include "mc/bits.h"
-#include "mc/co.h"
+#include "rig.h"
 
-typedef struct {
-    hal_pwm_t pwm;
-    hal_adc_t adc;
-    hal_qep_t qep;
-    hal_can_t can;
-    mc_drive_cfg_t cfg;
-    mc_drive_t d;
-    mc_drive_link_t link;
-    hal_nvm_t nvm;
-    mc_scope_t scope;
-    float scope_buf[256];
-    mc_co_t co;
-} rig_t;
-
-static rig_t rig;
-static uint32_t now;
-
-static void rig_init(void)
+/* node 5 with a 100 ms heartbeat and an identity to read back; these tests command the drive
+ * themselves (the 402 layer off) */
+static void rig_init_co(void)
 {
     memset(&rig, 0, sizeof rig);
-    hal_host_pwm_init(&rig.pwm, 1e-4f, 0.5e-6f);
-    rig.qep.counts_per_rev = 80000u;
-    hal_host_can_init(&rig.can);
-    mc_drive_cfg_default(&rig.cfg);
-    assert_true(mc_drive_init(&rig.d, &rig.link, &rig.cfg, &rig.adc, &rig.pwm, &rig.qep));
     hal_host_nvm_init(&rig.nvm);
-    mc_scope_init(&rig.scope, rig.scope_buf, 256u, 1e-4f);
-    const mc_co_cfg_t c = {.node_id = 5, .heartbeat_ms = 100, .step_s = 1e-3f, .vendor_id = 0x12345678u,
+    mc_drive_cfg_default(&rig.cfg);
+    const mc_co_cfg_t c = {.node_id = NODE, .heartbeat_ms = 100, .step_s = 1e-3f, .vendor_id = 0x12345678u,
                            .product_code = 1u, .revision = 2u, .serial = 3u};
-    assert_true(mc_co_init(&rig.co, &c, &rig.can, &rig.d, &rig.nvm, &rig.scope, MC_PSTORE_EMPTY));
-    rig.co.ds_on = false;   /* these tests command the drive themselves */
-    now = 0;
-}
-
-static void put(uint32_t id, const uint8_t *d, uint8_t n)
-{
-    hal_can_frame_t f = {.id = id, .dlc = n};
-    memcpy(f.data, d, n);
-    assert_true(hal_host_can_deliver(&rig.can, &f));
+    rig_start_cfg(&c, MC_PSTORE_EMPTY);
+    rig.co.ds_on = false;
 }
 
 /* The next frame that is not a TPDO (operational sends them on their timers). */
 static bool take(hal_can_frame_t *f)
 {
-    while (hal_host_can_take(&rig.can, f)) {
+    while (take_any(f)) {
         if (f->id < 0x180u || f->id > 0x4FFu) {
             return true;
         }
     }
     return false;
-}
-
-/* one SDO request -> its one response */
-static hal_can_frame_t sdo(uint8_t b0, uint16_t index, uint8_t sub, uint32_t data)
-{
-    const uint8_t r[8] = {b0, (uint8_t)index, (uint8_t)(index >> 8), sub,
-                          (uint8_t)data, (uint8_t)(data >> 8), (uint8_t)(data >> 16), (uint8_t)(data >> 24)};
-    put(0x605u, r, 8u);
-    mc_co_step(&rig.co, now);
-    hal_can_frame_t f;
-    assert_true(take(&f));
-    assert_int_equal(f.id, 0x585u);
-    assert_int_equal(f.dlc, 8u);
-    return f;
-}
-
-static uint32_t word(const hal_can_frame_t *f)
-{
-    return (uint32_t)f->data[4] | ((uint32_t)f->data[5] << 8) | ((uint32_t)f->data[6] << 16) |
-           ((uint32_t)f->data[7] << 24);
 }
 
 static void expect_abort(const hal_can_frame_t *f, uint32_t code)
@@ -88,13 +32,12 @@ static void expect_abort(const hal_can_frame_t *f, uint32_t code)
     assert_int_equal(word(f), code);
 }
 
-static void drive_inputs(float vdc);
 static void drive_run(int n, bool enable);
 
 static void test_node_id_checked(void **state)
 {
     (void)state;
-    rig_init();
+    rig_init_co();
     mc_co_t co;
     mc_co_cfg_t c = {.node_id = 0, .step_s = 1e-3f};
     assert_false(mc_co_init(&co, &c, &rig.can, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
@@ -110,42 +53,42 @@ static void test_node_id_checked(void **state)
 static void test_boot_heartbeat_nmt(void **state)
 {
     (void)state;
-    rig_init();
-    mc_co_step(&rig.co, now);
+    rig_init_co();
+    mc_co_step(&rig.co, rig.now);
     hal_can_frame_t f;
     assert_true(take(&f));   /* boot-up */
     assert_int_equal(f.id, 0x705u);
     assert_int_equal(f.dlc, 1u);
     assert_int_equal(f.data[0], 0x00u);
     assert_false(take(&f));
-    now = 99;
-    mc_co_step(&rig.co, now);
+    rig.now = 99;
+    mc_co_step(&rig.co, rig.now);
     assert_false(take(&f));
-    now = 100;
-    mc_co_step(&rig.co, now);
+    rig.now = 100;
+    mc_co_step(&rig.co, rig.now);
     assert_true(take(&f));   /* heartbeat, pre-operational */
     assert_int_equal(f.id, 0x705u);
     assert_int_equal(f.data[0], 0x7Fu);
     const uint8_t start[2] = {0x01, 5}, stop[2] = {0x02, 0}, other[2] = {0x80, 6}, reset[2] = {0x82, 5};
     put(0x000u, start, 2u);
-    now = 200;
-    mc_co_step(&rig.co, now);
+    rig.now = 200;
+    mc_co_step(&rig.co, rig.now);
     assert_true(take(&f));
     assert_int_equal(f.data[0], 0x05u);
     put(0x000u, other, 2u);   /* another node's command: ignored */
     put(0x000u, stop, 2u);    /* broadcast */
-    now = 300;
-    mc_co_step(&rig.co, now);
+    rig.now = 300;
+    mc_co_step(&rig.co, rig.now);
     assert_true(take(&f));
     assert_int_equal(f.data[0], 0x04u);
     /* stopped: no SDO answer */
     const uint8_t r[8] = {0x40, 0x00, 0x10, 0, 0, 0, 0, 0};
     put(0x605u, r, 8u);
-    mc_co_step(&rig.co, now);
+    mc_co_step(&rig.co, rig.now);
     assert_false(take(&f));
     put(0x000u, reset, 2u);   /* reset communication: boot-up again */
-    mc_co_step(&rig.co, now);
-    mc_co_step(&rig.co, now);
+    mc_co_step(&rig.co, rig.now);
+    mc_co_step(&rig.co, rig.now);
     assert_true(take(&f));
     assert_int_equal(f.id, 0x705u);
     assert_int_equal(f.data[0], 0x00u);
@@ -154,8 +97,8 @@ static void test_boot_heartbeat_nmt(void **state)
 static void test_sdo_expedited_and_segmented_upload(void **state)
 {
     (void)state;
-    rig_init();
-    mc_co_step(&rig.co, now);
+    rig_init_co();
+    mc_co_step(&rig.co, rig.now);
     hal_can_frame_t f;
     (void)take(&f);
     f = sdo(0x40, 0x1000, 0, 0);
@@ -192,8 +135,8 @@ static void test_sdo_expedited_and_segmented_upload(void **state)
     expect_abort(&f, MC_SDO_ABORT_TOGGLE);
     /* a timeout */
     (void)sdo(0x40, 0x1008, 0, 0);
-    now += MC_CO_SDO_TIMEOUT_MS + 1u;
-    mc_co_step(&rig.co, now);
+    rig.now += MC_CO_SDO_TIMEOUT_MS + 1u;
+    mc_co_step(&rig.co, rig.now);
     assert_true(take(&f));
     expect_abort(&f, MC_SDO_ABORT_TIMEOUT);
 }
@@ -201,8 +144,8 @@ static void test_sdo_expedited_and_segmented_upload(void **state)
 static void test_sdo_parameters(void **state)
 {
     (void)state;
-    rig_init();
-    mc_co_step(&rig.co, now);
+    rig_init_co();
+    mc_co_step(&rig.co, rig.now);
     hal_can_frame_t f;
     (void)take(&f);
     const int id = mc_param_find("control.current_bw_hz");
@@ -244,8 +187,8 @@ static void test_sdo_parameters(void **state)
 static void test_sdo_aborts(void **state)
 {
     (void)state;
-    rig_init();
-    mc_co_step(&rig.co, now);
+    rig_init_co();
+    mc_co_step(&rig.co, rig.now);
     hal_can_frame_t f;
     (void)take(&f);
     f = sdo(0x40, 0x6789, 0, 0);
@@ -271,8 +214,8 @@ static void test_sdo_aborts(void **state)
 static void test_segmented_download(void **state)
 {
     (void)state;
-    rig_init();
-    mc_co_step(&rig.co, now);
+    rig_init_co();
+    mc_co_step(&rig.co, rig.now);
     hal_can_frame_t f;
     (void)take(&f);
     /* 0x1017 (2 bytes) written segmented: initiate with size, one last segment */
@@ -280,20 +223,11 @@ static void test_segmented_download(void **state)
     assert_int_equal(f.data[0], 0x60u);
     const uint8_t seg[8] = {(uint8_t)(0x00 | (5u << 1) | 1u), 0x2C, 0x01, 0, 0, 0, 0, 0};   /* 300 ms, last */
     put(0x605u, seg, 8u);
-    mc_co_step(&rig.co, now);
+    mc_co_step(&rig.co, rig.now);
     assert_true(take(&f));
     assert_int_equal(f.data[0], 0x20u);
     f = sdo(0x40, 0x1017, 0, 0);
     assert_int_equal(word(&f), 300u);
-}
-
-static void drive_inputs(float vdc)
-{
-    const mc_drive_blk_t *b = &rig.d.cfg->blk;
-    for (int k = 0; k < 3; ++k) {
-        rig.adc.sample.i[k] = (uint16_t)(b->offset_nominal + 0.5f);
-    }
-    rig.adc.sample.vdc = (uint16_t)(vdc / b->volts_per_count + 0.5f);
 }
 
 static void drive_run(int n, bool enable)
@@ -309,18 +243,18 @@ static void drive_run(int n, bool enable)
 static void test_emcy_on_fault(void **state)
 {
     (void)state;
-    rig_init();
-    mc_co_step(&rig.co, now);
+    rig_init_co();
+    mc_co_step(&rig.co, rig.now);
     hal_can_frame_t f;
     (void)take(&f);   /* boot-up */
     drive_inputs(300.0f);
     drive_run((int)rig.d.cfg->p.offset_cal_samples + 2, true);
-    mc_co_step(&rig.co, now);
+    mc_co_step(&rig.co, rig.now);
     assert_false(take(&f));   /* no fault, no EMCY */
     drive_inputs(rig.d.cfg->p.vdc_max + 20.0f);
     drive_run(1, true);
     assert_true(mc_drive_faults(&rig.d) & MC_FAULT_OVERVOLTAGE);
-    mc_co_step(&rig.co, now);
+    mc_co_step(&rig.co, rig.now);
     assert_true(take(&f));
     assert_int_equal(f.id, 0x085u);
     assert_int_equal(f.dlc, 8u);
@@ -328,7 +262,7 @@ static void test_emcy_on_fault(void **state)
     assert_int_equal(f.data[2], 0x05u);                        /* generic + voltage */
     assert_int_equal(f.data[3], 1u);                           /* MC_FAULT_OVERVOLTAGE's bit */
     assert_false(take(&f));   /* once */
-    mc_co_step(&rig.co, now);
+    mc_co_step(&rig.co, rig.now);
     assert_false(take(&f));
     f = sdo(0x40, 0x1001, 0, 0);
     assert_int_equal(f.data[4], 0x05u);
@@ -345,7 +279,7 @@ static void test_emcy_on_fault(void **state)
     drive_run(2, false);
     drive_run(2, true);
     assert_int_equal(mc_drive_faults(&rig.d), 0u);
-    mc_co_step(&rig.co, now);
+    mc_co_step(&rig.co, rig.now);
     assert_true(take(&f));
     assert_int_equal(f.id, 0x085u);
     assert_int_equal(f.data[0] | f.data[1] | f.data[2], 0);
