@@ -20,6 +20,9 @@ def cases(tmp):
     huge_file = os.path.join(tmp, "huge_file.toml")  # valid TOML, but beyond the 1 MiB limit
     with open(huge_file, "w") as f:
         f.write("[scenario]\n" + "#" * (1 << 20) + "\n")
+    short_nvm = os.path.join(tmp, "short.nvm")  # not an NVM image of this drive
+    with open(short_nvm, "wb") as f:
+        f.write(b"0123456789")
     raw_nul = os.path.join(tmp, "raw_nul.toml")  # a literal NUL byte inside a string
     with open(raw_nul, "wb") as f:
         f.write(b'[scenario]\nname = "a\x00b"\n')
@@ -53,6 +56,10 @@ def cases(tmp):
         (["run", GOOD, "--set", "control.current_bw_hz=fast"], "control.current_bw_hz"),
         (["run", GOOD, "--set", "control.decouple=1"], "control.decouple"),
         (["run", GOOD, "--set", "sensors.i_gain_err=[0.1,0.2]"], "sensors.i_gain_err"),
+        # the drive's NVM file (the CANopen store): another size is refused, not guessed at
+        (["run", GOOD, "--nvm", short_nvm], ("--nvm", "10 bytes, expected 16384")),
+        (["run", GOOD, "--set", "can.commands=\"bus\""], ("can.commands", "canopen|scenario")),
+        (["run", GOOD, "--can", "socketcand:127.0.0.1:99999"], ("--can", "1..65535")),
     ]
 
 
