@@ -16,6 +16,7 @@
 
 extern "C" {
 #include "hal/stage.h"
+#include "hal_host/host.h"
 #include "mc/monitor.h"
 #include "mc/store.h"
 }
@@ -64,6 +65,7 @@ class PilDrive final : public DriveTarget {
 public:
     PilDrive(const std::string& elf, const DriveSetup& ds, double ts) : elf_(elf), ts_(ts)
     {
+        hal_host_can_init(&can_);
         try {
             t_ = pil::Target::load(elf);
         } catch (const pil::LoadError& e) {
@@ -151,6 +153,7 @@ public:
             throw std::runtime_error(m.str());
         }
         t_->run_background_to_idle(kBackgroundBudget);   // telemetry, background work
+        if (can_on_) bridge_can();
         last_ = c;
         last_k_ = k;
         have_last_ = true;
@@ -178,6 +181,20 @@ public:
         return tm;
     }
     PwmOut outputs() const override { return conv(t_->outputs()); }
+
+    // The image's CAN controller model (AM263x MCAN) on the simulator's bus: the link reaches it
+    // through a host CAN ring, bridged after every period's background run.
+    hal_can_t* can() override { return t_->peripherals().can_supported() ? &can_ : nullptr; }
+    bool attach_canopen(uint8_t node_id, uint16_t heartbeat_ms, bool commands) override
+    {
+        (void)commands;   // the image: the last commander heard wins (the runner sends none then)
+        if (!t_->peripherals().can_supported()) return false;
+        if (node_id != 1 || heartbeat_ms != 1000)
+            throw ScenarioError("--pil with --can: the image's CANopen device is node 1 with a 1000 ms heartbeat "
+                                "(firmware/image/main.c): set can.node_id = 1 and can.heartbeat_ms = 1000");
+        can_on_ = true;
+        return true;
+    }
 
     std::vector<std::pair<std::string, std::string>> metrics() const override
     {
@@ -227,6 +244,33 @@ public:
     }
 
 private:
+    void bridge_can()
+    {
+        pil::CanFrame f;
+        while (t_->peripherals().can_take(f)) {   // the image sent it: onto the bus
+            hal_can_frame_t h{};
+            h.id = f.id;
+            h.ext = f.ext;
+            h.rtr = f.rtr;
+            h.dlc = f.dlc;
+            std::memcpy(h.data, f.data, 8);
+            if (!hal_can_send(&can_, &h)) ++can_lost_;
+        }
+        hal_can_frame_t h;
+        while (hal_can_receive(&can_, &h)) {   // from the bus: into the image's RX FIFO
+            pil::CanFrame r;
+            r.id = h.id;
+            r.ext = h.ext;
+            r.rtr = h.rtr;
+            r.dlc = h.dlc;
+            std::memcpy(r.data, h.data, 8);
+            if (!t_->peripherals().can_deliver(r)) ++can_lost_;
+        }
+    }
+    hal_can_t can_{};
+    bool can_on_ = false;
+    unsigned long can_lost_ = 0;
+
     uint32_t word(size_t off)
     {
         uint32_t w = 0;

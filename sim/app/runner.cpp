@@ -443,7 +443,7 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     const bool can_commands = !opt.can.empty() && sc.s("can.commands") == "canopen";
     if (!opt.can.empty()) {
         if (drive->can() == nullptr)
-            throw ScenarioError("--can: this target has no CAN the simulator reaches (use the host build, without --pil)");
+            throw ScenarioError("--can: this target has no CAN controller the simulator models (the generic Cortex-M4F port has none: use the host build or the am263x image)");
         can = make_can_link(opt.can);
         if (!drive->attach_canopen(static_cast<uint8_t>(sc.i("can.node_id")), static_cast<uint16_t>(sc.i("can.heartbeat_ms")),
                                    can_commands))

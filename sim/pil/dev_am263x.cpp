@@ -24,7 +24,10 @@
 //    period estimate from the counts moved (COEF when slower than the 16-bit capture timer).
 //  - RTI0: RTIFRC0 = time_us scaled by RTICLK (25 MHz) / (RTICPUC0 + 1).
 //  - MCAN0: MEM_INIT_DONE, CCCR (INIT reads back, CCE cleared with INIT), PSR error active, TX
-//    FIFO always free (a TXBAR request is "sent" at once: the frame is logged), RX FIFO 0 empty.
+//    FIFO always free (a TXBAR request is "sent" at once: the frame goes to the bus side,
+//    can_take), RX FIFO 0 in the message RAM as RXF0C places it, filled by can_deliver (fill
+//    level, get and put indices in RXF0S, RXF0A frees the element; full: the frame is lost and
+//    IR.RF0L set).
 //  - QSPI0: configuration-port frames of 8-bit words (WREN, RDSR, PP, SE4K) applied to the flash
 //    window through bind_memory (program = AND, erase = 0xFF over 4 KiB), never busy.
 #include <algorithm>
@@ -509,7 +512,10 @@ private:
                 const uint32_t tfqs = (get(kMcanCfg, MCAN_CORE_OFFSET + MCAN_TXBC, 4) >> MCAN_TXBC_TFQS_SHIFT) & 0x3Fu;
                 return tfqs | (tx_put_ << MCAN_TXFQS_TFQPI_SHIFT) | (tx_put_ << 8);   // free, get = put
             }
-            if (r == MCAN_RXF0S) return 0;   // nothing received
+            if (r == MCAN_RXF0S)
+                return rx_count_ | (rx_get_ << MCAN_RXF0S_F0GI_SHIFT) | (rx_put_ << 16) |
+                       (rx_count_ >= rx_size() && rx_size() != 0 ? (1u << 24) : 0u);
+            if (r == MCAN_IR) return get(kMcanCfg, off, size) | (rx_lost_ ? MCAN_IR_RF0L : 0u);
         }
         return get(kMcanCfg, off, size);
     }
@@ -529,14 +535,73 @@ private:
                 const uint32_t e = (txbc & 0xFFFCu) + AM263X_CAN_ELEM_BYTES * k;
                 std::array<uint32_t, 4> words{};
                 for (uint32_t j = 0; j < 4 && e + 4 * j + 4 <= kWins[kMcanRam].size; ++j) words[j] = get(kMcanRam, e + 4 * j, 4);
-                if (tx_log_.size() < 64) tx_log_.push_back(words);
+                if (tx_.size() < 256) tx_.push_back(words);   // the bus takes them (can_take)
                 if (tfqs != 0) tx_put_ = (tx_put_ + 1) % tfqs;
             }
             return true;
         }
-        if (r == MCAN_RXF0A || r == MCAN_IR) return true;
+        if (r == MCAN_RXF0A) {   // the element at the get index is free again
+            if (rx_count_ > 0 && (v & 0x3Fu) == rx_get_) {
+                rx_get_ = (rx_get_ + 1) % rx_size();
+                --rx_count_;
+            }
+            return true;
+        }
+        if (r == MCAN_IR) {
+            if (v & MCAN_IR_RF0L) rx_lost_ = false;   // write 1 to clear
+            return true;
+        }
         return false;
     }
+    uint32_t rx_size() const
+    {
+        const uint32_t n = (get(kMcanCfg, MCAN_CORE_OFFSET + MCAN_RXF0C, 4) >> MCAN_LIST_SIZE_SHIFT) & 0x7Fu;
+        return n > 64 ? 64 : n;
+    }
+
+public:
+    bool can_supported() const override { return true; }
+    bool can_take(CanFrame& f) override
+    {
+        if (tx_.empty()) return false;
+        const std::array<uint32_t, 4> w = tx_.front();
+        tx_.pop_front();
+        f = CanFrame{};
+        f.ext = (w[0] & MCAN_ELEM_XTD) != 0;
+        f.rtr = (w[0] & MCAN_ELEM_RTR) != 0;
+        f.id = f.ext ? (w[0] & 0x1FFFFFFFu) : (w[0] >> MCAN_ELEM_STD_ID_SHIFT) & 0x7FFu;
+        const uint32_t dlc = (w[1] >> MCAN_ELEM_DLC_SHIFT) & 0xFu;
+        f.dlc = static_cast<uint8_t>(dlc > 8 ? 8 : dlc);
+        for (int k = 0; k < 8; ++k) f.data[k] = static_cast<uint8_t>(w[2 + k / 4] >> (8 * (k % 4)));
+        return true;
+    }
+    bool can_deliver(const CanFrame& f) override
+    {
+        const uint32_t cccr = get(kMcanCfg, MCAN_CORE_OFFSET + MCAN_CCCR, 4);
+        const uint32_t n = rx_size();
+        if ((cccr & MCAN_CCCR_INIT) || n == 0) return false;   // not on the bus
+        if (rx_count_ >= n) {
+            rx_lost_ = true;   // blocking FIFO: the new frame is lost
+            return false;
+        }
+        const uint32_t sa = get(kMcanCfg, MCAN_CORE_OFFSET + MCAN_RXF0C, 4) & 0xFFFCu;
+        const uint32_t e = sa + AM263X_CAN_ELEM_BYTES * rx_put_;
+        const uint32_t w0 = (f.ext ? (f.id & 0x1FFFFFFFu) | MCAN_ELEM_XTD : (f.id & 0x7FFu) << MCAN_ELEM_STD_ID_SHIFT) |
+                            (f.rtr ? MCAN_ELEM_RTR : 0u);
+        const uint32_t w1 = static_cast<uint32_t>(f.dlc & 0xFu) << MCAN_ELEM_DLC_SHIFT;
+        uint32_t d[2] = {0, 0};
+        for (int k = 0; k < 8; ++k) d[k / 4] |= static_cast<uint32_t>(f.data[k]) << (8 * (k % 4));
+        if (e + 16 > kWins[kMcanRam].size) return false;
+        put(kMcanRam, e, 4, w0);
+        put(kMcanRam, e + 4, 4, w1);
+        put(kMcanRam, e + 8, 4, d[0]);
+        put(kMcanRam, e + 12, 4, d[1]);
+        rx_put_ = (rx_put_ + 1) % n;
+        ++rx_count_;
+        return true;
+    }
+
+private:
 
     // ---- QSPI configuration port -> the flash window
     void qspi_cmd(uint32_t v)
@@ -604,7 +669,9 @@ private:
     uint32_t q_pos_ = 0, q_ilat_ = 0, q_lat_ = 0, q_flg_ = 0, q_sts_ = 0, q_cprd_ = 0, q_cprdlat_ = 0;
     double ut_acc_ = 0, cap_t_ = 0, cap_n_ = 0;
     uint32_t tx_put_ = 0;
-    std::vector<std::array<uint32_t, 4>> tx_log_;
+    std::deque<std::array<uint32_t, 4>> tx_;
+    uint32_t rx_get_ = 0, rx_put_ = 0, rx_count_ = 0;
+    bool rx_lost_ = false;
     std::vector<uint8_t> frame_;
     bool wel_ = false;
 };

@@ -28,6 +28,14 @@ struct PeriphOutputs {
     bool enabled = false;               // false: all six switches off (safe state)
 };
 
+// A classic CAN frame on the bus side of a CAN controller model.
+struct CanFrame {
+    uint32_t id = 0;      // 11 or 29 bits
+    bool ext = false, rtr = false;
+    uint8_t dlc = 0;      // 0..8
+    uint8_t data[8] = {};
+};
+
 struct MmioWindow {
     uint64_t base = 0, size = 0;        // size: a multiple of 4 KiB
     std::string name;
@@ -73,6 +81,12 @@ public:
     // pwm_off_time() (the host build mimics it: scenario keys inverter.pwm_counts / pwm_compare).
     virtual uint32_t pwm_counts() const { return 0; }
     virtual bool pwm_off_time() const { return false; }
+    // The CAN controller's bus side, for a port that models one (else false): a frame the
+    // firmware queued for transmission, and a frame received from the bus (into the firmware's
+    // receive FIFO; false when it is full or the controller is not running).
+    virtual bool can_supported() const { return false; }
+    virtual bool can_take(CanFrame& f) { (void)f; return false; }
+    virtual bool can_deliver(const CanFrame& f) { (void)f; return false; }
 };
 
 std::unique_ptr<Peripherals> make_generic_peripherals();   // hal/generic (Cortex-M4F image)

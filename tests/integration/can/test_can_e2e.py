@@ -35,11 +35,12 @@ def free_port():
 class Sim:
     """mcsim with the socketcand endpoint, paced to real time, its NVM in a file."""
 
-    def __init__(self, mcsim, nvm, out):
+    def __init__(self, mcsim, nvm, out, pil=None):
         self.port = free_port()
+        where = ["--pil", str(pil)] if pil else ["--nvm", str(nvm)]
         self.proc = subprocess.Popen(
             [mcsim, "run", str(SCENARIO), "--quiet", "--out", str(out), "--set", "scenario.duration_s=120",
-             "--can", f"socketcand:127.0.0.1:{self.port}", "--realtime", "--nvm", str(nvm)],
+             "--can", f"socketcand:127.0.0.1:{self.port}", "--realtime", *where],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         deadline = time.time() + 20
         while time.time() < deadline:
@@ -70,6 +71,14 @@ def mcsim(request):
     path = request.config.getoption("--mcsim")
     if not path:
         pytest.skip("--mcsim not given")
+    return path
+
+
+@pytest.fixture(scope="module")
+def pil_image(request):
+    path = request.config.getoption("--pil-image")
+    if not path:
+        pytest.skip("--pil-image not given")
     return path
 
 
@@ -262,6 +271,42 @@ def test_out_of_range_writes_abort_and_change_nothing(mcsim, tmp_path):
                     if "r" not in v.access_type and v.access_type != "const":
                         continue
                     node.sdo.upload(v.index, v.subindex)
+        finally:
+            net.disconnect()
+    finally:
+        sim.stop()
+
+
+def test_image_under_pil_over_can(mcsim, pil_image, tmp_path):
+    """The AM263x firmware image on the emulated Cortex-R5F, its MCAN model on the same
+    socketcand bus: the tool reaches the image's own CANopen device as it would a real drive."""
+    sim = Sim(mcsim, None, tmp_path / "pil", pil=pil_image)
+    try:
+        r = mctune(sim, "info")
+        assert "0x00020192" in r.stdout and "table hash match        yes" in r.stdout, r.stdout
+        net, node = connect(sim)
+        try:
+            assert node.sdo[0x1000].raw == 0x00020192
+            assert node.sdo[0x2FF1].raw == 1          # an erased QSPI store: the defaults
+            node.nmt.state = "OPERATIONAL"
+            node.sdo[0x6060].raw = 3
+            for cw, want in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
+                node.sdo[0x6040].raw = cw
+                wait_for(lambda w=want: (state_bits(statusword(node)) == w, hex(statusword(node))), 5, f"state {want:#x}")
+            wait_for(lambda: (statusword(node) & 0x4000 != 0, hex(statusword(node))), 20, "the image's drive in RUN")
+            node.sdo[0x60FF].raw = 300
+            v = wait_for(lambda: (abs(node.sdo[0x606C].raw - 300) <= 20, node.sdo[0x606C].raw), 20,
+                         "velocity actual near 300 rpm")
+            print(f"image under PIL: velocity actual {v} rpm for 300")
+            node.sdo["control.current_bw_hz"].raw = 300.0
+            assert math.isclose(node.sdo["control.current_bw_hz"].raw, 300.0)
+            with pytest.raises(canopen.SdoAbortedError) as e:
+                node.sdo["control.current_bw_hz"].raw = 1e6
+            assert e.value.code == 0x06090031
+            node.sdo[0x6040].raw = 0x06                 # outputs off, then a store into the QSPI flash
+            wait_for(lambda: (state_bits(statusword(node)) == 0x21, hex(statusword(node))), 5, "ready to switch on")
+            node.sdo[0x1010][1].raw = 0x65766173
+            assert node.sdo[0x2FF2].raw in (0, 7)      # committed (7: without the map)
         finally:
             net.disconnect()
     finally:

@@ -291,6 +291,52 @@ TEST_F(Am263xPil, CanFrameQueued)
     for (int k = 0; k < 20; ++k) EXPECT_TRUE(hal_can_send(board.can, &f));   // the model sends at once
     hal_can_frame_t r;
     EXPECT_FALSE(hal_can_receive(board.can, &r));
+    // the bus side: the 20 frames as sent, then nothing
+    mcsim::pil::CanFrame b;
+    for (int k = 0; k < 20; ++k) {
+        ASSERT_TRUE(model->can_take(b));
+        EXPECT_EQ(b.id, 0x701u);
+        EXPECT_FALSE(b.ext);
+        EXPECT_EQ(b.dlc, 1);
+        EXPECT_EQ(b.data[0], 0x05);
+    }
+    EXPECT_FALSE(model->can_take(b));
+}
+
+// Frames from the bus go into RX FIFO 0 as the driver configured it, in order; a full FIFO loses
+// the newest and says so (IR.RF0L, counted by the driver); extended and short frames survive.
+TEST_F(Am263xPil, CanFramesReceived)
+{
+    ASSERT_TRUE(model->can_supported());
+    mcsim::pil::CanFrame b;
+    b.id = 0x601;
+    b.dlc = 8;
+    EXPECT_FALSE(model->can_deliver(b));   // not initialised: not on the bus
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    for (int k = 0; k < 16; ++k) {
+        b.data[0] = static_cast<uint8_t>(k);
+        EXPECT_TRUE(model->can_deliver(b));
+    }
+    EXPECT_FALSE(model->can_deliver(b));   // 17th: the FIFO (16 elements) is full
+    hal_can_frame_t r;
+    for (int k = 0; k < 16; ++k) {
+        ASSERT_TRUE(hal_can_receive(board.can, &r));
+        EXPECT_EQ(r.id, 0x601u);
+        EXPECT_EQ(r.dlc, 8);
+        EXPECT_EQ(r.data[0], k);
+    }
+    EXPECT_FALSE(hal_can_receive(board.can, &r));
+    mcsim::pil::CanFrame x;
+    x.id = 0x1ABCDEF0 & 0x1FFFFFFF;
+    x.ext = true;
+    x.dlc = 3;
+    x.data[2] = 0x77;
+    EXPECT_TRUE(model->can_deliver(x));   // the FIFO wraps round
+    ASSERT_TRUE(hal_can_receive(board.can, &r));
+    EXPECT_TRUE(r.ext);
+    EXPECT_EQ(r.id, x.id);
+    EXPECT_EQ(r.dlc, 3);
+    EXPECT_EQ(r.data[2], 0x77);
 }
 
 }  // namespace
