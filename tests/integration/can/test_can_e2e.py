@@ -35,12 +35,13 @@ def free_port():
 class Sim:
     """mcsim with the socketcand endpoint, paced to real time, its NVM in a file."""
 
-    def __init__(self, mcsim, nvm, out, pil=None):
+    def __init__(self, mcsim, nvm, out, pil=None, sets=()):
         self.port = free_port()
         where = ["--pil", str(pil)] if pil else ["--nvm", str(nvm)]
+        extra = [a for kv in sets for a in ("--set", kv)]
         self.proc = subprocess.Popen(
             [mcsim, "run", str(SCENARIO), "--quiet", "--out", str(out), "--set", "scenario.duration_s=120",
-             "--can", f"socketcand:127.0.0.1:{self.port}", "--realtime", *where],
+             "--can", f"socketcand:127.0.0.1:{self.port}", "--realtime", *where, *extra],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         deadline = time.time() + 20
         while time.time() < deadline:
@@ -307,6 +308,26 @@ def test_image_under_pil_over_can(mcsim, pil_image, tmp_path):
             wait_for(lambda: (state_bits(statusword(node)) == 0x21, hex(statusword(node))), 5, "ready to switch on")
             node.sdo[0x1010][1].raw = 0x65766173
             assert node.sdo[0x2FF2].raw in (0, 7)      # committed (7: without the map)
+        finally:
+            net.disconnect()
+    finally:
+        sim.stop()
+
+
+def test_second_preset_default_keys(mcsim, tmp_path):
+    """The same scenario and commands on brodatzki-35kw with every key at its default: the CiA 402
+    ramps and limits follow that motor's data (rated torque, inertia, the over-speed limit)."""
+    sim = Sim(mcsim, tmp_path / "b.nvm", tmp_path / "b", sets=['machine.preset="brodatzki-35kw"'])
+    try:
+        mctune(sim, "enable", "--mode", "pv")
+        mctune(sim, "speed", "300")
+        net, node = connect(sim)
+        try:
+            assert node.sdo[0x6076].raw == 80000                    # 80 N m rated, in mN m
+            assert node.sdo[0x6083].raw != 1090                     # not the thesis motor's ramp
+            v = wait_for(lambda: (abs(node.sdo[0x606C].raw - 300) <= 15, node.sdo[0x606C].raw), 15,
+                         "velocity actual near 300 rpm")
+            print(f"brodatzki-35kw: velocity actual {v} rpm for 300, ramp {node.sdo[0x6083].raw} rpm/s")
         finally:
             net.disconnect()
     finally:
