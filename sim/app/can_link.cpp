@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <deque>
@@ -79,6 +80,12 @@ public:
     void pump(hal_can_t* can, double t) override
     {
         accept_clients();
+        const auto now = std::chrono::steady_clock::now();
+        for (Client& c : clients_)
+            if (c.fd >= 0 && !c.held.empty() && now >= c.hold_until) {
+                send_line(c, c.held);
+                c.held.clear();
+            }
         for (size_t k = 0; k < clients_.size(); ++k) read_client(k, can, t);
         hal_can_frame_t f;
         while (hal_host_can_take(can, &f)) broadcast(frame_line(f, t), clients_.size());
@@ -94,10 +101,16 @@ public:
 
 private:
     static constexpr size_t kMaxClients = 8;
+    // After `< rawmode >` is acknowledged a client's frames are held back for a moment (and then
+    // sent, none lost): python-can's client reads the `< ok >` with one recv() and compares it
+    // whole, so a frame in the same TCP segment would fail its handshake.
+    static constexpr std::chrono::milliseconds kHold{100};
     struct Client {
         int fd = -1;
         bool raw = false;
         std::string in;
+        std::chrono::steady_clock::time_point hold_until{};
+        std::string held;
     };
 
     static std::string frame_line(const hal_can_frame_t& f, double t)
@@ -129,7 +142,9 @@ private:
             set_nonblocking(fd);
             const int one = 1;
             setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-            clients_.push_back(Client{fd, false, {}});
+            Client c;
+            c.fd = fd;
+            clients_.push_back(c);
             send_line(clients_.back(), "< hi >");
         }
     }
@@ -162,8 +177,16 @@ private:
     // To every raw-mode client but `except` (an index; clients_.size(): none).
     void broadcast(const std::string& line, size_t except)
     {
-        for (size_t k = 0; k < clients_.size(); ++k)
-            if (k != except && clients_[k].fd >= 0 && clients_[k].raw) send_line(clients_[k], line);
+        const auto now = std::chrono::steady_clock::now();
+        for (size_t k = 0; k < clients_.size(); ++k) {
+            Client& c = clients_[k];
+            if (k == except || c.fd < 0 || !c.raw) continue;
+            if (now < c.hold_until) {
+                if (c.held.size() < (1u << 20)) c.held += line;   // a second of a busy bus at most
+            } else {
+                send_line(c, line);
+            }
+        }
     }
 
     void read_client(size_t k, hal_can_t* can, double t)
@@ -216,6 +239,7 @@ private:
             send_line(c, "< ok >");
         } else if (w[0] == "rawmode") {
             c.raw = true;   // subscribed first, then acknowledged
+            c.hold_until = std::chrono::steady_clock::now() + kHold;
             send_line(c, "< ok >");
         } else if (w[0] == "send" && w.size() >= 3) {
             hal_can_frame_t f{};

@@ -111,6 +111,20 @@ def wait_for(pred, timeout, what):
     raise AssertionError(f"{what}: not within {timeout} s (last {last})")
 
 
+def settled_velocity(node, target, tol, timeout):
+    """0x606C once it has come within tol of target, then averaged over 0.5 s (the sensorless
+    speed estimate moves a few rpm from one reading to the next) [rpm]."""
+    def near():
+        v = node.sdo[0x606C].raw
+        return abs(v - target) <= tol, v
+    wait_for(near, timeout, f"velocity actual within {tol} rpm of {target}")
+    vals = []
+    for _ in range(10):
+        vals.append(node.sdo[0x606C].raw)
+        time.sleep(0.05)
+    return sum(vals) / len(vals)
+
+
 def statusword(node):
     return node.sdo[0x6041].raw
 
@@ -174,6 +188,14 @@ def test_drive_over_can(mcsim, tmp_path):
             assert node.sdo[0x2FF0].raw == node.object_dictionary[0x2FF0].default
             # --- NMT and the CiA 402 state machine to Operation enabled, profile velocity
             node.nmt.state = "OPERATIONAL"
+            # new clients while the TPDOs flow: python-can's handshake reads `< ok >` with one
+            # recv, so no frame may share its segment (the server holds them back a moment)
+            import can  # noqa: PLC0415
+            time.sleep(0.1)
+            for _ in range(10):
+                bus = can.Bus(interface="socketcand", host="127.0.0.1", port=sim.port, channel="can0")
+                assert bus.recv(timeout=2.0) is not None       # and the held frames do arrive
+                bus.shutdown()
             node.sdo[0x6060].raw = 3
             assert state_bits(statusword(node)) == 0x40          # switch on disabled
             node.sdo[0x6040].raw = 0x06
@@ -186,10 +208,9 @@ def test_drive_over_can(mcsim, tmp_path):
             wait_for(lambda: (statusword(node) & 0x4000 != 0, hex(statusword(node))), 10, "drive in RUN")
             # --- a velocity target, 0x606C follows
             node.sdo[0x60FF].raw = 300
-            v = wait_for(lambda: (abs(node.sdo[0x606C].raw - 300) <= 15, node.sdo[0x606C].raw), 10,
-                         "velocity actual near 300 rpm")
+            v = settled_velocity(node, 300, 15, 10)
             assert abs(v - 300) <= 15
-            print(f"velocity actual {v} rpm for a 300 rpm target")
+            print(f"velocity actual {v:.1f} rpm (0.5 s mean) for a 300 rpm target")
             # --- the current-loop gain and its effect: i_q's rise time on a torque step in cst
             node.sdo[0x6060].raw = 10
             rows = scope_iq_step(node, 150)
@@ -296,9 +317,9 @@ def test_image_under_pil_over_can(mcsim, pil_image, tmp_path):
                 wait_for(lambda w=want: (state_bits(statusword(node)) == w, hex(statusword(node))), 5, f"state {want:#x}")
             wait_for(lambda: (statusword(node) & 0x4000 != 0, hex(statusword(node))), 20, "the image's drive in RUN")
             node.sdo[0x60FF].raw = 300
-            v = wait_for(lambda: (abs(node.sdo[0x606C].raw - 300) <= 20, node.sdo[0x606C].raw), 20,
-                         "velocity actual near 300 rpm")
-            print(f"image under PIL: velocity actual {v} rpm for 300")
+            v = settled_velocity(node, 300, 20, 20)
+            assert abs(v - 300) <= 20
+            print(f"image under PIL: velocity actual {v:.1f} rpm (0.5 s mean) for 300")
             node.sdo["control.current_bw_hz"].raw = 300.0
             assert math.isclose(node.sdo["control.current_bw_hz"].raw, 300.0)
             with pytest.raises(canopen.SdoAbortedError) as e:
@@ -325,9 +346,9 @@ def test_second_preset_default_keys(mcsim, tmp_path):
         try:
             assert node.sdo[0x6076].raw == 80000                    # 80 N m rated, in mN m
             assert node.sdo[0x6083].raw != 1090                     # not the thesis motor's ramp
-            v = wait_for(lambda: (abs(node.sdo[0x606C].raw - 300) <= 15, node.sdo[0x606C].raw), 15,
-                         "velocity actual near 300 rpm")
-            print(f"brodatzki-35kw: velocity actual {v} rpm for 300, ramp {node.sdo[0x6083].raw} rpm/s")
+            v = settled_velocity(node, 300, 15, 15)
+            assert abs(v - 300) <= 15
+            print(f"brodatzki-35kw: velocity actual {v:.1f} rpm (0.5 s mean) for 300, ramp {node.sdo[0x6083].raw} rpm/s")
         finally:
             net.disconnect()
     finally:
