@@ -307,3 +307,29 @@ bool mc_drive_param_write(mc_drive_t *d, int id, float value, mc_param_err_t *er
     }
     return mc_drive_cfgbuf_commit(&d->link->cfg);
 }
+
+bool mc_drive_params_write(mc_drive_t *d, const mc_params_t *p, mc_param_err_t *err)
+{
+    if ((mc_drive_faults(d) & MC_FAULT_CONFIG) != 0u) {
+        return mc_param_fail(err, MC_PERR_ACCESS, -1, 0.0f, "the configuration was refused at init: init again");
+    }
+    const mc_state_t st = mc_drive_state(d);
+    if (st != MC_STATE_IDLE && st != MC_STATE_FAULT) {
+        return mc_param_fail(err, MC_PERR_ACCESS, -1, 0.0f, "only while the outputs are off");
+    }
+    const mc_params_t *now = &mc_drive_cfgbuf_latest(&d->link->cfg)->p;
+    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {   /* INIT parameters stay as they are */
+        if (mc_param_table[id].access == MC_PA_INIT && mc_param_get(p, id) != mc_param_get(now, id)) {
+            return mc_param_fail(err, MC_PERR_ACCESS, id, mc_param_get(p, id), "only at init");
+        }
+    }
+    mc_drive_built_t *slot = mc_drive_cfgbuf_begin(&d->link->cfg);
+    if (slot == 0) {
+        return mc_param_fail(err, MC_PERR_BUSY, -1, 0.0f, "the previous change is not taken yet: retry");
+    }
+    const mc_drive_cfg_t cfg = {.p = *p, .est = d->est};
+    if (!mc_drive_build(&cfg, slot, err)) {
+        return false;
+    }
+    return mc_drive_cfgbuf_commit(&d->link->cfg);
+}

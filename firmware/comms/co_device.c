@@ -50,10 +50,11 @@ static void reset_comm(mc_co_t *co)
     co->boot_pending = true;
 }
 
-/* Application reset: also the 402 objects and state (the drive's parameters are kept: they are
- * the configuration in force, and a power-on takes the stored set). */
+/* Application reset: also the 402 objects and state, and (with defaults given) the drive's
+ * parameters to their power-on values once its outputs are off (reload_step). */
 static void reset_app(mc_co_t *co)
 {
+    co->reload_pending = co->defaults != NULL;
     mc_402_cfg_t c;
     ds_cfg(co, &c);
     mc_402_init(&co->ds, &c);
@@ -83,6 +84,41 @@ bool mc_co_init(mc_co_t *co, const mc_co_cfg_t *cfg, hal_can_t *can, mc_drive_t 
     (void)mc_drive_telemetry_read(drive, &co->tm);
     reset_app(co);
     return true;
+}
+
+void mc_co_set_defaults(mc_co_t *co, const mc_params_t *defaults)
+{
+    co->defaults = defaults;
+}
+
+/* The power-on parameter set after a reset node: the stored one, else the defaults; taken when
+ * the outputs are off (the 402 reset disables them), retried while the drive's hand-over is busy.
+ * A set the drive refuses (an INIT parameter that differs, a cross-check) keeps the parameters
+ * in force and sends EMCY 0x6320 with the parameter's id. */
+static void reload_step(mc_co_t *co)
+{
+    const mc_state_t st = mc_drive_state(co->drive);
+    if (!co->reload_pending || (st != MC_STATE_IDLE && st != MC_STATE_FAULT)) {
+        return;
+    }
+    mc_drive_cfg_t cfg = {.p = *co->defaults, .est = co->drive->est};
+    if (co->nvm != NULL) {
+        uint8_t work[MC_CO_STORE_WORK];
+        mc_drive_cfg_t stored = cfg;
+        const mc_pstore_status_t ls = mc_pstore_load(co->nvm, &stored, NULL, work, sizeof work, NULL);
+        if (ls == MC_PSTORE_OK || ls == MC_PSTORE_FELL_BACK) {
+            cfg.p = stored.p;
+        }
+    }
+    mc_param_err_t err;
+    if (mc_drive_params_write(co->drive, &cfg.p, &err)) {
+        co->reload_pending = false;
+        co->motor_changed = true;
+    } else if (err.kind != MC_PERR_BUSY) {
+        co->reload_pending = false;
+        const uint8_t info[5] = {(uint8_t)err.kind, (uint8_t)err.param, (uint8_t)((uint32_t)err.param >> 8), 0u, 0u};
+        mc_co_emcy_send(co, 0x6320u, 0x01u, info);   /* parameter error */
+    }
 }
 
 void mc_co_emcy_send(mc_co_t *co, uint16_t code, uint8_t reg, const uint8_t info[5])
@@ -397,6 +433,7 @@ void mc_co_step(mc_co_t *co, uint32_t now_ms)
             ds_step(co, false);
         }
     }
+    reload_step(co);
     ds_step(co, true);
     mc_co_pdo_tx(co);
     mc_co_emcy_step(co);

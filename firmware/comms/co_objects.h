@@ -38,7 +38,7 @@ X(0x100A, 0, VSTRING, CONST, MC_NOPT, HOOK, HK(SWVER), 0, 0, "Manufacturer softw
 X(0x1010, 0, U8, CONST, MC_NOPT, HOOK, HK(ONE), 1, 1, "Store parameters", "Highest sub-index supported", "", "") \
 X(0x1010, 1, U32, RW, MC_NOPT, HOOK, HK(STORE), 0, MC_U32MAX, "Store parameters", "Save all parameters", "", "Write 0x65766173 (\"save\") with the outputs off: the drive's configuration (parameters, the estimator's model and its map) goes to the power-cut-safe store (mc/param_store.h). Reads 1: saves on command.") \
 X(0x1011, 0, U8, CONST, MC_NOPT, HOOK, HK(ONE), 1, 1, "Restore default parameters", "Highest sub-index supported", "", "") \
-X(0x1011, 1, U32, RW, MC_NOPT, HOOK, HK(RESTORE), 0, MC_U32MAX, "Restore default parameters", "Restore all default parameters", "", "Write 0x64616F6C (\"load\") with the outputs off: the stored set is erased; the defaults are in force from the next power-on.") \
+X(0x1011, 1, U32, RW, MC_NOPT, HOOK, HK(RESTORE), 0, MC_U32MAX, "Restore default parameters", "Restore all default parameters", "", "Write 0x64616F6C (\"load\") with the outputs off: the stored set is erased; the defaults are in force from the next reset node or power-on.") \
 X(0x1017, 0, U16, RW, MC_NOPT, FIELD, FLD(heartbeat_ms), 0, 65535, "Producer heartbeat time", "", "ms", "0: no heartbeat.") \
 X(0x1018, 0, U8, CONST, MC_NOPT, HOOK, HK(FOUR), 4, 4, "Identity object", "Highest sub-index supported", "", "") \
 X(0x1018, 1, U32, RO, MC_NOPT, FIELD, FLD(cfg.vendor_id), 0, MC_U32MAX, "Identity object", "Vendor-ID", "", "") \

@@ -152,6 +152,7 @@ int main(void)
     const mc_co_cfg_t cc = {.node_id = 1u, .heartbeat_ms = 1000u, .step_s = 10.0f * cfg.p.ts, .vendor_id = 0u,
                             .product_code = 1u, .revision = 0x00020000u, .serial = 0u};
     (void)mc_co_init(&co, &cc, board.can, &drive, board.nvm, &scope, src);
+    mc_co_set_defaults(&co, &base.p);   /* a reset node: the stored set, else the area's */
     co.ds_on = false;   /* until a controlword comes */
     hal_board_attach_isr(control_isr, &drive);
     mc_monitor.boot = 1u;

@@ -33,6 +33,7 @@ public:
         // scenario's, as the firmware image does with its store.
         hal_host_nvm_init(nvm_.get());
         mc_drive_cfg_t cfg = ds.cfg;
+        defaults_ = ds.cfg.p;   // a CANopen reset node falls back to these after a restore
         if (!nvm_file_.empty()) {
             load_nvm();
             boot_status_ = mc_co_boot_config(nvm_.get(), &ds.cfg, &cfg, map_.get());
@@ -83,6 +84,7 @@ public:
         c.serial = 0x00000001u;
         co_ = std::make_unique<mc_co_t>();
         if (!mc_co_init(co_.get(), &c, &can_, drive_.get(), nvm_.get(), &scope_, boot_status_)) return false;
+        mc_co_set_defaults(co_.get(), &defaults_);
         co_->ds_on = commands;
         return true;
     }
@@ -141,6 +143,7 @@ private:
     std::unique_ptr<mc_flux_map_t> map_ = std::make_unique<mc_flux_map_t>();
     uint32_t nvm_steps_ = 0;
     mc_pstore_status_t boot_status_ = MC_PSTORE_EMPTY;
+    mc_params_t defaults_{};
     mc_scope_t scope_{};
     std::vector<float> scope_buf_;
     std::unique_ptr<mc_co_t> co_;

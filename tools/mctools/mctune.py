@@ -146,7 +146,7 @@ def cmd_save(args, drive: Drive) -> int:
 def cmd_restore(args, drive: Drive) -> int:
     st = drive.restore()
     print("restored: the stored set is erased (0x1011:1 = \"load\"); the defaults apply after the "
-          "next restart of the drive (power-on), until then the values in force stay"
+          "next restart of the drive (a reset node: mctune nmt reset, or power-on), until then the values in force stay"
           + (f"; store status {st}: {STORE_STATUS.get(st, 'unknown')}" if st not in (None, 0) else ""))
     return 0
 

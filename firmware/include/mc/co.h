@@ -168,6 +168,10 @@ typedef struct {
     uint8_t scope_ctrl;          /* 0x2302, last written                                   */
     uint8_t cfg_source;          /* 0x2FF1: mc_pstore_status_t of the boot's load           */
     uint32_t store_status;       /* mc_pstore_status_t of the last 0x1010 / 0x1011          */
+    const mc_params_t *defaults; /* the integrator's set a reset node falls back to (NULL: a
+                                    reset node keeps the parameters in force)                */
+    bool reload_pending;         /* reset node: the stored (or default) set goes to the drive
+                                    once its outputs are off                                 */
     bool cw_written;             /* the controlword was written since the 402 step        */
     uint32_t cw_count;           /* controlwords received (SDO or RPDO)                   */
     bool motor_changed;          /* a motor parameter was written: the 402 rated values follow */
@@ -178,6 +182,11 @@ typedef struct {
  * (MC_PSTORE_CORRUPT sends an EMCY "parameters lost" once the device is up). */
 bool mc_co_init(mc_co_t *co, const mc_co_cfg_t *cfg, hal_can_t *can, mc_drive_t *drive, hal_nvm_t *nvm,
                 mc_scope_t *scope, mc_pstore_status_t cfg_source);
+/* The parameter set the drive started with before any stored one (the scenario's, the image's
+ * configuration area): NMT reset node then sets the drive's parameters to their power-on values,
+ * the stored set or, after a restore (0x1011), these (CiA 301 §7.2.8.3.2.1). Without it a reset
+ * node keeps the parameters in force. */
+void mc_co_set_defaults(mc_co_t *co, const mc_params_t *defaults);
 /* Background: up to MC_CO_RX_PER_STEP received frames, the 402 step and its drive command (if
  * ds_on), the TPDOs, the SDO timeout, EMCY and the heartbeat. */
 void mc_co_step(mc_co_t *co, uint32_t now_ms);

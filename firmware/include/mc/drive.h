@@ -238,6 +238,10 @@ void mc_drive_command(mc_drive_t *d, const mc_drive_cmd_t *cmd);
  * gains and limits change without resetting the controllers' state). false with err: nothing
  * changed (MC_PERR_BUSY: the previous change is not taken yet, retry a period later). */
 bool mc_drive_param_write(mc_drive_t *d, int id, float value, mc_param_err_t *err);
+/* Background: a whole parameter set at once (the CANopen reset node's stored or default set),
+ * only while the outputs are off; every INIT parameter must equal the one in force (else
+ * MC_PERR_ACCESS naming it). Derived, validated and handed over like mc_drive_param_write. */
+bool mc_drive_params_write(mc_drive_t *d, const mc_params_t *p, mc_param_err_t *err);
 /* Background: a consistent copy of the last period's telemetry (false if the ISR overwrote it on
  * every one of a few tries: practically never). */
 bool mc_drive_telemetry_read(const mc_drive_t *d, mc_drive_telem_t *out);

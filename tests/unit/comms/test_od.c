@@ -156,6 +156,66 @@ static void test_store_restore(void **state)
     assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), MC_SDO_ABORT_STORE);
 }
 
+/* NMT reset node: the drive's parameters to their power-on values (the stored set, else the
+ * defaults), once its outputs are off; a set the drive refuses keeps them, with EMCY 0x6320. */
+static void test_reset_node_reloads(void **state)
+{
+    (void)state;
+    rig_init();
+    static mc_params_t defaults;
+    defaults = rig.cfg.p;
+    mc_co_set_defaults(&rig.co, &defaults);
+    rig.co.ds_on = false;
+    drive_inputs(300.0f);
+    const int bw = mc_param_find("control.current_bw_hz");
+    const uint16_t obj = (uint16_t)(0x2000 + bw);
+    uint32_t a;
+    assert_int_equal(sdo_write(obj, 0, mc_f32_bits(321.0f), 4), 0u);
+    run_ms(1);
+    assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), 0u);
+    assert_int_equal(sdo_write(obj, 0, mc_f32_bits(400.0f), 4), 0u);
+    run_ms(1);
+    /* outputs on: the reload waits */
+    const mc_drive_cmd_t on = {.enable = true, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&rig.d, &on);
+    run_ms(2);
+    assert_true(mc_drive_state(&rig.d) != MC_STATE_IDLE);
+    nmt(0x81);
+    run_ms(3);
+    drain();
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == 400.0f);
+    const mc_drive_cmd_t off = {.enable = false, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&rig.d, &off);
+    run_ms(3);
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == 321.0f);   /* the stored set */
+    /* restore, reset node: the defaults */
+    assert_int_equal(sdo_write(0x1011, 1, MC_CO_LOAD_SIGNATURE, 4), 0u);
+    nmt(0x81);
+    run_ms(3);
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == defaults.cc_bw_hz);
+    /* a stored set with another INIT parameter (the PWM period) is refused: EMCY, nothing changes */
+    mc_drive_cfg_t other = {.p = rig.d.cfg->p, .est = rig.d.est};
+    assert_true(mc_param_set(&other.p, mc_param_find("control.ts_s"), 2e-4f, NULL));
+    assert_true(mc_param_set(&other.p, bw, 123.0f, NULL));
+    uint8_t work[MC_CO_STORE_WORK];
+    assert_int_equal(mc_pstore_save(&rig.nvm, &other, work, sizeof work, NULL), MC_PSTORE_OK);
+    drain();
+    nmt(0x81);
+    run_ms(3);
+    hal_can_frame_t f;
+    assert_true(take_id(0x080u + NODE, &f));
+    assert_int_equal(f.data[0] | (f.data[1] << 8), 0x6320);
+    assert_int_equal(f.data[4] | (f.data[5] << 8), mc_param_find("control.ts_s"));
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == defaults.cc_bw_hz);
+    /* without defaults a reset node keeps the parameters */
+    mc_co_set_defaults(&rig.co, NULL);
+    assert_int_equal(sdo_write(obj, 0, mc_f32_bits(222.0f), 4), 0u);
+    run_ms(1);
+    nmt(0x81);
+    run_ms(3);
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == 222.0f);
+}
+
 /* A segmented download whose data does not match the size it announced. */
 static void test_segmented_size_mismatch(void **state)
 {
@@ -230,6 +290,7 @@ int main(void)
         cmocka_unit_test(test_store_restore),
         cmocka_unit_test(test_scope_upload),
         cmocka_unit_test(test_segmented_size_mismatch),
+        cmocka_unit_test(test_reset_node_reloads),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
