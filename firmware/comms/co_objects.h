@@ -74,9 +74,9 @@ X(0x2FF2, 0, U32, RO, MC_NOPT, FIELD, FLD(store_status), 0, MC_U32MAX, "Store st
 X(0x603F, 0, U16, RO, MC_CO_F_TPDO, FIELD, FLD(ds.od.error_code), 0, 65535, "Error code", "", "", "The EMCY code of the fault that put the drive in Fault (0: none).") \
 X(0x6040, 0, U16, RW, MC_CO_F_RPDO, FIELD, FLD(ds.od.controlword), 0, 65535, "Controlword", "", "", "CiA 402 state machine commands.") \
 X(0x6041, 0, U16, RO, MC_CO_F_TPDO, FIELD, FLD(ds.od.statusword), 0, 65535, "Statusword", "", "", "CiA 402 state; bit 14: the drive is in RUN; bit 15: its start-up (offset calibration, initial position, catch) runs.") \
-X(0x605A, 0, I16, RW, MC_NOPT, FIELD, FLD(ds.od.quick_stop_option), 0, 6, "Quick stop option code", "", "", "0 disable at once; 1, 2 slow down on 0x6084 / 0x6085, then Switch on disabled; 5, 6 the same, staying in Quick stop active.") \
-X(0x605B, 0, I16, RW, MC_NOPT, FIELD, FLD(ds.od.shutdown_option), 0, 1, "Shutdown option code", "", "", "0 disable at once; 1 slow down on 0x6084 first.") \
-X(0x605C, 0, I16, RW, MC_NOPT, FIELD, FLD(ds.od.disable_op_option), 0, 1, "Disable operation option code", "", "", "0 disable at once; 1 slow down on 0x6084 first.") \
+X(0x605A, 0, I16, RW, MC_NOPT, FIELD, FLD(ds.od.quick_stop_option), 0, 8, "Quick stop option code", "", "", "0 disable at once; 1 slow down on 0x6084, 2 (3, 4: the current / voltage limit stops, taken as it) on 0x6085, then Switch on disabled; 5-8 the same, staying in Quick stop active.") \
+X(0x605B, 0, I16, RW, MC_NOPT, FIELD, FLD(ds.od.shutdown_option), 0, 1, "Shutdown option code", "", "", "0 disable at once; 1 slow down on 0x6084 first (default 0).") \
+X(0x605C, 0, I16, RW, MC_NOPT, FIELD, FLD(ds.od.disable_op_option), 0, 1, "Disable operation option code", "", "", "0 disable at once; 1 slow down on 0x6084 first (default 1, as CiA 402).") \
 X(0x605E, 0, I16, RO, MC_NOPT, FIELD, FLD(ds.od.fault_reaction_option), 0, 0, "Fault reaction option code", "", "", "0: the drive's own reaction (outputs off; over-speed above the generation limit with protection.overspeed_action = hold_fw keeps field weakening first).") \
 X(0x6060, 0, I8, RW, MC_CO_F_RPDO, FIELD, FLD(ds.od.mode), -128, 127, "Modes of operation", "", "", "3 profile velocity, 4 profile torque, 9 cyclic synchronous velocity, 10 cyclic synchronous torque.") \
 X(0x6061, 0, I8, RO, MC_CO_F_TPDO, FIELD, FLD(ds.od.mode_display), -128, 127, "Modes of operation display", "", "", "") \

@@ -453,7 +453,6 @@ static uint32_t field_check(const mc_co_entry_t *e, int64_t v)
 {
     switch (e->index) {
     case 0x6060u: return mc_402_mode_supported((int8_t)v) ? 0u : MC_SDO_ABORT_VALUE;
-    case 0x605Au: return (v <= 2 || v == 5 || v == 6) ? 0u : MC_SDO_ABORT_VALUE;
     default: return 0u;
     }
 }

@@ -1,20 +1,31 @@
 /* The CiA 402 block (mc/cia402.h) on synthetic telemetry: the state machine's transitions and
- * statusword values (CiA 402-2 Table 30), the quick stop and disable options, the faults with the
- * drive's reaction, the fault-reset edge, and the modes: ramps, clamps, halt, offsets, units,
- * bumpless mode changes, the start-up hold, and inputs at their extremes. */
+ * statusword values (CiA 402-2 §6.3 Table 30), the quick stop, disable operation and shutdown
+ * options, the faults with the drive's reaction, the fault-reset edge, and the modes: ramps,
+ * clamps, halt, offsets, units, bumpless mode changes, the start-up hold, and inputs at their
+ * extremes. The drive is a small model (drive_model): RUN while enabled (after an optional
+ * start-up), IDLE when not, and with `follow` a rotor that turns at the commanded speed. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <cmocka.h>
 #include <string.h>
 #include "mc/cia402.h"
 #include "mc/co.h"
 
+#define RPM (60.0f / 6.2831853f)   /* rpm per rad/s */
+#define PP 5.0f
+
 static mc_402_t s;
 static mc_drive_telem_t tm;
 static mc_drive_cmd_t cmd;
+static struct {
+    bool follow;     /* omega follows the speed command (an ideal speed loop) */
+    int startup;     /* periods of OFFSET_CAL + INIT_POS after an enable */
+    int left;
+} drv;
 
 static const mc_402_cfg_t CFG = {.dt = 1e-3f, .pole_pairs = 5, .rated_torque = 29.7f, .rated_current = 13.29f,
                                  .psi_pm = 0.343f, .ld = 10.5e-3f, .lq = 12.9e-3f, .vdc_on = 150.0f,
@@ -23,340 +34,993 @@ static const mc_402_cfg_t CFG = {.dt = 1e-3f, .pole_pairs = 5, .rated_torque = 2
 static void start(void)
 {
     memset(&tm, 0, sizeof tm);
+    memset(&cmd, 0, sizeof cmd);
     tm.state = MC_STATE_IDLE;
     tm.vdc = 300.0f;
+    drv.follow = true;
+    drv.startup = 0;
+    drv.left = 0;
     mc_402_init(&s, &CFG);
+}
+
+/* The drive's answer to the command, seen by the next step. Fault states are the test's. */
+static void drive_model(void)
+{
+    if (tm.state == MC_STATE_FAULT || tm.state == MC_STATE_FAULT_REACTION) {
+        return;
+    }
+    if (!cmd.enable) {
+        tm.state = MC_STATE_IDLE;
+        drv.left = drv.startup;
+        return;
+    }
+    if (drv.left > 0) {
+        tm.state = drv.left > drv.startup / 2 ? MC_STATE_OFFSET_CAL : MC_STATE_INIT_POS;
+        drv.left--;
+        return;
+    }
+    tm.state = MC_STATE_RUN;
+    if (drv.follow && cmd.mode == MC_MODE_SPEED) {
+        tm.omega = cmd.speed_ref * PP;
+    }
 }
 
 static void step_n(int n)
 {
     for (int k = 0; k < n; ++k) {
         mc_402_step(&s, &tm, &cmd);
-        /* a drive that follows its command: RUN while enabled, IDLE when not */
-        if (tm.state != MC_STATE_FAULT && tm.state != MC_STATE_FAULT_REACTION) {
-            tm.state = cmd.enable ? MC_STATE_RUN : MC_STATE_IDLE;
-        }
+        drive_model();
     }
 }
 
-static uint16_t cw(uint16_t w)
+/* The statusword's state bits 0-6 and the remote bit 9 (Table 30 values with remote). */
+static unsigned sw(void)
+{
+    return s.od.statusword & 0x027Fu;
+}
+
+/* A controlword and one step; the statusword as sw(). */
+static unsigned cw(uint16_t w)
 {
     s.od.controlword = w;
     step_n(1);
-    return s.od.statusword & 0x006Fu;
+    return sw();
 }
 
 static void to_enabled(void)
 {
-    assert_int_equal(cw(0x06), 0x21);
-    assert_int_equal(cw(0x07), 0x23);
-    assert_int_equal(cw(0x0F), 0x27);
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_int_equal(cw(0x07), 0x0233);
+    assert_int_equal(cw(0x0F), 0x0237);
 }
 
-static void test_walk_and_statusword(void **state)
+static float speed_rpm(void)   /* the commanded speed [rpm mechanical] */
+{
+    return cmd.speed_ref * RPM;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+
+static void test_defaults_and_table(void **state)
+{
+    (void)state;
+    start();
+    /* Table 30 (bits 6, 5, 3-0; x as 0) */
+    assert_int_equal(mc_402_statusword_for(MC_402_NOT_READY), 0x00);
+    assert_int_equal(mc_402_statusword_for(MC_402_SWITCH_ON_DISABLED), 0x40);
+    assert_int_equal(mc_402_statusword_for(MC_402_READY_TO_SWITCH_ON), 0x21);
+    assert_int_equal(mc_402_statusword_for(MC_402_SWITCHED_ON), 0x23);
+    assert_int_equal(mc_402_statusword_for(MC_402_OPERATION_ENABLED), 0x27);
+    assert_int_equal(mc_402_statusword_for(MC_402_QUICK_STOP_ACTIVE), 0x07);
+    assert_int_equal(mc_402_statusword_for(MC_402_FAULT_REACTION_ACTIVE), 0x0F);
+    assert_int_equal(mc_402_statusword_for(MC_402_FAULT), 0x08);
+    assert_int_equal(mc_402_statusword_for((mc_402_state_t)99), 0x00);
+    for (int a = 0; a <= (int)MC_402_FAULT; ++a) {
+        for (int b = a + 1; b <= (int)MC_402_FAULT; ++b) {
+            assert_string_not_equal(mc_402_state_name((mc_402_state_t)a), mc_402_state_name((mc_402_state_t)b));
+        }
+    }
+    assert_string_equal(mc_402_state_name((mc_402_state_t)99), "?");
+    assert_string_equal(mc_402_state_name(MC_402_QUICK_STOP_ACTIVE), "quick stop active");
+    /* the object defaults */
+    const mc_402_od_t *o = &s.od;
+    assert_int_equal(s.state, MC_402_SWITCH_ON_DISABLED);
+    assert_int_equal(o->statusword, 0x0240u);
+    assert_int_equal(o->quick_stop_option, 2);
+    assert_int_equal(o->shutdown_option, 0);
+    assert_int_equal(o->disable_op_option, 1);
+    assert_int_equal(o->fault_reaction_option, 0);
+    assert_int_equal(o->mode, MC_402_MODE_PV);
+    assert_int_equal(o->mode_display, MC_402_MODE_PV);
+    assert_int_equal(o->velocity_window, 20u);
+    assert_int_equal(o->velocity_window_time, 10u);
+    assert_int_equal(o->velocity_threshold, 10u);
+    assert_int_equal(o->velocity_threshold_time, 10u);
+    assert_int_equal(o->max_torque, 1000u);
+    assert_int_equal(o->max_motor_speed, 1800u);
+    assert_int_equal(o->profile_accel, 1000u);
+    assert_int_equal(o->profile_decel, 1000u);
+    assert_int_equal(o->quick_stop_decel, 1000u);
+    assert_int_equal(o->torque_slope, 10000u);
+    assert_int_equal(o->rated_current, 13290u);
+    assert_int_equal(o->rated_torque, 29700u);
+    assert_int_equal(o->supported_modes, 0x30Cu);   /* bits 2 pv, 3 tq, 8 csv, 9 cst */
+    assert_true(mc_402_mode_supported(MC_402_MODE_PV) && mc_402_mode_supported(MC_402_MODE_TQ) &&
+                mc_402_mode_supported(MC_402_MODE_CSV) && mc_402_mode_supported(MC_402_MODE_CST));
+    assert_false(mc_402_mode_supported(0) || mc_402_mode_supported(1) || mc_402_mode_supported(8) ||
+                 mc_402_mode_supported(-1) || mc_402_mode_supported(INT8_MIN));
+    /* new motor data: the rated objects follow, the state and the rw objects stay */
+    to_enabled();
+    s.od.profile_accel = 77u;
+    mc_402_cfg_t c2 = CFG;
+    c2.rated_torque = 10.0f;
+    c2.rated_current = 2.5f;
+    c2.accel_rpm_s = 5.0f;
+    mc_402_configure(&s, &c2);
+    assert_int_equal(s.state, MC_402_OPERATION_ENABLED);
+    assert_int_equal(s.od.rated_torque, 10000u);
+    assert_int_equal(s.od.rated_current, 2500u);
+    assert_int_equal(s.od.profile_accel, 77u);
+}
+
+/* Transitions 2, 3, 4 and 3 + 4, the commands' don't-care bits, and what is not a transition. */
+static void test_walk(void **state)
 {
     (void)state;
     start();
     step_n(1);
-    assert_int_equal(s.state, MC_402_SWITCH_ON_DISABLED);
-    assert_int_equal(s.od.statusword & 0x026Fu, 0x0240u);   /* SOD + remote */
+    assert_int_equal(sw(), 0x0240);   /* SOD + remote */
     assert_false(cmd.enable);
-    assert_int_equal(cw(0x07), 0x40);   /* switch on from SOD: not a transition */
-    assert_int_equal(cw(0x06), 0x21);
-    assert_int_equal(s.od.statusword & 0x0010u, 0x0010u);   /* voltage enabled: the DC link is up */
-    assert_int_equal(cw(0x07), 0x23);
+    assert_int_equal(cw(0x07), 0x0240);   /* switch on, enable operation from SOD: no transition */
+    assert_int_equal(cw(0x0F), 0x0240);
+    assert_int_equal(cw(0x06), 0x0221);   /* 2 */
     assert_false(cmd.enable);
-    assert_int_equal(cw(0x0F), 0x27);
+    assert_int_equal(cw(0x06), 0x0221);   /* held: stays */
+    assert_int_equal(cw(0x07), 0x0233);   /* 3: voltage enabled (bit 4) */
+    assert_false(cmd.enable);
+    assert_int_equal(cw(0x07), 0x0233);
+    assert_int_equal(cw(0x0F), 0x0237);   /* 4 */
     assert_true(cmd.enable);
     assert_int_equal(cmd.mode, MC_MODE_SPEED);
+    assert_true(cmd.theta_init == 0.0f);
+    assert_int_equal(cw(0x0F), 0x0237);
+    assert_int_equal(s.od.statusword & 0x4000u, 0x4000u);   /* the model's drive is in RUN */
+    /* 3 + 4 in one command from RTSO */
+    assert_int_equal(cw(0x00), 0x0240);
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_int_equal(cw(0x0F), 0x0237);
+    /* don't-care bits: shutdown x110 with bit 3 and the high bits set; bit 7 set blocks */
+    assert_int_equal(cw(0x00), 0x0240);
+    assert_int_equal(cw(0x0086), 0x0240);   /* bit 7: a fault reset, not a shutdown */
+    assert_int_equal(cw(0xFF7E), 0x0221);   /* shutdown with every don't-care bit set */
+    assert_int_equal(cw(0x0D), 0x0240);     /* x x 1 0 1: disable voltage (bit 1 = 0) */
+    assert_int_equal(cw(0x0E), 0x0221);     /* 0 1 1 1 0: shutdown */
+    assert_int_equal(cw(0x0B), 0x0240);     /* 0 1 0 1 1: quick stop from RTSO (7) */
+    /* two controlwords between steps (mc_402_controlword): both transitions, no time passes */
+    s.od.controlword = 0x06;
+    mc_402_controlword(&s, &tm, &cmd);
+    s.od.controlword = 0x07;
+    mc_402_controlword(&s, &tm, &cmd);
+    assert_int_equal(sw(), 0x0233);
+    assert_int_equal(s.state, MC_402_SWITCHED_ON);
+    /* bit 4 needs the DC link */
+    tm.vdc = 100.0f;
     step_n(1);
-    assert_int_equal(s.od.statusword & 0x4000u, 0x4000u);   /* RUN */
-    assert_int_equal(cw(0x07), 0x23);   /* disable operation, option 0: at once */
-    assert_false(cmd.enable);
-    assert_int_equal(cw(0x0F), 0x27);
-    assert_int_equal(cw(0x06), 0x21);   /* shutdown from OE */
-    assert_int_equal(cw(0x0F), 0x27);   /* RTSO -> OE with one command */
-    /* disable voltage from every state */
-    assert_int_equal(cw(0x00), 0x40);
-    assert_int_equal(cw(0x06), 0x21);
-    assert_int_equal(cw(0x00), 0x40);
-    assert_int_equal(cw(0x06), 0x21);
-    assert_int_equal(cw(0x07), 0x23);
-    assert_int_equal(cw(0x00), 0x40);
-    /* quick stop from RTSO and SO: SOD */
-    assert_int_equal(cw(0x06), 0x21);
-    assert_int_equal(cw(0x02), 0x40);
-    assert_int_equal(mc_402_state_name(MC_402_QUICK_STOP_ACTIVE)[0], 'q');
+    assert_int_equal(sw(), 0x0223);
+    tm.vdc = NAN;
+    step_n(1);
+    assert_int_equal(sw(), 0x0223);
 }
 
+/* Disable voltage from every state that has it (7, 9, 10, 12); quick stop from RTSO, SO (7, 10). */
+static void test_disable_voltage(void **state)
+{
+    (void)state;
+    start();
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_int_equal(cw(0x00), 0x0240);   /* 7 */
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_int_equal(cw(0x07), 0x0233);
+    assert_int_equal(cw(0x00), 0x0240);   /* 10 */
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_int_equal(cw(0x07), 0x0233);
+    assert_int_equal(cw(0x02), 0x0240);   /* 10 on quick stop */
+    to_enabled();
+    s.od.target_velocity = 500;
+    step_n(300);
+    assert_int_equal(cw(0x00), 0x0240);   /* 9: at once, no ramp */
+    assert_false(cmd.enable);
+    assert_true(cmd.speed_ref == 0.0f && cmd.torque_ref == 0.0f);
+    assert_int_equal(s.od.velocity_demand, 0);
+    to_enabled();
+    step_n(300);
+    assert_int_equal(cw(0x02), 0x0217);   /* QSA */
+    assert_true(cmd.enable);
+    assert_int_equal(cw(0x00), 0x0240);   /* 12 during the ramp-down */
+    assert_false(cmd.enable);
+    s.od.quick_stop_option = 5;
+    to_enabled();
+    assert_int_equal(cw(0x02), 0x0217);
+    step_n(50);
+    assert_int_equal(sw(), 0x0217);
+    assert_int_equal(cw(0x00), 0x0240);   /* 12 from the hold */
+    assert_false(cmd.enable);
+}
+
+/* Quick stop (11) with each option, 12 at the end, 16 back. */
 static void test_quick_stop_options(void **state)
 {
     (void)state;
-    /* option 2 (default): ramp down on 0x6085, then SOD */
+    /* 2 (default): ramp down on 0x6085 (not 0x6084), then SOD */
     start();
+    s.od.profile_decel = 500u;
+    s.od.quick_stop_decel = 2000u;
     to_enabled();
     s.od.target_velocity = 600;
-    tm.omega = 0.0f;
     step_n(700);
-    assert_true(fabsf(s.v_ramp - 600.0f) < 1e-3f);
-    s.od.quick_stop_decel = 2000u;
-    assert_int_equal(cw(0x02), 0x07);   /* QSA */
+    assert_int_equal(s.od.velocity_demand, 600);
+    assert_int_equal(cw(0x02), 0x0217);
     assert_true(cmd.enable);
-    step_n(100);   /* 0.1 s: 200 rpm less */
-    assert_true(fabsf(s.v_ramp - 400.0f) < 3.0f);
-    assert_int_equal(s.state, MC_402_QUICK_STOP_ACTIVE);
-    step_n(300);   /* the ramp reached 0 and the rotor (omega 0) is still */
-    assert_int_equal(s.state, MC_402_SWITCH_ON_DISABLED);
+    assert_int_equal(cw(0x0F), 0x0217);   /* enable operation does not return with option 2 */
+    step_n(98);                           /* 0.1 s after the quick stop: 200 rpm less */
+    assert_true(fabsf(speed_rpm() - 400.0f) < 3.0f);
+    assert_int_equal(s.od.statusword & 0x0400u, 0u);   /* not stopped yet */
+    step_n(180);                          /* 280 ms: 40 rpm left */
+    assert_int_equal(sw(), 0x0217);
+    step_n(50);                           /* at 0 and below the threshold for its time */
+    assert_int_equal(sw(), 0x0240);
     assert_false(cmd.enable);
-    /* option 5: stays in QSA at standstill, enable operation returns */
+
+    /* 1: the same on 0x6084 */
     start();
+    s.od.profile_decel = 500u;
+    s.od.quick_stop_decel = 2000u;
+    s.od.quick_stop_option = 1;
+    to_enabled();
+    s.od.target_velocity = 600;
+    step_n(700);
+    assert_int_equal(cw(0x02), 0x0217);
+    step_n(99);
+    assert_true(fabsf(speed_rpm() - 550.0f) < 2.0f);
+    step_n(1100);
+    assert_int_equal(sw(), 0x0240);
+
+    /* 5: on 0x6084, stays in QSA held at 0 (enabled, stopped: bit 10); enable operation: 16 */
+    start();
+    s.od.profile_decel = 500u;
+    s.od.quick_stop_decel = 2000u;
     s.od.quick_stop_option = 5;
     to_enabled();
-    assert_int_equal(cw(0x02), 0x07);
-    step_n(50);
-    assert_int_equal(s.state, MC_402_QUICK_STOP_ACTIVE);
+    s.od.target_velocity = 600;
+    step_n(700);
+    assert_int_equal(cw(0x02), 0x0217);
+    step_n(99);
+    assert_true(fabsf(speed_rpm() - 550.0f) < 2.0f);
+    step_n(1500);
+    assert_int_equal(sw(), 0x0217);
     assert_true(cmd.enable);
+    assert_int_equal(cmd.mode, MC_MODE_SPEED);
     assert_true(cmd.speed_ref == 0.0f);
-    assert_int_equal(cw(0x0F), 0x27);
-    /* option 0: off at once */
+    assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
+    assert_int_equal(cw(0x0F), 0x0237);   /* 16 */
+    step_n(100);
+    assert_true(fabsf(speed_rpm() - 100.0f) < 2.0f);   /* from 0 on 0x6083 */
+
+    /* 6: on 0x6085, and enable operation during the ramp-down returns at once (16) */
+    start();
+    s.od.profile_decel = 500u;
+    s.od.quick_stop_decel = 2000u;
+    s.od.quick_stop_option = 6;
+    to_enabled();
+    s.od.target_velocity = 600;
+    step_n(700);
+    assert_int_equal(cw(0x02), 0x0217);
+    step_n(99);
+    assert_true(fabsf(speed_rpm() - 400.0f) < 3.0f);
+    assert_int_equal(cw(0x0F), 0x0237);
+    step_n(100);
+    assert_true(fabsf(speed_rpm() - 500.0f) < 3.0f);   /* on toward the target from 400 */
+    assert_int_equal(cw(0x02), 0x0217);
+    step_n(400);
+    assert_int_equal(sw(), 0x0217);   /* stays */
+
+    /* 0: the drive function off at once */
+    start();
     s.od.quick_stop_option = 0;
-    assert_int_equal(cw(0x02), 0x40);
+    to_enabled();
+    s.od.target_velocity = 600;
+    step_n(700);
+    assert_int_equal(cw(0x02), 0x0240);
     assert_false(cmd.enable);
+
+    /* 3, 4 end in SOD, 7 stays; a value outside the profile's acts as 2 */
+    static const int16_t opts[] = {3, 4, 7, 8, -1, INT16_MIN, INT16_MAX};
+    static const unsigned ends[] = {0x0240, 0x0240, 0x0217, 0x0217, 0x0240, 0x0240, 0x0240};
+    for (size_t k = 0; k < sizeof opts / sizeof opts[0]; ++k) {
+        start();
+        s.od.quick_stop_option = opts[k];
+        s.od.profile_decel = 500u;
+        s.od.quick_stop_decel = 2000u;
+        to_enabled();
+        s.od.target_velocity = 600;
+        step_n(700);
+        assert_int_equal(cw(0x02), 0x0217);
+        step_n(99);
+        assert_true(fabsf(speed_rpm() - 400.0f) < 3.0f);   /* on 0x6085 */
+        step_n(400);
+        assert_int_equal(sw(), ends[k]);
+    }
+
     /* a rotor that does not stop: disabled after the ramp's time + 1 s anyway */
     start();
-    to_enabled();
-    s.od.target_velocity = 100;
-    step_n(200);
-    tm.omega = 100.0f;   /* 191 rpm and staying */
     s.od.quick_stop_decel = 1000u;
-    assert_int_equal(cw(0x02), 0x07);
-    step_n(1050);
-    assert_int_equal(s.state, MC_402_QUICK_STOP_ACTIVE);
-    step_n(200);
-    assert_int_equal(s.state, MC_402_SWITCH_ON_DISABLED);
+    to_enabled();
+    s.od.target_velocity = 200;
+    step_n(300);
+    drv.follow = false;   /* 200 rpm and staying */
+    assert_int_equal(cw(0x02), 0x0217);
+    step_n(1150);         /* 0.2 s + 1 s is the bound */
+    assert_int_equal(sw(), 0x0217);
+    step_n(100);
+    assert_int_equal(sw(), 0x0240);
+    assert_false(cmd.enable);
+
     /* in a torque mode the quick stop takes speed control from the actual speed */
     start();
     s.od.mode = MC_402_MODE_TQ;
     to_enabled();
+    s.od.target_torque = 200;
+    step_n(50);
     assert_int_equal(cmd.mode, MC_MODE_TORQUE);
-    tm.omega = 5.0f * 300.0f / 9.5493f;   /* 300 rpm */
+    tm.omega = PP * 300.0f / RPM;   /* 300 rpm */
     step_n(1);
-    assert_int_equal(cw(0x02), 0x07);
+    s.od.quick_stop_decel = 1000u;
+    assert_int_equal(cw(0x02), 0x0217);
     assert_int_equal(cmd.mode, MC_MODE_SPEED);
-    assert_true(fabsf(cmd.speed_ref * 9.5493f - 300.0f) < 5.0f);
+    assert_true(fabsf(speed_rpm() - 300.0f) < 2.0f);
+    assert_true(cmd.torque_ref == 0.0f);
+    step_n(100);
+    assert_true(fabsf(speed_rpm() - 200.0f) < 3.0f);   /* down on 0x6085 */
+    step_n(400);
+    assert_int_equal(sw(), 0x0240);
 }
 
-static void test_disable_operation_ramp(void **state)
+/* Disable operation (5) and shutdown (6, 8) with their options. */
+static void test_disable_operation_shutdown(void **state)
 {
     (void)state;
+    /* disable operation, option 1 (default): ramp down on 0x6084 in OE, then SO */
     start();
-    s.od.disable_op_option = 1;
+    s.od.profile_decel = 1000u;
     to_enabled();
     s.od.target_velocity = 300;
     step_n(400);
-    assert_int_equal(cw(0x07), 0x27);   /* still OE while it ramps down on 0x6084 */
+    assert_int_equal(cw(0x07), 0x0237);
+    assert_true(cmd.enable);
+    step_n(99);
+    assert_true(fabsf(speed_rpm() - 200.0f) < 2.0f);
+    assert_int_equal(cw(0x0F), 0x0237);   /* enable operation again: back to the target */
+    step_n(99);
+    assert_true(fabsf(speed_rpm() - 300.0f) < 2.0f);
+    assert_int_equal(cw(0x07), 0x0237);
+    step_n(250);
+    assert_int_equal(sw(), 0x0237);
+    step_n(100);
+    assert_int_equal(sw(), 0x0233);   /* 5 once stopped */
+    assert_false(cmd.enable);
+    assert_int_equal(cw(0x06), 0x0221);   /* 6 */
+    /* disable operation, option 0: at once */
+    s.od.disable_op_option = 0;
+    assert_int_equal(cw(0x0F), 0x0237);
+    step_n(400);
+    assert_int_equal(cw(0x07), 0x0233);
+    assert_false(cmd.enable);
+    /* shutdown from OE, option 0 (default): at once (8) */
+    assert_int_equal(cw(0x0F), 0x0237);
+    step_n(400);
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_false(cmd.enable);
+    /* shutdown, option 1: ramp down first */
+    s.od.shutdown_option = 1;
+    assert_int_equal(cw(0x0F), 0x0237);
+    step_n(400);
+    assert_int_equal(cw(0x06), 0x0237);
     assert_true(cmd.enable);
     step_n(400);
-    assert_int_equal(s.od.statusword & 0x6Fu, 0x23u);
+    assert_int_equal(sw(), 0x0221);
     assert_false(cmd.enable);
+    /* a quick stop during a disable-operation ramp takes over (11) */
+    s.od.disable_op_option = 1;
+    s.od.quick_stop_decel = 3000u;
+    assert_int_equal(cw(0x0F), 0x0237);
+    step_n(400);
+    assert_int_equal(cw(0x07), 0x0237);
+    step_n(10);
+    assert_int_equal(cw(0x02), 0x0217);
+    step_n(150);
+    assert_int_equal(sw(), 0x0240);
 }
 
+/* Faults (13, 14) from every state, the reaction with the command kept, the latch and the
+ * fault reset's edge (15). */
 static void test_faults(void **state)
 {
     (void)state;
     start();
     to_enabled();
-    /* the drive's reaction: FRA with the command kept, then Fault, disabled, the code */
+    s.od.target_velocity = 500;
+    step_n(300);
+    /* 13: the drive's reaction: FRA, the command as it was */
     const mc_drive_cmd_t before = cmd;
     tm.state = MC_STATE_FAULT_REACTION;
     tm.faults = MC_FAULT_OVERSPEED;
     step_n(1);
-    assert_int_equal(s.od.statusword & 0x6Fu, 0x0Fu);
-    assert_true(cmd.enable == before.enable && cmd.mode == before.mode);
-    s.od.controlword = 0x80;   /* fault reset during the reaction: ignored */
-    step_n(1);
+    assert_int_equal(sw(), 0x021F);
     assert_int_equal(s.state, MC_402_FAULT_REACTION_ACTIVE);
-    s.od.controlword = 0x0F;
+    assert_true(cmd.enable);
+    assert_int_equal(cmd.mode, before.mode);
+    assert_true(cmd.speed_ref == before.speed_ref);
+    assert_int_equal(s.od.error_code, 0x8400u);
+    s.od.controlword = 0x0000;   /* disable voltage and a fault reset: ignored during the reaction */
+    step_n(2);
+    s.od.controlword = 0x0080;
+    step_n(2);
+    assert_int_equal(s.state, MC_402_FAULT_REACTION_ACTIVE);
+    assert_true(cmd.enable);
+    /* 14: FAULT, disabled, the code; bit 4 stays (nothing opened the "contactor") */
     tm.state = MC_STATE_FAULT;
     step_n(1);
-    assert_int_equal(s.od.statusword & 0x6Fu, 0x08u);
+    assert_int_equal(sw(), 0x0218);
     assert_false(cmd.enable);
     assert_int_equal(s.od.error_code, 0x8400u);
-    /* latched: the drive forgets (IDLE), the 402 Fault stays */
+    /* latched: the drive forgets (IDLE), Fault stays; bit 7 held since the reaction: no edge */
     tm.state = MC_STATE_IDLE;
     tm.faults = 0u;
     step_n(5);
     assert_int_equal(s.state, MC_402_FAULT);
-    /* reset on the edge only */
-    s.od.controlword = 0x80;
-    step_n(1);
-    assert_int_equal(s.state, MC_402_SWITCH_ON_DISABLED);
+    assert_int_equal(cw(0x06), 0x0218);   /* no command leaves Fault */
+    assert_int_equal(cw(0x0F), 0x0218);
+    assert_false(cmd.enable);
+    /* 15 on the edge, error code cleared */
+    assert_int_equal(cw(0x0080), 0x0240);
     assert_int_equal(s.od.error_code, 0u);
-    /* a fault without a reaction, from Switched on; a level bit 7 does not reset again */
-    assert_int_equal(cw(0x06), 0x21);
-    assert_int_equal(cw(0x07), 0x23);
+    assert_int_equal(cw(0x0080), 0x0240);   /* a level does nothing more */
+
+    /* 14 from OE without a reaction; the lowest bit's code; reset with a shutdown pattern */
+    to_enabled();
     tm.state = MC_STATE_FAULT;
     tm.faults = MC_FAULT_OVERCURRENT | MC_FAULT_TRACKING;
     step_n(1);
-    assert_int_equal(s.state, MC_402_FAULT);
-    assert_int_equal(s.od.error_code, 0x2310u);   /* the lowest bit's code */
-    s.od.controlword = 0x86;   /* bit 7 set with a shutdown: the edge resets */
+    assert_int_equal(sw(), 0x0218);
+    assert_int_equal(s.od.error_code, 0x2310u);
+    assert_int_equal(cw(0x0086), 0x0240);   /* bit 7 rises with a shutdown's bits: 15 */
+    step_n(3);   /* the drive still shows FAULT for a while: not a new one */
+    assert_int_equal(sw(), 0x0240);
+    tm.state = MC_STATE_IDLE;
+
+    /* 14 from QSA (option 5 hold) */
+    s.od.quick_stop_option = 5;
+    to_enabled();
+    assert_int_equal(cw(0x02), 0x0217);
+    tm.state = MC_STATE_FAULT;
+    tm.faults = MC_FAULT_STALL;
     step_n(1);
-    assert_int_equal(s.state, MC_402_SWITCH_ON_DISABLED);
-    tm.state = MC_STATE_FAULT;   /* the drive still shows it: no new edge, no new Fault */
-    step_n(3);
-    assert_int_equal(s.state, MC_402_SWITCH_ON_DISABLED);
-    /* a drive that faults while not enabled (a configuration refused at init) */
+    assert_int_equal(sw(), 0x0218);
+    assert_int_equal(s.od.error_code, 0x7121u);
+    tm.state = MC_STATE_IDLE;
+    assert_int_equal(cw(0x00), 0x0218);
+    assert_int_equal(cw(0x80), 0x0240);
+
+    /* a drive fault while not enabled: from SOD (no bit 4), RTSO, SO (bit 4) */
+    static const uint16_t path[3][2] = {{0x00, 0x00}, {0x06, 0x06}, {0x06, 0x07}};
+    static const unsigned want[3] = {0x0208, 0x0208, 0x0218};
+    for (int k = 0; k < 3; ++k) {
+        assert_int_equal(cw(0x00), 0x0240);
+        (void)cw(path[k][0]);
+        (void)cw(path[k][1]);
+        tm.state = MC_STATE_FAULT;
+        tm.faults = k == 0 ? 0u : MC_FAULT_CONFIG;
+        step_n(1);
+        assert_int_equal(s.state, MC_402_FAULT);
+        assert_int_equal(sw(), want[k]);
+        assert_int_equal(s.od.error_code, k == 0 ? 0x1000u : 0x6320u);   /* generic without a bit */
+        tm.state = MC_STATE_IDLE;
+        assert_int_equal(cw(0x00), want[k]);
+        assert_int_equal(cw(0x80), 0x0240);
+    }
+
+    /* a configuration fault at init: Fault at the first step */
     start();
     tm.state = MC_STATE_FAULT;
     tm.faults = MC_FAULT_CONFIG;
     step_n(1);
-    assert_int_equal(s.state, MC_402_FAULT);
+    assert_int_equal(sw(), 0x0208);
     assert_int_equal(s.od.error_code, 0x6320u);
+    /* reset while the drive still shows it: SOD; enabling it again: Fault again */
+    assert_int_equal(cw(0x80), 0x0240);
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_int_equal(cw(0x07), 0x0233);
+    assert_int_equal(cw(0x0F), 0x0218);
+    assert_false(cmd.enable);
+
+    /* a reaction that ends without the drive showing FAULT: Fault all the same */
+    start();
+    to_enabled();
+    tm.state = MC_STATE_FAULT_REACTION;
+    tm.faults = MC_FAULT_OVERSPEED;
+    step_n(3);
+    tm.state = MC_STATE_IDLE;
+    step_n(1);
+    assert_int_equal(sw(), 0x0218);
+    assert_int_equal(s.od.error_code, 0x8400u);
 }
 
+/* pv: start-up hold, ramp rates, units, velocity actual, target reached, clamp, halt. */
 static void test_profile_velocity(void **state)
 {
     (void)state;
     start();
-    to_enabled();
-    tm.state = MC_STATE_INIT_POS;   /* still starting: the ramp holds at 0, bit 15 */
+    drv.startup = 40;
     s.od.target_velocity = 1000;
-    mc_402_step(&s, &tm, &cmd);
-    mc_402_step(&s, &tm, &cmd);
-    assert_true(s.v_ramp == 0.0f);
+    to_enabled();
+    step_n(38);   /* still starting: the ramp holds at 0, bit 15, not bit 14 */
+    assert_true(tm.state == MC_STATE_OFFSET_CAL || tm.state == MC_STATE_INIT_POS);
+    assert_true(cmd.enable);
+    assert_true(cmd.speed_ref == 0.0f);
+    assert_int_equal(s.od.velocity_demand, 0);
     assert_int_equal(s.od.statusword & 0xC000u, 0x8000u);
-    tm.state = MC_STATE_RUN;
-    step_n(500);   /* 1000 rpm/s: 500 rpm */
-    assert_true(fabsf(s.v_ramp - 500.0f) < 2.0f);
-    assert_int_equal(s.od.velocity_demand, (int32_t)lrintf(s.v_ramp));
-    step_n(600);
-    assert_true(s.v_ramp == 1000.0f);
-    assert_true(fabsf(cmd.speed_ref - 104.72f) < 0.01f);   /* rad/s mechanical */
-    /* velocity actual from the electrical speed with 5 pole pairs; target reached in the window */
-    tm.omega = 5.0f * 104.72f;
+    step_n(2);
+    assert_int_equal(tm.state, MC_STATE_RUN);
+    step_n(1);   /* RUN entry: from 0 */
+    assert_int_equal(s.od.statusword & 0xC000u, 0x4000u);
+    assert_true(s.od.velocity_demand >= 0 && s.od.velocity_demand <= 1);
+    step_n(500);   /* 0x6083 = 1000 rpm/s */
+    assert_true(abs(s.od.velocity_demand - 501) <= 1);
+    assert_int_equal(s.od.statusword & 0x0400u, 0u);   /* not reached while ramping */
+    drv.follow = false;
+    tm.omega = PP * 1000.0f / RPM;   /* a rotor at the target before the ramp: not reached either */
     step_n(20);
-    assert_int_equal(s.od.velocity_actual, 1000);
+    assert_int_equal(s.od.statusword & 0x0400u, 0u);
+    drv.follow = true;
+    assert_int_equal(s.od.statusword & 0x1000u, 0u);   /* speed is not 0 */
+    step_n(580);
+    assert_int_equal(s.od.velocity_demand, 1000);
+    assert_true(fabsf(cmd.speed_ref - 104.7198f) < 1e-3f);   /* rad/s mechanical */
+    assert_int_equal(s.od.velocity_actual, 1000);   /* omega = 5 * 104.72 rad/s el */
     assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
-    /* clamp by 0x6080: bit 11 */
+    /* velocity actual: mechanical rpm from electrical rad/s with 5 pole pairs, rounded */
+    drv.follow = false;
+    tm.omega = -PP * 1234.4f / RPM;
+    step_n(1);
+    assert_int_equal(s.od.velocity_actual, -1234);
+    tm.omega = PP * 99.6f / RPM;
+    step_n(1);
+    assert_int_equal(s.od.velocity_actual, 100);
+    /* target reached needs the window (20 rpm) for its time (10 ms) */
+    tm.omega = PP * 1030.0f / RPM;
+    step_n(20);
+    assert_int_equal(s.od.statusword & 0x0400u, 0u);
+    tm.omega = PP * 1015.0f / RPM;
+    step_n(5);
+    assert_int_equal(s.od.statusword & 0x0400u, 0u);
+    step_n(10);
+    assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
+    drv.follow = true;
+    /* decelerating on 0x6084 */
+    s.od.profile_decel = 4000u;
+    s.od.target_velocity = 600;
+    step_n(50);
+    assert_true(abs(s.od.velocity_demand - 800) <= 1);
+    step_n(100);
+    /* through zero: 0x6084 down to 0, then 0x6083 up the other way */
+    s.od.target_velocity = -200;
+    step_n(150);
+    assert_true(abs(s.od.velocity_demand - 0) <= 1);
+    step_n(100);
+    assert_true(abs(s.od.velocity_demand + 100) <= 1);
+    /* clamp by 0x6080: bit 11, both ways */
     s.od.target_velocity = 5000;
     step_n(1);
     assert_int_equal(s.od.statusword & 0x0800u, 0x0800u);
-    step_n(2000);
-    assert_true(s.v_ramp == 1800.0f);
-    /* halt: decelerate on 0x6084 and hold, enabled */
+    step_n(2500);
+    assert_int_equal(s.od.velocity_demand, 1800);
+    assert_int_equal(s.od.statusword & 0x0C00u, 0x0C00u);   /* reached the clamped target */
+    s.od.target_velocity = 1800;
+    step_n(1);
+    assert_int_equal(s.od.statusword & 0x0800u, 0u);   /* at the limit is not beyond it */
+    s.od.target_velocity = -5000;
+    s.od.profile_decel = 100000u;
+    s.od.profile_accel = 100000u;
+    step_n(100);
+    assert_int_equal(s.od.velocity_demand, -1800);
+    assert_int_equal(s.od.statusword & 0x0800u, 0x0800u);
+    /* the drive at its voltage limit: bit 11 too */
+    s.od.target_velocity = 100;
+    step_n(100);
+    assert_int_equal(s.od.statusword & 0x0800u, 0u);
+    tm.u_limited = true;
+    step_n(1);
+    assert_int_equal(s.od.statusword & 0x0800u, 0x0800u);
+    tm.u_limited = false;
+    /* halt: decelerate on 0x6084 and hold at 0, enabled; stopped: bits 10 and 12 */
+    s.od.profile_accel = 1000u;
     s.od.profile_decel = 3000u;
+    s.od.target_velocity = 1500;
+    step_n(1600);
+    assert_int_equal(s.od.velocity_demand, 1500);
     s.od.controlword = 0x010F;
     step_n(100);
-    assert_true(fabsf(s.v_ramp - 1500.0f) < 3.0f);
-    step_n(600);
-    assert_true(s.v_ramp == 0.0f);
+    assert_true(abs(s.od.velocity_demand - 1200) <= 1);
+    assert_int_equal(s.od.statusword & 0x1400u, 0u);
+    step_n(450);
+    assert_int_equal(s.od.velocity_demand, 0);
     assert_true(cmd.enable);
-    /* speed = 0 (bit 12) when the rotor is below the threshold for its time */
-    tm.omega = 0.0f;
-    step_n(20);
-    assert_int_equal(s.od.statusword & 0x1000u, 0x1000u);
+    assert_int_equal(sw(), 0x0237);
+    assert_int_equal(s.od.statusword & 0x1400u, 0x1400u);
+    /* halt released: on 0x6083 from 0 */
+    s.od.controlword = 0x000F;
+    step_n(100);
+    assert_true(abs(s.od.velocity_demand - 100) <= 1);
 }
 
-static void test_torque_and_cyclic(void **state)
+/* csv: target + offset, clamped, no ramp; bit 12 = the drive follows the command. */
+static void test_cyclic_velocity(void **state)
+{
+    (void)state;
+    start();
+    s.od.mode = MC_402_MODE_CSV;
+    to_enabled();
+    assert_int_equal(s.od.mode_display, MC_402_MODE_CSV);
+    assert_int_equal(cmd.mode, MC_MODE_SPEED);
+    s.od.target_velocity = 200;
+    s.od.velocity_offset = 20;
+    step_n(1);
+    assert_true(fabsf(speed_rpm() - 220.0f) < 0.01f);
+    assert_int_equal(s.od.velocity_demand, 220);
+    assert_int_equal(s.od.statusword & 0x1000u, 0x1000u);
+    /* target reached after the window time */
+    s.od.target_velocity = 700;
+    step_n(5);
+    assert_int_equal(s.od.statusword & 0x0400u, 0u);
+    step_n(10);
+    assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
+    /* clamped */
+    s.od.target_velocity = 1790;
+    step_n(1);
+    assert_int_equal(s.od.velocity_demand, 1800);
+    assert_int_equal(s.od.statusword & 0x0800u, 0x0800u);
+    s.od.target_velocity = -1000;
+    s.od.velocity_offset = -1000;
+    step_n(1);
+    assert_int_equal(s.od.velocity_demand, -1800);
+    /* halt is the master's business in csv: ignored */
+    s.od.target_velocity = 300;
+    s.od.velocity_offset = 0;
+    s.od.controlword = 0x010F;
+    step_n(1);
+    assert_int_equal(s.od.velocity_demand, 300);
+    /* not following while the drive is not in RUN */
+    tm.state = MC_STATE_INIT_POS;
+    drv.startup = 10;
+    drv.left = 10;
+    step_n(1);
+    assert_int_equal(s.od.statusword & 0xD000u, 0x8000u);
+    assert_int_equal(s.od.velocity_demand, 0);
+}
+
+/* tq and cst: slope, clamp, halt, units, offset; the actual torque and current. */
+static void test_torque_modes(void **state)
 {
     (void)state;
     start();
     s.od.mode = MC_402_MODE_TQ;
     to_enabled();
+    assert_int_equal(cmd.mode, MC_MODE_TORQUE);
+    assert_int_equal(s.od.mode_display, MC_402_MODE_TQ);
     s.od.target_torque = 500;
     s.od.torque_slope = 1000u;   /* per-mille/s */
     step_n(250);
-    assert_true(fabsf(s.t_ramp - 250.0f) < 2.0f);
+    assert_true(abs(s.od.torque_demand - 250) <= 1);
+    assert_int_equal(s.od.statusword & 0x1400u, 0u);   /* not reached; bit 12 reserved in tq */
     step_n(300);
-    assert_true(s.t_ramp == 500.0f);
+    assert_int_equal(s.od.torque_demand, 500);
     assert_true(fabsf(cmd.torque_ref - 14.85f) < 1e-3f);   /* half the rated torque */
-    assert_int_equal(cmd.mode, MC_MODE_TORQUE);
-    assert_int_equal(s.od.mode_display, MC_402_MODE_TQ);
-    /* clamp by 0x6072 */
-    s.od.max_torque = 300u;
+    assert_true(cmd.speed_ref == 0.0f);
+    assert_int_equal(s.od.statusword & 0x1400u, 0x0400u);
+    assert_int_equal(s.od.velocity_demand, 0);
+    /* down and negative on the same slope */
+    s.od.target_torque = -100;
     step_n(300);
-    assert_true(s.t_ramp == 300.0f);
-    assert_int_equal(s.od.statusword & 0x0800u, 0x0800u);
-    /* cst: target + offset, no ramp */
+    assert_true(abs(s.od.torque_demand - 200) <= 1);
+    step_n(400);
+    assert_int_equal(s.od.torque_demand, -100);
+    /* clamp by 0x6072: bit 11 */
+    s.od.max_torque = 300u;
+    s.od.target_torque = 900;
+    step_n(700);
+    assert_int_equal(s.od.torque_demand, 300);
+    assert_int_equal(s.od.statusword & 0x0C00u, 0x0C00u);
+    /* halt: the torque ramps to 0 on the slope */
+    s.od.controlword = 0x010F;
+    step_n(100);
+    assert_true(abs(s.od.torque_demand - 200) <= 1);
+    step_n(250);
+    assert_int_equal(s.od.torque_demand, 0);
+    assert_true(cmd.enable);
+    assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
+    s.od.controlword = 0x000F;
+    /* cst: target + offset, no ramp, clamped */
     s.od.max_torque = 1000u;
     s.od.mode = MC_402_MODE_CST;
     s.od.target_torque = 100;
     s.od.torque_offset = 50;
     step_n(1);
+    assert_int_equal(s.od.mode_display, MC_402_MODE_CST);
     assert_true(fabsf(cmd.torque_ref - 0.15f * 29.7f) < 1e-3f);
-    assert_int_equal(s.od.statusword & 0x1000u, 0x1000u);   /* follows the command value */
-    /* torque actual from i_dq by (2.9): i_q = 6 A, i_d = -2 A */
+    assert_int_equal(s.od.torque_demand, 150);
+    assert_int_equal(s.od.statusword & 0x1C00u, 0x1400u);   /* follows the command, reached */
+    s.od.target_torque = 990;
+    step_n(1);
+    assert_int_equal(s.od.torque_demand, 1000);
+    assert_int_equal(s.od.statusword & 0x0800u, 0x0800u);
+    s.od.target_torque = -2000;
+    step_n(1);
+    assert_int_equal(s.od.torque_demand, -1000);
+    /* torque actual from i_dq by (2.9), current actual |i_dq| signed by i_q, DC link in mV */
     tm.i_dq.d = -2.0f;
     tm.i_dq.q = 6.0f;
+    tm.vdc = 312.5f;
     step_n(1);
     const float t = 1.5f * 5.0f * (0.343f * 6.0f + (10.5e-3f - 12.9e-3f) * -2.0f * 6.0f);
     assert_int_equal(s.od.torque_actual, (int16_t)lrintf(t / 29.7f * 1000.0f));
     assert_int_equal(s.od.current_actual, (int16_t)lrintf(sqrtf(40.0f) / 13.29f * 1000.0f));
-    /* to csv, bumpless from the actual speed; target + offset at once */
-    tm.omega = 5.0f * 31.416f;   /* 300 rpm */
-    s.od.mode = MC_402_MODE_CSV;
-    s.od.target_velocity = 200;
-    s.od.velocity_offset = 20;
+    assert_int_equal(s.od.dc_link_voltage, 312500u);
+    tm.i_dq.q = -6.0f;
+    step_n(1);
+    assert_int_equal(s.od.current_actual, -(int16_t)lrintf(sqrtf(40.0f) / 13.29f * 1000.0f));
+    assert_true(s.od.torque_actual < 0);
+}
+
+/* Mode changes while enabled are bumpless; an unsupported mode keeps the one in force. */
+static void test_mode_change(void **state)
+{
+    (void)state;
+    start();
+    to_enabled();
+    s.od.target_velocity = 1000;
+    step_n(1100);
+    assert_int_equal(s.od.velocity_demand, 1000);
+    /* pv -> tq: from the torque the speed loop asks for (5.94 N m = 200 per-mille) */
+    tm.torque_ref = 5.94f;
+    step_n(1);
+    assert_int_equal(s.od.torque_demand, 200);   /* the speed loop's torque in speed control */
+    s.od.mode = MC_402_MODE_TQ;
+    s.od.target_torque = 600;
+    s.od.torque_slope = 1000u;
+    step_n(1);
+    assert_int_equal(cmd.mode, MC_MODE_TORQUE);
+    assert_true(fabsf(cmd.torque_ref - 5.94f) < 0.05f);   /* not 0, not the target */
+    step_n(100);
+    assert_true(abs(s.od.torque_demand - 301) <= 1);
+    /* tq -> pv: from the velocity actual (the rotor at 700 rpm) */
+    drv.follow = false;
+    tm.omega = PP * 700.0f / RPM;
+    step_n(1);
+    s.od.mode = MC_402_MODE_PV;
+    drv.follow = true;
     step_n(1);
     assert_int_equal(cmd.mode, MC_MODE_SPEED);
-    assert_true(fabsf(cmd.speed_ref * 9.5493f - 220.0f) < 0.1f);
-    /* to pv: the ramp starts from the speed it was at */
+    assert_true(fabsf(speed_rpm() - 701.0f) < 1.5f);
+    step_n(100);
+    assert_true(fabsf(speed_rpm() - 801.0f) < 1.5f);
+    /* pv -> csv -> pv: csv takes its target at once, pv continues from the csv demand */
+    s.od.mode = MC_402_MODE_CSV;
+    s.od.target_velocity = 400;
+    step_n(1);
+    assert_true(fabsf(speed_rpm() - 400.0f) < 0.01f);
     s.od.mode = MC_402_MODE_PV;
     s.od.target_velocity = 1000;
     step_n(1);
-    assert_true(s.v_ramp > 219.0f && s.v_ramp < 225.0f);
-    assert_false(mc_402_mode_supported(1));
-    assert_true(mc_402_mode_supported(MC_402_MODE_CST));
+    assert_true(fabsf(speed_rpm() - 401.0f) < 0.01f);
+    /* tq -> cst continues nothing (cst has no ramp), cst -> tq ramps from the cst demand */
+    s.od.mode = MC_402_MODE_CST;
+    s.od.target_torque = 100;
+    step_n(1);
+    assert_int_equal(s.od.torque_demand, 100);
+    s.od.mode = MC_402_MODE_TQ;
+    s.od.target_torque = 500;
+    step_n(1);
+    assert_int_equal(s.od.torque_demand, 101);
+    /* an unsupported value (written past the dictionary) keeps the mode in force */
+    s.od.mode = 0;
+    step_n(1);
+    assert_int_equal(s.od.mode_display, MC_402_MODE_TQ);
+    assert_int_equal(cmd.mode, MC_MODE_TORQUE);
+    assert_int_equal(s.od.torque_demand, 102);
+    s.od.mode = -128;
+    step_n(1);
+    assert_int_equal(s.od.mode_display, MC_402_MODE_TQ);
+    /* a mode of 0 from the start: pv, the init default, stays in force */
+    start();
+    s.od.mode = 0;
+    to_enabled();
+    assert_int_equal(s.od.mode_display, MC_402_MODE_PV);
+    assert_int_equal(cmd.mode, MC_MODE_SPEED);
 }
 
+/* A flying start (or a recovery): the ramp starts from the caught speed, not from 0. */
+static void test_run_entry(void **state)
+{
+    (void)state;
+    start();
+    drv.startup = 20;
+    s.od.target_velocity = 1000;
+    drv.follow = false;
+    tm.omega = PP * 600.0f / RPM;   /* turning at 600 rpm while the catch runs */
+    to_enabled();
+    step_n(19);
+    assert_true(cmd.speed_ref == 0.0f);
+    assert_int_equal(s.od.statusword & 0xC000u, 0x8000u);
+    step_n(3);
+    assert_int_equal(s.od.statusword & 0xC000u, 0x4000u);
+    assert_true(speed_rpm() > 598.0f && speed_rpm() < 604.0f);
+    /* a recovery (RUN -> INIT_POS -> RUN) does the same */
+    step_n(100);
+    tm.state = MC_STATE_INIT_POS;
+    tm.omega = PP * 650.0f / RPM;
+    mc_402_step(&s, &tm, &cmd);
+    mc_402_step(&s, &tm, &cmd);
+    assert_true(cmd.speed_ref == 0.0f);
+    assert_int_equal(s.od.statusword & 0xC000u, 0x8000u);
+    tm.state = MC_STATE_RUN;
+    mc_402_step(&s, &tm, &cmd);
+    assert_true(speed_rpm() > 649.0f && speed_rpm() < 653.0f);
+    /* bit 15 only while this block enables the drive (not on a stale INIT_POS after a disable) */
+    s.od.controlword = 0x00;
+    mc_402_step(&s, &tm, &cmd);
+    tm.state = MC_STATE_INIT_POS;
+    mc_402_step(&s, &tm, &cmd);
+    assert_false(cmd.enable);
+    assert_int_equal(s.od.statusword & 0xC000u, 0u);
+    /* below the threshold: from 0 */
+    start();
+    drv.startup = 20;
+    drv.follow = false;
+    s.od.target_velocity = 1000;
+    tm.omega = PP * 6.0f / RPM;
+    to_enabled();
+    step_n(22);
+    assert_true(speed_rpm() >= 0.0f && speed_rpm() < 3.5f);
+}
+
+/* Inputs at their extremes: nothing overflows, everything stays finite and in range. */
 static void test_extremes(void **state)
 {
     (void)state;
+    static const int8_t modes[4] = {MC_402_MODE_PV, MC_402_MODE_CSV, MC_402_MODE_TQ, MC_402_MODE_CST};
     start();
     to_enabled();
     s.od.target_velocity = INT32_MIN;
     s.od.velocity_offset = INT32_MIN;
     s.od.profile_accel = UINT32_MAX;
-    s.od.max_motor_speed = UINT32_MAX;
+    s.od.profile_decel = 0u;
+    s.od.quick_stop_decel = 0u;
+    s.od.torque_slope = UINT32_MAX;
+    s.od.velocity_window = UINT16_MAX;
+    s.od.velocity_window_time = UINT16_MAX;
+    s.od.velocity_threshold_time = UINT16_MAX;
+    drv.follow = false;
     tm.omega = NAN;
     tm.i_dq.d = INFINITY;
     tm.i_dq.q = -INFINITY;
     tm.vdc = NAN;
     tm.torque_ref = NAN;
     for (int m = 0; m < 4; ++m) {
-        static const int8_t modes[4] = {MC_402_MODE_PV, MC_402_MODE_CSV, MC_402_MODE_TQ, MC_402_MODE_CST};
         s.od.mode = modes[m];
         s.od.target_torque = INT16_MIN;
         s.od.torque_offset = INT16_MIN;
-        s.od.torque_slope = UINT32_MAX;
         step_n(3);
         assert_true(isfinite(cmd.speed_ref) && isfinite(cmd.torque_ref));
+        assert_true(fabsf(speed_rpm()) <= 1800.5f);
+        assert_true(fabsf(cmd.torque_ref) <= 29.71f);
         assert_int_equal(s.od.velocity_actual, 0);
         assert_int_equal(s.od.torque_actual, 0);
+        assert_int_equal(s.od.current_actual, 0);
         assert_int_equal(s.od.dc_link_voltage, 0u);
+        assert_int_equal(s.od.torque_demand, m < 2 ? 0 : -1000);
+        assert_int_equal(s.state, MC_402_OPERATION_ENABLED);
     }
+    s.od.max_motor_speed = UINT32_MAX;
+    s.od.max_torque = UINT16_MAX;
+    s.od.mode = MC_402_MODE_CST;
+    step_n(1);
+    assert_int_equal(s.od.torque_demand, INT16_MIN);   /* 2 * INT16_MIN, saturated */
+    assert_true(isfinite(cmd.torque_ref));
     s.od.mode = MC_402_MODE_CSV;
+    step_n(1);
+    assert_int_equal(s.od.velocity_demand, INT32_MIN);   /* 2 * INT32_MIN, saturated */
+    assert_true(isfinite(cmd.speed_ref));
+    s.od.target_velocity = INT32_MAX;
+    s.od.velocity_offset = INT32_MAX;
+    step_n(1);
+    assert_int_equal(s.od.velocity_demand, INT32_MAX);
+    /* huge telemetry saturates */
     tm.omega = 1e30f;
+    tm.i_dq.q = 1e30f;
+    tm.i_dq.d = 0.0f;
+    tm.vdc = 1e30f;
+    tm.torque_ref = 1e30f;
     step_n(1);
     assert_int_equal(s.od.velocity_actual, INT32_MAX);
-    /* every controlword: the state stays one of the enum */
+    assert_int_equal(s.od.torque_actual, INT16_MAX);
+    assert_int_equal(s.od.current_actual, INT16_MAX);
+    assert_int_equal(s.od.dc_link_voltage, UINT32_MAX);
+    assert_int_equal(s.od.torque_demand, INT16_MAX);
+    tm.omega = -1e30f;
+    tm.i_dq.q = -1e30f;
+    tm.vdc = -5.0f;
+    step_n(1);
+    assert_int_equal(s.od.velocity_actual, INT32_MIN);
+    assert_int_equal(s.od.torque_actual, INT16_MIN);
+    assert_int_equal(s.od.dc_link_voltage, 0u);
+    /* a quick stop from there (0 decelerations, a huge speed): bounded, still ends */
+    s.od.mode = MC_402_MODE_TQ;
+    s.od.quick_stop_option = INT16_MIN;
+    assert_int_equal(cw(0x02), 0x0207);   /* QSA; the DC link is "negative": no bit 4 */
+    assert_true(isfinite(cmd.speed_ref));
+    assert_true(fabsf(speed_rpm()) <= 4.3e9f);
+    /* every controlword, with the drive's state and the options anything: the state stays one
+     * of the enum's, the command finite */
     for (uint32_t w = 0; w < 0x10000u; w += 7u) {
         s.od.controlword = (uint16_t)w;
-        step_n(1);
+        s.od.quick_stop_option = (int16_t)(w * 2654435761u >> 16);
+        s.od.disable_op_option = (int16_t)(w * 40503u);
+        s.od.mode = (int8_t)(w >> 3);
+        tm.state = (mc_state_t)(w % 7u);
+        tm.faults = w * 0x9E3779B9u;
+        mc_402_step(&s, &tm, &cmd);
         assert_true(s.state >= MC_402_NOT_READY && s.state <= MC_402_FAULT);
+        assert_true(isfinite(cmd.speed_ref) && isfinite(cmd.torque_ref));
     }
+    /* a corrupted state starts over; a configuration of nonsense does not break anything */
+    start();
+    s.state = (mc_402_state_t)1234;
+    step_n(1);
+    assert_int_equal(sw(), 0x0240);
+    mc_402_cfg_t bad = {.dt = NAN, .pole_pairs = 0, .rated_torque = NAN, .rated_current = -1.0f, .psi_pm = INFINITY,
+                        .ld = NAN, .lq = 1e38f, .vdc_on = NAN, .max_speed_rpm = 1e30f, .accel_rpm_s = -5.0f};
+    mc_402_init(&s, &bad);
+    assert_int_equal(s.od.max_motor_speed, UINT32_MAX);
+    assert_int_equal(s.od.profile_accel, 0u);
+    assert_int_equal(s.od.rated_torque, 0u);
+    assert_int_equal(s.od.rated_current, 0u);
+    tm = (mc_drive_telem_t){.state = MC_STATE_IDLE, .omega = 100.0f, .i_dq = {.d = 1.0f, .q = 1.0f}, .vdc = 300.0f};
+    drv.follow = false;
+    to_enabled();
+    s.od.target_velocity = 100;
+    step_n(10);
+    assert_true(isfinite(cmd.speed_ref) && isfinite(cmd.torque_ref));
+    assert_int_equal(s.od.velocity_actual, 955);   /* 1 pole pair taken */
+    bad.dt = INFINITY;
+    mc_402_configure(&s, &bad);
+    step_n(10);
+    assert_true(isfinite(cmd.speed_ref));
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_walk_and_statusword),
+        cmocka_unit_test(test_defaults_and_table),
+        cmocka_unit_test(test_walk),
+        cmocka_unit_test(test_disable_voltage),
         cmocka_unit_test(test_quick_stop_options),
-        cmocka_unit_test(test_disable_operation_ramp),
+        cmocka_unit_test(test_disable_operation_shutdown),
         cmocka_unit_test(test_faults),
         cmocka_unit_test(test_profile_velocity),
-        cmocka_unit_test(test_torque_and_cyclic),
+        cmocka_unit_test(test_cyclic_velocity),
+        cmocka_unit_test(test_torque_modes),
+        cmocka_unit_test(test_mode_change),
+        cmocka_unit_test(test_run_entry),
         cmocka_unit_test(test_extremes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -56,8 +56,7 @@ static void test_write_checks(void **state)
     rig_init();
     assert_int_equal(sdo_write(0x6060, 0, 1, 1), MC_SDO_ABORT_VALUE);   /* profile position: not here */
     assert_int_equal(sdo_write(0x6060, 0, MC_402_MODE_CSV, 1), 0u);
-    assert_int_equal(sdo_write(0x605A, 0, 3, 2), MC_SDO_ABORT_VALUE);
-    assert_int_equal(sdo_write(0x605A, 0, 7, 2), MC_SDO_ABORT_VALUE_HIGH);
+    assert_int_equal(sdo_write(0x605A, 0, 9, 2), MC_SDO_ABORT_VALUE_HIGH);
     assert_int_equal(sdo_write(0x605A, 0, 0xFFFF, 2), MC_SDO_ABORT_VALUE_LOW);   /* -1 */
     assert_int_equal(sdo_write(0x605A, 0, 5, 2), 0u);
     assert_int_equal(sdo_write(0x6041, 0, 0, 2), MC_SDO_ABORT_READ_ONLY);
