@@ -68,6 +68,11 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
     const float w_min = p->catch_min_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
     const float t_per_a = m->lq / (m->psi_pm * w_min);   /* [s/A] at w_min */
     const float rot = 0.35f;
+    /* the longest wait: where the diodes conduct (above omega_ug = Vdc / (sqrt3 psi_pm)) their
+     * current comes in pulses a sixth of a turn apart; 2.5 of them at omega_ug give (C.5) its
+     * sign and a low to start from (5.2 ms on the thesis motor); at least 1 ms */
+    const float w_ug = p->vdc_nominal / (1.7320508f * m->psi_pm);
+    const float wait = fmaxf(2.5f * 1.0471976f / w_ug, 1e-3f);
     b->fly = (mc_catch_cfg_t){.ts = p->ts, .ld = m->ld, .lq = m->lq, .psi_pm = m->psi_pm,
                               .i_pulse = p->catch_i, .i_detect = 0.25f * p->catch_i, .i_rest = p->ip_i_rest,
                               .rot_target = rot, .high_speed_share = 0.9f, .v_device = p->v_device,
@@ -75,7 +80,7 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
                               .n_probe = periods_up(0.25f * p->catch_i * t_per_a / p->ts),
                               .n_pulse_max = periods_up(1.5f * p->catch_i * t_per_a / p->ts),
                               .n_gap_max = periods_up(rot / (w_min * p->ts)),
-                              .n_wait_max = periods_up(1e-3f / p->ts)};
+                              .n_wait_max = periods_up(wait / p->ts)};
     if (b->fly.n_gap_max < 2u) {
         b->fly.n_gap_max = 2u;
     }

@@ -7,6 +7,8 @@
 #include <math.h>
 #include <stddef.h>
 #include "drive_internal.h"
+#include "mc/angle.h"
+#include "mc/sincos.h"
 #include "mc/transforms.h"
 
 /* Outputs off and duties at 50 % (zero voltage) so a later enable starts from rest. */
@@ -232,6 +234,8 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     if (res.moving) {
         /* the pipeline runs from this sample on: the estimate is the caught one */
         pipeline_reset(d, res.theta, res.omega);
+        /* the references start from the current the catch left (bumpless), not from 0 */
+        d->i_ref_prev = mc_park(i_ab, mc_sincos(mc_wrap_pi(res.theta)));
         mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
         return;
     }

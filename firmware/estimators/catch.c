@@ -143,6 +143,30 @@ static bool single_pulse_sign(mc_catch_t *s)
     return true;
 }
 
+/* (C.5) sign known from the wait: |Delta| from (C.1), theta from (C.2) at this sample. */
+static void known_sign(mc_catch_t *s, mc_ab_t di)
+{
+    const mc_catch_cfg_t *c = &s->cfg;
+    const float sg = (float)s->passive;
+    mc_ab_t b = di;
+    float th = 0.0f, dl = 0.0f;
+    for (int pass = 0; pass < (c->v_device > 0.0f ? 3 : 1); ++pass) {
+        if (pass > 0) {
+            b = sub(di, current_of(c, s->psi, th));
+        }
+        dl = rotation_of(c, mag(b));
+        th = atan2f(b.beta, b.alpha) - offset_c2(c, sg * dl);
+    }
+    s->n1 = s->n;
+    s->di1 = di;
+    s->omega = sg * dl / ((float)s->n * c->ts);
+    s->theta = mc_wrap_pi(th);
+    s->rotation = sg * dl;
+    s->fit = 1.0f;
+    s->single = true;
+    s->moving = true;
+}
+
 /* The device drop under V(000): every phase conducts through its low-side switch or diode, whose
  * drop opposes its current (a soft sign over i_band, as in the dead-time compensation); the
  * line-to-neutral vector (2.4) [V]. */
@@ -184,9 +208,36 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
     }
     const uint32_t call = s->calls++;
     if (s->phase == WAIT) {
-        /* pulse 1 starts from this sample once the current is at rest (at an enable it is;
-         * after a recovery the outputs were just switched off), or after the longest gap */
-        if (!(im <= c->i_rest) && s->n++ < c->n_wait_max) {
+        /* (C.5): the diodes' current turning with the rotor, step by step within one pulse */
+        /* measured from the diode pulse's low (the sample after a fall), so that an offset
+         * error of the current sensing (the calibration may have averaged diode current) drops
+         * out, as in (C.1)-(C.3) */
+        const float i_min = 0.25f * c->i_pulse;
+        const mc_ab_t d_now = sub(i_ab, s->i0), d_last = sub(s->i_last, s->i0);
+        const float dm_now = mag(d_now), dm_last = mag(d_last);
+        if (s->n == 0u || im < mag(s->i_last)) {
+            s->i0 = i_ab;   /* a new low */
+        } else if (dm_now >= i_min && dm_last >= i_min && dm_now > dm_last) {
+            const float dphi = mc_wrap_pi(atan2f(d_now.beta, d_now.alpha) - atan2f(d_last.beta, d_last.alpha));
+            s->pas_sum += dphi;
+            s->pas_abs += fabsf(dphi);
+            s->pas_n++;
+        }
+        s->i_last = i_ab;
+        if (dm_now >= i_min) {
+            s->diodes = true;
+        }
+        if (s->pas_n >= MC_CATCH_PASSIVE_N && fabsf(s->pas_sum) >= 0.1745f &&
+            fabsf(s->pas_sum) >= 0.8f * s->pas_abs) {
+            s->passive = s->pas_sum > 0.0f ? 1 : -1;
+        }
+        /* pulse 1 starts from this sample once the current is at rest (at an enable below the
+         * uncontrolled-generation speed it is; after a recovery the outputs were just switched
+         * off), or, where the diodes conduct, at a diode pulse's low once (C.5) has its sign;
+         * or after the longest wait */
+        const bool low = im <= c->i_rest + 0.3f * c->i_pulse;
+        const bool ready = s->diodes ? (low && s->passive != 0) : im <= c->i_rest;
+        if (!ready && s->n++ < c->n_wait_max) {
             return MC_IP_RUNNING;
         }
         s->i0 = i_ab;
@@ -222,6 +273,17 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
          * already i_pulse (a low sampling rate at speed); then two one-period pulses */
         const bool coarse = s->n == 1u && dm >= c->i_pulse;
         const bool high = !coarse && 1.7320508f * w1 * c->psi_pm > c->high_speed_share * vdc;
+        if (s->passive != 0 && (dm >= c->i_pulse || s->n >= c->n_pulse_max || s->n >= MC_CATCH_HIST)) {
+            known_sign(s, di);
+            *off = false;   /* kept on: the control loop takes over from the next duties */
+            s->phase = END;
+            s->status = MC_IP_DONE;
+            return s->status;
+        }
+        if (s->passive != 0) {
+            *off = false;
+            return MC_IP_RUNNING;
+        }
         const float i_end = high ? 2.0f * c->i_pulse : c->i_pulse;
         if (dm < i_end && s->n < c->n_pulse_max && !(high && s->n >= MC_CATCH_HIST)) {
             *off = false;

@@ -4,7 +4,8 @@
  * back-EMF exceeds the link, where it keeps the last current (a crude uncontrolled generation:
  * the catch must not wait for it). Checked: angle and speed at both signs and several speeds
  * and angles, the standstill verdict, the single-pulse sign above base speed (C.4), its fallback
- * to two pulses when Lq = 2 Ld, the peak current, and refusals of bad configurations. */
+ * to two pulses when Lq = 2 Ld, the sign taken from the diodes' current before the pulse (C.5),
+ * the peak current, and refusals of bad configurations. */
 #include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -156,6 +157,76 @@ static void test_single_pulse_falls_back(void **st)
     }
 }
 
+/* (C.5): above base speed the diodes conduct before the catch, in pulses that rise from zero
+ * along a direction fixed in the rotor frame (braking: against q for w > 0) and then fall. The
+ * wait takes the sign of rotation from them, starts the pulse at a low and needs only i_pulse;
+ * an offset error of the current sensing (a calibration that averaged diode current) must not
+ * change that. The rotor-frame direction of the diode current is varied too. */
+static outcome_t run_diode(double w, double th0, double off_a, double lean)
+{
+    plant_t p = {.ld = 10.5e-3, .lq = 12.9e-3, .w = w, .th = th0};
+    const double sg = w > 0.0 ? 1.0 : -1.0;
+    outcome_t o = {0};
+    mc_catch_cfg_t cfg = cfg_for(p.ld, p.lq);
+    cfg.n_wait_max = 40u;
+    assert_true(mc_catch_start(&o.c, &cfg));
+    for (int k = 5; o.calls < 2000; ++o.calls, ++k) {
+        if (!p.on) {
+            /* the diodes' current: a sawtooth of 13 periods, 0.55 A per period */
+            const double a = 0.55 * (double)(k % 13);
+            const double id = -lean * a, iq = -sg * a;
+            const double c = cos(p.th), s = sin(p.th);
+            const double pd = p.ld * id + PSI, pq = p.lq * iq;
+            p.pa = c * pd - s * pq;
+            p.pb = s * pd + c * pq;
+        }
+        double ia, ib;
+        plant_currents(&p, &ia, &ib);
+        o.i_peak = fmax(o.i_peak, hypot(ia, ib));
+        mc_abc_t duty;
+        bool off;
+        o.st = mc_catch_step(&o.c, (mc_ab_t){(float)(ia + off_a), (float)(ib - 0.5 * off_a)}, (float)VDC, &duty,
+                             &off);
+        if (o.st != MC_IP_RUNNING) {
+            o.th_true = p.th;
+            o.w_true = w;
+            return o;
+        }
+        p.on = !off;
+        p.th += w * TS;   /* on: V(000) keeps the stator flux (R = 0) */
+    }
+    fail_msg("catch did not finish");
+    return o;
+}
+
+static void test_passive_sign_from_the_diodes(void **st)
+{
+    (void)st;
+    const double speeds[] = {785.4, -785.4, 680.7, -680.7};   /* 1500, 1300 rpm, 5 pole pairs */
+    const double offsets[] = {0.0, 1.0, -1.5};
+    const double leans[] = {0.25, 0.0, 0.6};
+    for (size_t i = 0; i < sizeof speeds / sizeof speeds[0]; ++i) {
+        for (size_t j = 0; j < sizeof offsets / sizeof offsets[0]; ++j) {
+            for (int a = 0; a < 8; ++a) {
+                const double th0 = -PI_D + a * (PI_D / 4.0) + 0.1;
+                const outcome_t o = run_diode(speeds[i], th0, offsets[j], leans[(size_t)a % 3u]);
+                assert_int_equal(o.st, MC_IP_DONE);
+                assert_true(o.c.moving);
+                assert_int_equal(o.c.passive, speeds[i] > 0.0 ? 1 : -1);
+                const double err = fabs(mc_wrap_pi((float)(o.c.theta - o.th_true)));
+                if (err > 5.0 * PI_D / 180.0) {
+                    fail_msg("w %.1f off %.1f th0 %.2f: angle error %.2f deg", speeds[i], offsets[j], th0,
+                             err * 180.0 / PI_D);
+                }
+                assert_true(o.c.omega * speeds[i] > 0.0);
+                assert_true(fabs(o.c.omega - speeds[i]) < 0.25 * fabs(speeds[i]));
+                /* one pulse of i_pulse from a low: no 2 i_pulse lengthening */
+                assert_true(o.c.di1.alpha * o.c.di1.alpha + o.c.di1.beta * o.c.di1.beta < 2.0 * 3.3 * 2.0 * 3.3);
+            }
+        }
+    }
+}
+
 static void test_bad_config(void **st)
 {
     (void)st;
@@ -199,6 +270,7 @@ int main(void)
         cmocka_unit_test(test_angle_and_speed_both_signs),
         cmocka_unit_test(test_standstill),
         cmocka_unit_test(test_single_pulse_falls_back),
+        cmocka_unit_test(test_passive_sign_from_the_diodes),
         cmocka_unit_test(test_bad_config),
         cmocka_unit_test(test_nan_currents),
     };
