@@ -215,16 +215,23 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 3. Protection and the startup sequence (offset calibration, Step I and II pulses).
      *    Only RUN and Step III continue into the control pipeline. */
-    if (!mc_drive_startup(d, &raw, i_abc, i_ab, vdc)) {
-        d->i_ab_prev = i_ab;
-        publish(d);
-        return;
-    }
-
     /* 4. Angle source: it gets i(k-1), i(k) and the voltage applied between them. */
     const mc_angle_in_t ain = {.i_ab = i_ab, .i_ab_prev = d->i_ab_prev, .u_ab_applied = d->u_hist[1],
                                .vdc = vdc, .qep_count = qep.count};
     mc_angle_out_t ang;
+    if (!mc_drive_startup(d, &raw, i_abc, i_ab, vdc)) {
+        if (c->src_measures && d->seq.state == MC_STATE_OFFSET_CAL) {
+            /* an angle sensor is tracked while the offsets are calibrated (outputs off): RUN
+             * then starts with its speed, not from 0 (a rotor already turning at 1500 rpm would
+             * otherwise meet a decoupling and a field weakening planned for standstill) */
+            angle_source(d, &ain, &ang);
+            d->tm.theta = ang.theta;
+            d->tm.omega = ang.omega;
+        }
+        d->i_ab_prev = i_ab;
+        publish(d);
+        return;
+    }
     hal_stage_mark(HAL_STAGE_ANGLE);
     angle_source(d, &ain, &ang);
 

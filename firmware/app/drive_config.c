@@ -142,6 +142,7 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     b->seq = (mc_seq_cfg_t){.ts = p->ts, .init_pos = b->three_step, .timeout_cal = cal > 0.1f ? cal : 0.1f,
                             .timeout_step12 = p->timeout_step12, .timeout_step3 = p->timeout_step3};
     b->seq.catch_first = p->catch_on != 0 && !mc_angle_src_get(p->angle_src)->measures_angle;
+    b->src_measures = mc_angle_src_get(p->angle_src)->measures_angle;
     build_catch(p, m, b);
     b->step3_speed_tol = p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
     b->step3_hold = (uint32_t)(p->step3_hold / p->ts + 0.5f);

@@ -125,19 +125,35 @@ static bool begin_step1(mc_drive_t *d)
 /* Average the current channels with the outputs off; the offsets must be plausible. */
 static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 {
-    for (int k = 0; k < 3; ++k) {
-        d->cal_sum[k] += (float)raw->i[k];
-    }
-    if (++d->cal_count < d->cfg->blk.cal_samples) {
-        return;
-    }
-    for (int k = 0; k < 3; ++k) {
-        const float off = d->cal_sum[k] / (float)d->cal_count;
-        if (!(fabsf(off - d->cfg->blk.offset_nominal) <= d->cfg->blk.offset_tol)) {
-            mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
+    const mc_drive_blk_t *b = &d->cfg->blk;
+    if (d->cal_count < b->cal_samples) {
+        for (int k = 0; k < 3; ++k) {
+            d->cal_sum[k] += (float)raw->i[k];
+        }
+        if (++d->cal_count < b->cal_samples) {
             return;
         }
-        d->offset[k] = off;
+        for (int k = 0; k < 3; ++k) {
+            const float off = d->cal_sum[k] / (float)d->cal_count;
+            if (!(fabsf(off - b->offset_nominal) <= b->offset_tol)) {
+                mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
+                return;
+            }
+            d->offset[k] = off;
+        }
+    } else {
+        d->cal_count++;
+    }
+    const mc_ab_t i_now = mc_clarke((mc_abc_t){((float)raw->i[0] - d->offset[0]) * b->amps_per_count,
+                                               ((float)raw->i[1] - d->offset[1]) * b->amps_per_count,
+                                               ((float)raw->i[2] - d->offset[2]) * b->amps_per_count});
+    if (b->src_measures && d->cal_count < b->cal_samples + b->fly.n_wait_max &&
+        !(i_now.alpha * i_now.alpha + i_now.beta * i_now.beta <=
+          (b->fly.i_rest + 0.3f * b->fly.i_pulse) * (b->fly.i_rest + 0.3f * b->fly.i_pulse))) {
+        /* a sensor drive needs no catch, but above the uncontrolled-generation speed the diodes
+         * conduct: it waits (outputs off, at most the catch's longest wait) for a diode pulse's
+         * low, as the catch does (C.5), and starts from there */
+        return;
     }
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
     if (d->seq.state == MC_STATE_INIT_POS && d->seq.step == MC_INIT_CATCH) {
@@ -153,6 +169,11 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     if (d->seq.state == MC_STATE_INIT_POS && !started) {
         mc_drive_trip(d, MC_FAULT_CONFIG);
         return;
+    }
+    if (d->seq.state == MC_STATE_RUN && b->src_measures) {
+        /* an angle sensor tracked through the calibration: the references start from the
+         * current that flows (bumpless) */
+        d->i_ref_prev = mc_park(i_now, mc_sincos(mc_wrap_pi(d->tm.theta + d->tm.omega * b->ts)));
     }
     hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
     hal_pwm_enable(d->hal.pwm, true);
