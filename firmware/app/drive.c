@@ -255,7 +255,15 @@ void mc_drive_isr(mc_drive_t *d)
     /* 7. Current control, limited to the inscribed circle of the voltage hexagon; the HF
      *    injection (6.6) rides on the estimated d axis. */
     hal_stage_mark(HAL_STAGE_CURRENT);
-    mc_dq_t u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, vdc * MC_1_SQRT3);
+    mc_dq_t u_dq;
+    if (c->cc_map) {
+        /* the decoupling from the flux map's psi(i): the machine's own back-EMF (mc_cc_step_psi) */
+        mc_dq_t psi;
+        mc_flux_eval(&c->src.model, i_fb, &psi, 0, 0);
+        u_dq = mc_cc_step_psi(&d->cc, i_ref, i_fb, psi, ang.omega, vdc * MC_1_SQRT3);
+    } else {
+        u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, vdc * MC_1_SQRT3);
+    }
     d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
     u_dq.d += d->tm.u_inj;
 

@@ -174,6 +174,7 @@ static void build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive
     s->pll_bw_hz = p->pll_bw_hz;
     s->pll_speed_fc_hz = p->pll_speed_fc_hz;
     b->inject = mc_angle_src_get(p->angle_src)->needs_injection && p->inj_kind != (int32_t)MC_INJ_OFF;
+    b->cc_map = s->model.kind == MC_FLUX_MAP && s->model.map != 0;
     b->inj = (mc_inj_cfg_t){.kind = (mc_inj_kind_t)p->inj_kind, .v1 = p->inj_v1, .f_hz = p->inj_f_hz,
                             .omega_n1 = s->omega_n1, .ts = p->ts};
     const float f_notch = p->inj_f_hz < 0.45f / p->ts ? p->inj_f_hz : 0.45f / p->ts;

@@ -52,31 +52,26 @@ void mc_cc_reset(mc_cc_t *s)
     s->limited = false;
 }
 
-mc_dq_t mc_cc_step(mc_cc_t *s, mc_dq_t i_ref, mc_dq_t i_meas, float omega_e, float u_max)
+/* The loop with its decoupling feed-forward given (0 when not decoupling). */
+static mc_dq_t cc_core(mc_cc_t *s, mc_dq_t i_ref, mc_dq_t i_meas, float ff_d, float ff_q, float u_max, bool res_p)
 {
     mc_dq_t u;
-    float ff_d = 0.0f;
-    float ff_q = 0.0f;
     float uq_max;
 
     /* NaN-safe: a bad limit must not open the clamp. */
     if (!(u_max > 0.0f)) {
         u_max = 0.0f;
     }
-    if (s->cfg.decouple) {
-        /* Measured currents, not references: this cancels the plant's own coupling, so the axes
-         * stay decoupled during transients as well (the references would only do so in steady state). */
-        ff_d = -omega_e * s->cfg.lq * i_meas.q;
-        ff_q = omega_e * (s->cfg.ld * i_meas.d + s->cfg.psi_pm);
-    }
-
     /* d axis first: it sets the flux (field weakening relies on it), q gets the rest of the
      * circle. Limits go into the PI so its conditional integration stops the wind-up. */
     /* ... but not all of it: q keeps the share its back-EMF feed-forward needs (up to 95 % of
      * the circle). Without that reserve, a braking q current at the voltage limit (a rotor caught
      * above base speed) makes the decoupling -w Lq iq take the circle for d, q loses its
      * back-EMF and iq runs away further. */
-    const float res_q = fminf(fabsf(ff_q), 0.95f * u_max);
+    /* With the machine's own back-EMF as the feed-forward (a flux map) that share leaves q
+     * nothing to correct its error with: the reserve then covers the proportional demand too. */
+    const float dem_q = res_p ? ff_q + s->cfg.kp_q * (i_ref.q - i_meas.q) : ff_q;
+    const float res_q = fminf(fabsf(dem_q), 0.95f * u_max);
     const float ud_max = sqrtf(fmaxf(u_max * u_max - res_q * res_q, 0.0f));
     u.d = mc_pi_step_lim(&s->pi_d, i_ref.d - i_meas.d, ff_d, -ud_max, ud_max);
     uq_max = u_max * u_max - u.d * u.d;
@@ -86,4 +81,30 @@ mc_dq_t mc_cc_step(mc_cc_t *s, mc_dq_t i_ref, mc_dq_t i_meas, float omega_e, flo
     s->u = u;
     s->limited = s->pi_d.saturated || s->pi_q.saturated;
     return u;
+}
+
+/* Measured currents, not references, in the decoupling: it cancels the plant's own coupling, so
+ * the axes stay decoupled during transients as well (the references would only do so in steady
+ * state). (2.7) in steady state: u_d = R i_d - w psi_q, u_q = R i_q + w psi_d. */
+mc_dq_t mc_cc_step(mc_cc_t *s, mc_dq_t i_ref, mc_dq_t i_meas, float omega_e, float u_max)
+{
+    float ff_d = 0.0f, ff_q = 0.0f;
+    if (s->cfg.decouple) {
+        ff_d = -omega_e * s->cfg.lq * i_meas.q;
+        ff_q = omega_e * (s->cfg.ld * i_meas.d + s->cfg.psi_pm);
+    }
+    return cc_core(s, i_ref, i_meas, ff_d, ff_q, u_max, false);
+}
+
+mc_dq_t mc_cc_step_psi(mc_cc_t *s, mc_dq_t i_ref, mc_dq_t i_meas, mc_dq_t psi_meas, float omega_e, float u_max)
+{
+    if (!(fabsf(psi_meas.d) < 1.0e6f && fabsf(psi_meas.q) < 1.0e6f)) {
+        return mc_cc_step(s, i_ref, i_meas, omega_e, u_max);
+    }
+    float ff_d = 0.0f, ff_q = 0.0f;
+    if (s->cfg.decouple) {
+        ff_d = -omega_e * psi_meas.q;
+        ff_q = omega_e * psi_meas.d;
+    }
+    return cc_core(s, i_ref, i_meas, ff_d, ff_q, u_max, true);
 }

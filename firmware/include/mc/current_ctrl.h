@@ -1,6 +1,6 @@
 /* Current controller in a given (rotor or estimated) frame: PI per axis, decoupling
- * feed-forward (-w Lq iq, +w (Ld id + psi_pm)) from the measured currents, anti-windup against
- * the voltage limit. */
+ * feed-forward (-w psi_q, +w psi_d of the measured currents: -w Lq iq, +w (Ld id + psi_pm) with
+ * constant parameters, or a flux map's), anti-windup against the voltage limit. */
 #ifndef MC_CURRENT_CTRL_H
 #define MC_CURRENT_CTRL_H
 #include "mc/types.h"
@@ -28,5 +28,11 @@ void mc_cc_reset(mc_cc_t *s);
 /* u_max: radius of the available voltage circle (e.g. vdc/sqrt(3) * margin). d axis has
  * priority; q gets what is left. Returns the limited voltage in the same frame. */
 mc_dq_t mc_cc_step(mc_cc_t *s, mc_dq_t i_ref, mc_dq_t i_meas, float omega_e, float u_max);
+/* The same with the flux of the measured currents given (a flux map's psi_dq(i_meas)): the
+ * decoupling is then the back-EMF of the machine's own flux, -w psi_q and +w psi_d (2.7), which
+ * on a saturating machine differs from Lq iq, Ld id + psi_pm by more than the loop's
+ * proportional gain absorbs (brodatzki-35kw at 3000 rpm and 80 A: 12 V on d, 65 A of d error
+ * with the constants). A non-finite psi falls back to the constants. */
+mc_dq_t mc_cc_step_psi(mc_cc_t *s, mc_dq_t i_ref, mc_dq_t i_meas, mc_dq_t psi_meas, float omega_e, float u_max);
 
 #endif

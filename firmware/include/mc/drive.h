@@ -110,6 +110,7 @@ typedef struct {
     uint32_t step3_hold;         /* [periods]                                                */
     bool  inject, three_step, ip1_pulse3, ip2_dvi;
     bool  src_measures;         /* an angle sensor: tracked while the offsets are calibrated */
+    bool  cc_map;               /* the current loop's decoupling from the flux map (src.model) */
     mc_biquad_t notch;           /* at the injection frequency, state at rest                 */
     mc_lpf1_t step3_lpf;         /* Step III's |omega_hat| low-pass (50 Hz), state at rest     */
     float avg_k;                 /* the detectors' 20 Hz first-order low-pass coefficient      */
