@@ -107,6 +107,51 @@ static void test_decoupling_feedforward(void **state)
     assert_near(u.q, 0.0, 1e-6);
 }
 
+/* With the flux of the measured currents given (a flux map), the decoupling is -w psi_q, w psi_d;
+ * a non-finite flux falls back to the constants; at the voltage limit q keeps what its
+ * back-EMF and its proportional demand need (a reserve for the correction, not just the EMF). */
+static void test_decoupling_from_flux(void **state)
+{
+    (void)state;
+    mc_cc_cfg_t c;
+    mc_cc_t s;
+    mc_cc_cfg_from_bandwidth(&c, 500.0f, (float)RS, (float)LD, (float)LQ, (float)PSI, (float)TS);
+    mc_cc_init(&s, &c);
+    /* a saturated machine: psi = (0.30, 0.08) Wb at (-3, 8) A (the constants say 0.3116, 0.1032) */
+    mc_dq_t u = mc_cc_step_psi(&s, dq(-3.0f, 8.0f), dq(-3.0f, 8.0f), dq(0.30f, 0.08f), 500.0f, 1000.0f);
+    assert_near(u.d, -40.0, 1e-3);
+    assert_near(u.q, 150.0, 1e-3);
+    /* the linear model's flux gives what mc_cc_step gives */
+    mc_cc_reset(&s);
+    const mc_dq_t lin = mc_cc_step_psi(&s, dq(-3.0f, 8.0f), dq(-3.0f, 8.0f),
+                                       dq((float)(LD * -3.0 + PSI), (float)(LQ * 8.0)), 500.0f, 1000.0f);
+    assert_near(lin.d, -51.6, 1e-3);
+    assert_near(lin.q, 155.775, 1e-3);
+    /* NaN or infinite flux: the constants */
+    mc_cc_reset(&s);
+    u = mc_cc_step_psi(&s, dq(-3.0f, 8.0f), dq(-3.0f, 8.0f), dq(NAN, 0.08f), 500.0f, 1000.0f);
+    assert_near(u.d, -51.6, 1e-3);
+    assert_near(u.q, 155.775, 1e-3);
+    mc_cc_reset(&s);
+    u = mc_cc_step_psi(&s, dq(-3.0f, 8.0f), dq(-3.0f, 8.0f), dq(0.3f, INFINITY), 500.0f, 1000.0f);
+    assert_near(u.q, 155.775, 1e-3);
+
+    /* voltage limit, pure P (kp 1 V/A): back-EMF 0.3 Wb x 500 rad/s = 150 V on a 200 V circle, q
+     * error +8 A, d error -190 A. mc_cc_step's reserve (the EMF alone, 150 V) leaves d 132.3 V
+     * and q 150 V, no room for its error; with the flux given the reserve is 150 + 8 = 158 V:
+     * d gets 122.6 V, q 158 V */
+    mc_cc_cfg_t p = {1.0f, 0.0f, 1.0f, 0.0f, (float)TS, 0.0f, 0.0f, 0.3f, true};
+    mc_cc_init(&s, &p);
+    u = mc_cc_step(&s, dq(-190.0f, 8.0f), dq(0.0f, 0.0f), 500.0f, 200.0f);
+    assert_near(u.d, -sqrt(200.0 * 200.0 - 150.0 * 150.0), 1e-2);
+    assert_near(u.q, 150.0, 1e-2);
+    mc_cc_reset(&s);
+    u = mc_cc_step_psi(&s, dq(-190.0f, 8.0f), dq(0.0f, 0.0f), dq(0.3f, 0.0f), 500.0f, 200.0f);
+    assert_near(u.d, -sqrt(200.0 * 200.0 - 158.0 * 158.0), 1e-2);
+    assert_near(u.q, 158.0, 1e-2);
+    assert_true(s.limited);
+}
+
 static void test_voltage_limit_d_priority(void **state)
 {
     (void)state;
@@ -261,6 +306,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gains_from_bandwidth),
         cmocka_unit_test(test_decoupling_feedforward),
+        cmocka_unit_test(test_decoupling_from_flux),
         cmocka_unit_test(test_voltage_limit_d_priority),
         cmocka_unit_test(test_antiwindup_recovery),
         cmocka_unit_test(test_antiwindup_closed_loop_overshoot),
