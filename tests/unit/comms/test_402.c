@@ -248,6 +248,22 @@ static void test_disable_voltage(void **state)
 }
 
 /* Quick stop (11) with each option, 12 at the end, 16 back. */
+/* A quick stop with option `opt` from 600 rpm, decelerating on 0x6084 (500 rpm/s; 0x6085 is
+ * 2000 rpm/s, so the rate tells which one acts): 100 ms after it, 550 rpm. */
+static void quick_stop_on_profile_decel(int16_t opt)
+{
+    start();
+    s.od.profile_decel = 500u;
+    s.od.quick_stop_decel = 2000u;
+    s.od.quick_stop_option = opt;
+    to_enabled();
+    s.od.target_velocity = 600;
+    step_n(700);
+    assert_int_equal(cw(0x02), 0x0217);
+    step_n(99);
+    assert_true(fabsf(speed_rpm() - 550.0f) < 2.0f);
+}
+
 static void test_quick_stop_options(void **state)
 {
     (void)state;
@@ -272,30 +288,12 @@ static void test_quick_stop_options(void **state)
     assert_false(cmd.enable);
 
     /* 1: the same on 0x6084 */
-    start();
-    s.od.profile_decel = 500u;
-    s.od.quick_stop_decel = 2000u;
-    s.od.quick_stop_option = 1;
-    to_enabled();
-    s.od.target_velocity = 600;
-    step_n(700);
-    assert_int_equal(cw(0x02), 0x0217);
-    step_n(99);
-    assert_true(fabsf(speed_rpm() - 550.0f) < 2.0f);
+    quick_stop_on_profile_decel(1);
     step_n(1100);
     assert_int_equal(sw(), 0x0240);
 
     /* 5: on 0x6084, stays in QSA held at 0 (enabled, stopped: bit 10); enable operation: 16 */
-    start();
-    s.od.profile_decel = 500u;
-    s.od.quick_stop_decel = 2000u;
-    s.od.quick_stop_option = 5;
-    to_enabled();
-    s.od.target_velocity = 600;
-    step_n(700);
-    assert_int_equal(cw(0x02), 0x0217);
-    step_n(99);
-    assert_true(fabsf(speed_rpm() - 550.0f) < 2.0f);
+    quick_stop_on_profile_decel(5);
     step_n(1500);
     assert_int_equal(sw(), 0x0217);
     assert_true(cmd.enable);
