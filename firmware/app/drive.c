@@ -205,17 +205,16 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 2. Scaling with the calibrated offsets; Clarke (2.4), all three channels measured. */
     const float vdc = (float)raw.vdc * c->volts_per_count;
-    const mc_abc_t i_abc = {((float)raw.i[0] - d->offset[0]) * c->amps_per_count,
-                            ((float)raw.i[1] - d->offset[1]) * c->amps_per_count,
-                            ((float)raw.i[2] - d->offset[2]) * c->amps_per_count};
+    const mc_abc_t i_abc = mc_drive_currents(d, &raw);
     const mc_ab_t i_ab = mc_clarke(i_abc);
     d->tm.period++;
     d->tm.i_abc = i_abc;
     d->tm.vdc = vdc;
 
     /* 3. Protection and the startup sequence (offset calibration, Step I and II pulses).
-     *    Only RUN and Step III continue into the control pipeline. */
-    /* 4. Angle source: it gets i(k-1), i(k) and the voltage applied between them. */
+     *    Only RUN and Step III continue into the control pipeline; an angle sensor is also
+     *    read during the offset calibration. The angle source (step 4) gets i(k-1), i(k) and
+     *    the voltage applied between them. */
     const mc_angle_in_t ain = {.i_ab = i_ab, .i_ab_prev = d->i_ab_prev, .u_ab_applied = d->u_hist[1],
                                .vdc = vdc, .qep_count = qep.count};
     mc_angle_out_t ang;
@@ -232,6 +231,7 @@ void mc_drive_isr(mc_drive_t *d)
         publish(d);
         return;
     }
+    /* 4. Angle source. */
     hal_stage_mark(HAL_STAGE_ANGLE);
     angle_source(d, &ain, &ang);
 

@@ -6,6 +6,15 @@
 #define MC_DRIVE_INTERNAL_H
 #include "mc/drive.h"
 
+/* The phase currents of a raw sample with the calibrated offsets [A] (ISR step 2, and the
+ * offset calibration once it has its offsets). */
+static inline mc_abc_t mc_drive_currents(const mc_drive_t *d, const hal_adc_sample_t *raw)
+{
+    const float k = d->cfg->blk.amps_per_count;
+    return (mc_abc_t){((float)raw->i[0] - d->offset[0]) * k, ((float)raw->i[1] - d->offset[1]) * k,
+                      ((float)raw->i[2] - d->offset[2]) * k};
+}
+
 /* Every block configured from a built configuration (copies only). */
 void mc_drive_apply(mc_drive_t *d, const mc_drive_built_t *b);
 /* A new configuration while running: gains and limits, no state reset. */

@@ -122,6 +122,13 @@ static bool begin_step1(mc_drive_t *d)
     return begin_program(d, &step1_programs[d->cfg->blk.ip1_pulse3 ? 1 : 0], 0.0f);
 }
 
+/* RUN's current references start from the current that flows (bumpless: a rotor caught or
+ * enabled at speed carries the diodes' or the catch's current), in the frame at theta. */
+static void refs_from_current(mc_drive_t *d, mc_ab_t i_ab, float theta)
+{
+    d->i_ref_prev = mc_park(i_ab, mc_sincos(mc_wrap_pi(theta)));
+}
+
 /* Average the current channels with the outputs off; the offsets must be plausible. */
 static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 {
@@ -144,12 +151,9 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     } else {
         d->cal_count++;
     }
-    const mc_ab_t i_now = mc_clarke((mc_abc_t){((float)raw->i[0] - d->offset[0]) * b->amps_per_count,
-                                               ((float)raw->i[1] - d->offset[1]) * b->amps_per_count,
-                                               ((float)raw->i[2] - d->offset[2]) * b->amps_per_count});
-    if (b->src_measures && d->cal_count < b->cal_samples + b->fly.n_wait_max &&
-        !(i_now.alpha * i_now.alpha + i_now.beta * i_now.beta <=
-          (b->fly.i_rest + 0.3f * b->fly.i_pulse) * (b->fly.i_rest + 0.3f * b->fly.i_pulse))) {
+    /* with this period's offsets: the ISR scaled the sample with the previous ones */
+    const mc_ab_t i_now = b->src_measures ? mc_clarke(mc_drive_currents(d, raw)) : (mc_ab_t){0.0f, 0.0f};
+    if (b->src_measures && d->cal_count < b->cal_samples + b->fly.n_wait_max && !mc_catch_at_low(&b->fly, i_now)) {
         /* a sensor drive needs no catch, but above the uncontrolled-generation speed the diodes
          * conduct: it waits (outputs off, at most the catch's longest wait) for a diode pulse's
          * low, as the catch does (C.5), and starts from there */
@@ -171,9 +175,8 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         return;
     }
     if (d->seq.state == MC_STATE_RUN && b->src_measures) {
-        /* an angle sensor tracked through the calibration: the references start from the
-         * current that flows (bumpless) */
-        d->i_ref_prev = mc_park(i_now, mc_sincos(mc_wrap_pi(d->tm.theta + d->tm.omega * b->ts)));
+        /* the sensor's angle (tracked through the calibration, a period old) one period on */
+        refs_from_current(d, i_now, d->tm.theta + d->tm.omega * b->ts);
     }
     hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
     hal_pwm_enable(d->hal.pwm, true);
@@ -255,8 +258,7 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     if (res.moving) {
         /* the pipeline runs from this sample on: the estimate is the caught one */
         pipeline_reset(d, res.theta, res.omega);
-        /* the references start from the current the catch left (bumpless), not from 0 */
-        d->i_ref_prev = mc_park(i_ab, mc_sincos(mc_wrap_pi(res.theta)));
+        refs_from_current(d, i_ab, res.theta);
         mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
         return;
     }

@@ -235,8 +235,7 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
          * uncontrolled-generation speed it is; after a recovery the outputs were just switched
          * off), or, where the diodes conduct, at a diode pulse's low once (C.5) has its sign;
          * or after the longest wait */
-        const bool low = im <= c->i_rest + 0.3f * c->i_pulse;
-        const bool ready = s->diodes ? (low && s->passive != 0) : im <= c->i_rest;
+        const bool ready = s->diodes ? (mc_catch_at_low(c, i_ab) && s->passive != 0) : im <= c->i_rest;
         if (!ready && s->n++ < c->n_wait_max) {
             return MC_IP_RUNNING;
         }
@@ -267,23 +266,23 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
             s->hist[s->n - 1u] = di;
             s->hist_psi[s->n - 1u] = s->psi;
         }
+        if (s->passive != 0) {
+            /* the sign known from the wait (C.5): one pulse of i_pulse gives the angle */
+            *off = false;   /* kept on: the control loop takes over from the next duties */
+            if (dm < c->i_pulse && s->n < c->n_pulse_max && s->n < MC_CATCH_HIST) {
+                return MC_IP_RUNNING;
+            }
+            known_sign(s, di);
+            s->phase = END;
+            s->status = MC_IP_DONE;
+            return s->status;
+        }
         /* |omega| to first order of (C.1) */
         const float w1 = dm * c->lq / (c->psi_pm * (float)s->n * c->ts);
         /* the single pulse needs two samples below 2 i_pulse: not when one period's rise is
          * already i_pulse (a low sampling rate at speed); then two one-period pulses */
         const bool coarse = s->n == 1u && dm >= c->i_pulse;
         const bool high = !coarse && 1.7320508f * w1 * c->psi_pm > c->high_speed_share * vdc;
-        if (s->passive != 0 && (dm >= c->i_pulse || s->n >= c->n_pulse_max || s->n >= MC_CATCH_HIST)) {
-            known_sign(s, di);
-            *off = false;   /* kept on: the control loop takes over from the next duties */
-            s->phase = END;
-            s->status = MC_IP_DONE;
-            return s->status;
-        }
-        if (s->passive != 0) {
-            *off = false;
-            return MC_IP_RUNNING;
-        }
         const float i_end = high ? 2.0f * c->i_pulse : c->i_pulse;
         if (dm < i_end && s->n < c->n_pulse_max && !(high && s->n >= MC_CATCH_HIST)) {
             *off = false;

@@ -93,6 +93,7 @@ def simulate(m: Machine, omega_e: float, vdc: float, ts: float, ang, mag, *, lim
     h = ts / substeps
     u_lin = vdc / SQRT3
     theta = theta0
+    i_d, i_q = m.model.current(pd, pq)   # at the start of each sub-step (the last one's end)
     for k in range(N):
         # stator-frame vector for this period, limited as the inverter would
         a_s = theta + ang[:, k]
@@ -105,7 +106,6 @@ def simulate(m: Machine, omega_e: float, vdc: float, ts: float, ang, mag, *, lim
         for _ in range(substeps):
             c, sn = math.cos(theta + 0.5 * omega_e * h), math.sin(theta + 0.5 * omega_e * h)
             ud, uq = c * ua + sn * ub, -sn * ua + c * ub                      # Park (2.5)
-            i_d, i_q = m.model.current(pd, pq)
             # midpoint step of d psi/dt = u - Rs i - j omega psi
             kd = ud - m.rs_ohm * i_d + omega_e * pq
             kq = uq - m.rs_ohm * i_q - omega_e * pd

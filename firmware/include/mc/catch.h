@@ -60,6 +60,7 @@
  * Units SI: A, V, s, H, Wb, rad, rad/s electrical. */
 #ifndef MC_CATCH_H
 #define MC_CATCH_H
+#include <math.h>
 #include <stdint.h>
 
 #include "mc/initpos.h"
@@ -112,6 +113,13 @@ typedef struct {
     float fit;                /* |delta i2| / (C.1) */
     float i_peak;             /* [A] */
 } mc_catch_t;
+
+/* A diode pulse's low (C.5): where a pulse may start, for the catch and for a sensor drive
+ * entering RUN above the uncontrolled-generation speed. */
+static inline bool mc_catch_at_low(const mc_catch_cfg_t *c, mc_ab_t i_ab)
+{
+    return sqrtf(i_ab.alpha * i_ab.alpha + i_ab.beta * i_ab.beta) <= c->i_rest + 0.3f * c->i_pulse;
+}
 
 /* false on a bad configuration (non-positive or non-finite values): the engine then FAILs */
 bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg);
