@@ -58,7 +58,7 @@ void mc_polcheck_schedule(mc_drive_t *d, float omega)
      * tries again a settling time later, three times at most */
     const mc_drive_blk_t *b = &d->cfg->blk;
     const uint32_t k = d->pol.starts;
-    if (b->pol_at_start && d->seq.state == MC_STATE_RUN && !b->three_step && k < 3u &&
+    if ((b->pol_at_start || d->pol.unsure) && d->seq.state == MC_STATE_RUN && !b->three_step && k < 3u &&
         (k == 0u || d->tm.polarity_last == 0) && d->seq.ticks == (k + 1u) * b->pol_start_n &&
         mc_polcheck_start(d, omega)) {
         d->pol.starts = k + 1u;

@@ -49,6 +49,7 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->tm.recovered_from = 0u;
     d->tm.polarity_checks = d->tm.polarity_flips = 0u;
     d->pol.starts = 0u;
+    d->pol.unsure = false;
     d->tm.polarity_last = 0;
     d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
     mc_drive_init_blocks(d);
@@ -259,6 +260,7 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
         /* the pipeline runs from this sample on: the estimate is the caught one */
         pipeline_reset(d, res.theta, res.omega);
         refs_from_current(d, i_ab, res.theta);
+        d->pol.unsure = false;
         mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
         return;
     }
@@ -270,6 +272,13 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     /* standing: the outputs stay off this period (the probe's small current decays through the
      * diodes); Step I switches them on with its first call, RUN here */
     if (d->seq.state == MC_STATE_RUN) {
+        /* Under V(000) the devices' drop opposes the current like a dead zone: a back-EMF below
+         * it drives none, so with a drop the probe's "standing" means only "slower than
+         * omega_min + (4/3) v_device / psi_pm" (docs/protection.md; brodatzki-35kw under the harsh
+         * profile: 50 rpm is 1.6 V of back-EMF behind ~2 V of drops). RUN then starts from the
+         * given angle, which a turning rotor may have left anywhere: the polarity re-check runs
+         * as with polarity_check = at_start, so that a wrong one is not kept at pi. */
+        d->pol.unsure = d->cfg->blk.fly.v_device > 0.0f;
         hal_pwm_enable(d->hal.pwm, true);
     }
 }

@@ -207,6 +207,8 @@ typedef struct {
         float w0;                /* speed estimate (20 Hz average) at its start [rad/s el]    */
         float innov;             /* |raw angle - PLL angle|, 20 Hz average [rad]              */
         uint32_t starts;         /* at_start: checks begun since the enable (at most 3)       */
+        bool unsure;             /* this RUN entry follows a 'standing' verdict of the catch's
+                                    probe that the device drop makes unsure: checked as at_start */
     } pol;
     mc_cc_t cc;
     mc_sc_t sc;
