@@ -51,7 +51,7 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->pol.starts = 0u;
     d->pol.unsure = false;
     d->tm.polarity_last = 0;
-    d->cal_sum[0] = d->cal_sum[1] = d->cal_sum[2] = 0.0f;
+    mc_ocal_reset(&d->ocal);
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
     pipeline_reset(d, d->cmd.theta_init, 0.0f);
@@ -130,24 +130,57 @@ static void refs_from_current(mc_drive_t *d, mc_ab_t i_ab, float theta)
     d->i_ref_prev = mc_park(i_ab, mc_sincos(mc_wrap_pi(theta)));
 }
 
-/* Average the current channels with the outputs off; the offsets must be plausible. */
+/* Offsets within the plausible range of mid-scale, or false (then none changes). */
+static bool offsets_plausible(const mc_drive_t *d, const float off[3])
+{
+    const mc_drive_blk_t *b = &d->cfg->blk;
+    for (int k = 0; k < 3; ++k) {
+        if (!(fabsf(off[k] - b->offset_nominal) <= b->offset_tol)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/* Once the speed is known (the catch, an angle sensor): the offsets over whole electrical half-
+ * periods of the calibration's samples (O.1), which the diodes' current of a rotor turning above
+ * the generation speed does not bias. Returns the change of the stator-frame current this makes
+ * (new minus old) [A]; none where (O.1) does not apply. */
+static mc_ab_t offsets_at_speed(mc_drive_t *d, float omega)
+{
+    float off[3];
+    if (!mc_ocal_periodic(&d->ocal, omega, d->cfg->p.ts, off) || !offsets_plausible(d, off)) {
+        return (mc_ab_t){0.0f, 0.0f};
+    }
+    const float k = d->cfg->blk.amps_per_count;
+    const mc_abc_t di = {(d->offset[0] - off[0]) * k, (d->offset[1] - off[1]) * k, (d->offset[2] - off[2]) * k};
+    for (int j = 0; j < 3; ++j) {
+        d->offset[j] = off[j];
+    }
+    return mc_clarke(di);
+}
+
+/* Average the current channels with the outputs off; the offsets must be plausible. At a speed
+ * where the diodes conduct, the plain mean is biased: the catch or the angle sensor replaces it
+ * by offsets_at_speed() once the speed is known. */
 static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
     if (d->cal_count < b->cal_samples) {
-        for (int k = 0; k < 3; ++k) {
-            d->cal_sum[k] += (float)raw->i[k];
-        }
+        mc_ocal_add(&d->ocal, raw->i);
         if (++d->cal_count < b->cal_samples) {
             return;
         }
+        float off[3];
+        if (!mc_ocal_mean(&d->ocal, off) || !offsets_plausible(d, off)) {
+            mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
+            return;
+        }
         for (int k = 0; k < 3; ++k) {
-            const float off = d->cal_sum[k] / (float)d->cal_count;
-            if (!(fabsf(off - b->offset_nominal) <= b->offset_tol)) {
-                mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
-                return;
-            }
-            d->offset[k] = off;
+            d->offset[k] = off[k];
+        }
+        if (b->src_measures) {
+            (void)offsets_at_speed(d, d->tm.omega);   /* the sensor's speed, tracked meanwhile */
         }
     } else {
         d->cal_count++;
@@ -257,6 +290,11 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
         return;
     }
     if (res.moving) {
+        /* the offsets over whole half-periods at the caught speed (the catch itself works on
+         * current differences, which no offset biases) */
+        const mc_ab_t di = offsets_at_speed(d, res.omega);
+        i_ab.alpha += di.alpha;
+        i_ab.beta += di.beta;
         /* the pipeline runs from this sample on: the estimate is the caught one */
         pipeline_reset(d, res.theta, res.omega);
         refs_from_current(d, i_ab, res.theta);

@@ -13,6 +13,7 @@
 #include "mc/initpos.h"
 #include "mc/phase_program.h"
 #include "mc/params.h"
+#include "mc/offset_cal.h"
 #include "mc/polarity.h"
 #include "mc/pulse3.h"
 #include "mc/sequencer.h"
@@ -181,7 +182,7 @@ typedef struct {
 
     mc_seq_t seq;                /* state, init step, faults          */
     uint32_t cal_count;
-    float cal_sum[3];
+    mc_ocal_t ocal;              /* the calibration's samples (mc/offset_cal.h)  */
     float offset[3];             /* calibrated [counts]                      */
 
     const mc_angle_src_desc_t *src;
