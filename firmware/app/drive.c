@@ -127,6 +127,17 @@ static void take_config(mc_drive_t *d)
     mc_drive_retune(d, b);
 }
 
+/* The stator voltage with the outputs off while the phase currents flow: each phase at the rail
+ * its current returns through (the lower diode for a current into the machine), sign softened
+ * within +-i_band; Clarke (2.4) drops the common part. */
+static mc_ab_t diode_voltage(mc_abc_t i, float vdc, float i_band)
+{
+    const float h = 0.5f * vdc, k = i_band > 0.0f ? 1.0f / i_band : 1.0e6f;
+    const float a = fmaxf(-1.0f, fminf(1.0f, k * i.a)), b = fmaxf(-1.0f, fminf(1.0f, k * i.b)),
+                c = fmaxf(-1.0f, fminf(1.0f, k * i.c));
+    return mc_clarke((mc_abc_t){-h * a, -h * b, -h * c});
+}
+
 /* The selected angle source (mc/angle_source.h), with its diagnostics into the telemetry. */
 static void angle_source(mc_drive_t *d, const mc_angle_in_t *in, mc_angle_out_t *out)
 {
@@ -194,6 +205,14 @@ void mc_drive_isr(mc_drive_t *d)
 {
     const mc_drive_blk_t *c = &d->cfg->blk;
     hal_stage_mark(HAL_STAGE_SAMPLE);
+    /* 0. A RUN entry at a diode pulse's low latched its first duties last period with the
+     *    outputs off: they act from now on, with the outputs (a gate enable acts at once). */
+    if (d->gate_on_next) {
+        d->gate_on_next = false;
+        if (d->seq.state == MC_STATE_RUN) {
+            hal_pwm_enable(d->hal.pwm, true);
+        }
+    }
     take_command(d);
     take_config(d);
 
@@ -205,8 +224,8 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 2. Scaling with the calibrated offsets; Clarke (2.4), all three channels measured. */
     const float vdc = (float)raw.vdc * c->volts_per_count;
-    const mc_abc_t i_abc = mc_drive_currents(d, &raw);
-    const mc_ab_t i_ab = mc_clarke(i_abc);
+    mc_abc_t i_abc = mc_drive_currents(d, &raw);
+    mc_ab_t i_ab = mc_clarke(i_abc);
     d->tm.period++;
     d->tm.i_abc = i_abc;
     d->tm.vdc = vdc;
@@ -215,8 +234,8 @@ void mc_drive_isr(mc_drive_t *d)
      *    Only RUN and Step III continue into the control pipeline; an angle sensor is also
      *    read during the offset calibration. The angle source (step 4) gets i(k-1), i(k) and
      *    the voltage applied between them. */
-    const mc_angle_in_t ain = {.i_ab = i_ab, .i_ab_prev = d->i_ab_prev, .u_ab_applied = d->u_hist[1],
-                               .vdc = vdc, .qep_count = qep.count};
+    mc_angle_in_t ain = {.i_ab = i_ab, .i_ab_prev = d->i_ab_prev, .u_ab_applied = d->u_hist[1],
+                         .vdc = vdc, .qep_count = qep.count};
     mc_angle_out_t ang;
     if (!mc_drive_startup(d, &raw, i_abc, i_ab, vdc)) {
         if (c->src_measures && d->seq.state == MC_STATE_OFFSET_CAL) {
@@ -227,9 +246,19 @@ void mc_drive_isr(mc_drive_t *d)
             d->tm.theta = ang.theta;
             d->tm.omega = ang.omega;
         }
-        d->i_ab_prev = i_ab;
+        d->i_ab_prev = d->offsets_moved ? mc_clarke(mc_drive_currents(d, &raw)) : i_ab;
+        d->offsets_moved = false;
         publish(d);
         return;
+    }
+    if (d->offsets_moved) {
+        /* the catch moved the offsets in this very period ((O.1), startup.c): the pipeline
+         * starts with the currents, this one and the last, as the new offsets give them */
+        d->offsets_moved = false;
+        i_abc = mc_drive_currents(d, &raw);
+        i_ab = mc_clarke(i_abc);
+        ain.i_ab = i_ab;
+        ain.i_ab_prev = d->i_ab_prev;
     }
     /* 4. Angle source. */
     hal_stage_mark(HAL_STAGE_ANGLE);
@@ -306,7 +335,9 @@ void mc_drive_isr(mc_drive_t *d)
     hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
 
     /* 10. Keep what the estimators need next period, and the telemetry. */
-    d->u_hist[1] = d->u_hist[0];
+    /* with the outputs off until the next period (a RUN entry at gate_on_next) the diodes set
+     * the voltage of (k, k+1): each phase at the rail its current flows back to */
+    d->u_hist[1] = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
     d->u_hist[0] = duty.u_real;
     d->i_ab_prev = i_ab;
     d->tm.theta = ang.theta;

@@ -52,6 +52,8 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->pol.unsure = false;
     d->tm.polarity_last = 0;
     mc_ocal_reset(&d->ocal);
+    d->offsets_moved = false;
+    d->gate_on_next = false;
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
     pipeline_reset(d, d->cmd.theta_init, 0.0f);
@@ -157,7 +159,11 @@ static mc_ab_t offsets_at_speed(mc_drive_t *d, float omega)
     for (int j = 0; j < 3; ++j) {
         d->offset[j] = off[j];
     }
-    return mc_clarke(di);
+    const mc_ab_t dab = mc_clarke(di);
+    d->i_ab_prev.alpha += dab.alpha;   /* the last sample as the new offsets give it */
+    d->i_ab_prev.beta += dab.beta;
+    d->offsets_moved = true;
+    return dab;
 }
 
 /* Average the current channels with the outputs off; the offsets must be plausible. At a speed
@@ -208,11 +214,16 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         mc_drive_trip(d, MC_FAULT_CONFIG);
         return;
     }
+    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
     if (d->seq.state == MC_STATE_RUN && b->src_measures) {
         /* the sensor's angle (tracked through the calibration, a period old) one period on */
         refs_from_current(d, i_now, d->tm.theta + d->tm.omega * b->ts);
+        /* RUN's first duties, latched by the pipeline in this period, act with the outputs from
+         * the next one: switched on now, the last latched duties (zero voltage) would short the
+         * back-EMF for a period first (-2 A in q at 1500 rpm on the thesis motor) */
+        d->gate_on_next = true;
+        return;
     }
-    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
     hal_pwm_enable(d->hal.pwm, true);
 }
 
@@ -299,6 +310,8 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
         pipeline_reset(d, res.theta, res.omega);
         refs_from_current(d, i_ab, res.theta);
         d->pol.unsure = false;
+        /* a pulse ended with the outputs off (mc/catch.h): they come on with RUN's first duties */
+        d->gate_on_next = !hal_pwm_enabled(d->hal.pwm);
         mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
         return;
     }

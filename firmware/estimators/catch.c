@@ -268,8 +268,8 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         }
         if (s->passive != 0) {
             /* the sign known from the wait (C.5): one pulse of i_pulse gives the angle */
-            *off = false;   /* kept on: the control loop takes over from the next duties */
             if (dm < c->i_pulse && s->n < c->n_pulse_max && s->n < MC_CATCH_HIST) {
+                *off = false;
                 return MC_IP_RUNNING;
             }
             known_sign(s, di);
@@ -293,7 +293,6 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         s->n1 = s->n;
         s->end1 = call;
         if (high && s->n1 >= 2u && s->n1 <= MC_CATCH_HIST && single_pulse_sign(s)) {
-            *off = false;   /* kept on: the control loop takes over from the next duties */
             s->phase = END;
             s->status = MC_IP_DONE;
             return s->status;

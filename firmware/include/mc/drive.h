@@ -183,6 +183,9 @@ typedef struct {
     mc_seq_t seq;                /* state, init step, faults          */
     uint32_t cal_count;
     mc_ocal_t ocal;              /* the calibration's samples (mc/offset_cal.h)  */
+    bool offsets_moved;          /* (O.1) changed the offsets in this period      */
+    bool gate_on_next;           /* RUN's first duties latched with the outputs off: on at the
+                                    next period's start (a flying start at a diode pulse's low) */
     float offset[3];             /* calibrated [counts]                      */
 
     const mc_angle_src_desc_t *src;
