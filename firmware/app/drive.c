@@ -2,6 +2,7 @@
 #include "mc/drive.h"
 #include <math.h>
 #include "mc/angle.h"
+#include "mc/fw_entry.h"
 #include "mc/sincos.h"
 #include "mc/transforms.h"
 #include "drive_internal.h"
@@ -279,13 +280,42 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 6. References: current, torque (MTPA / field weakening) or speed; zero during Step III. */
     const bool step3 = d->seq.state == MC_STATE_INIT_POS;
-    const mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : references(d, ang.omega, vdc);
+    mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : references(d, ang.omega, vdc);
 
     /* 7. Current control, limited to the inscribed circle of the voltage hexagon; the HF
-     *    injection (6.6) rides on the estimated d axis. */
+     *    injection (6.6) rides on the estimated d axis. A RUN entry above the generation speed
+     *    first takes the flux into the voltage limit with the least current (mc/fw_entry.h); the
+     *    loop starts from the current that then flows. */
     hal_stage_mark(HAL_STAGE_CURRENT);
     mc_dq_t u_dq;
-    if (c->cc_map) {
+    if (d->fwe_active) {
+        /* the raw currents: the injection's notch would delay a current that moves by a
+         * tenth of the limit per period */
+        mc_dq_t psi;
+        mc_flux_eval(&c->src.model, i_dq, &psi, 0, 0);
+        /* the voltage acting until the next sample: the duties latched last period, or the
+         * diodes' with the outputs still off (a RUN entry at gate_on_next) */
+        const mc_ab_t u_now_ab = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
+        const mc_dq_t u_now = mc_park(u_now_ab, mc_sincos(mc_wrap_pi(ang.theta + 0.5f * ang.omega * c->ts)));
+        /* planned on the circle, asked of the hexagon (mc_svpwm scales it, same direction) */
+        d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, vdc * MC_1_SQRT3,
+                                    vdc * (2.0f / 3.0f), d->fwe_n > 0u, &u_dq);
+        if (d->fwe_active) {
+            d->fwe_n++;
+            i_ref = i_fb;   /* bumpless, for the loop after it and for the tracking check */
+            d->i_ref_prev = i_fb;
+            if (c->inject) {
+                /* the notches start again from the current that flows */
+                mc_biquad_reset(&d->notch_d, i_dq.d);
+                mc_biquad_reset(&d->notch_q, i_dq.q);
+            }
+        } else if (d->fwe_n > 0u) {
+            mc_cc_reset(&d->cc);   /* the loop starts from the references it was left */
+        }
+    }
+    if (d->fwe_active) {
+        d->cc.u = u_dq;   /* the plausibility checks see the voltage applied */
+    } else if (c->cc_map) {
         /* the decoupling from the flux map's psi(i): the machine's own back-EMF (mc_cc_step_psi) */
         mc_dq_t psi;
         mc_flux_eval(&c->src.model, i_fb, &psi, 0, 0);

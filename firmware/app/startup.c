@@ -54,6 +54,8 @@ void mc_drive_startup_reset(mc_drive_t *d)
     mc_ocal_reset(&d->ocal);
     d->offsets_moved = false;
     d->gate_on_next = false;
+    d->fwe_active = false;
+    d->fwe_n = 0u;
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
     pipeline_reset(d, d->cmd.theta_init, 0.0f);
@@ -222,6 +224,8 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
          * the next one: switched on now, the last latched duties (zero voltage) would short the
          * back-EMF for a period first (-2 A in q at 1500 rpm on the thesis motor) */
         d->gate_on_next = true;
+        d->fwe_active = true;
+        d->fwe_n = 0u;
         return;
     }
     hal_pwm_enable(d->hal.pwm, true);
@@ -312,6 +316,8 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
         d->pol.unsure = false;
         /* a pulse ended with the outputs off (mc/catch.h): they come on with RUN's first duties */
         d->gate_on_next = !hal_pwm_enabled(d->hal.pwm);
+        d->fwe_active = true;   /* ends at once where the flux can be held */
+        d->fwe_n = 0u;
         mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
         return;
     }

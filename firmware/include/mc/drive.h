@@ -186,6 +186,9 @@ typedef struct {
     bool offsets_moved;          /* (O.1) changed the offsets in this period      */
     bool gate_on_next;           /* RUN's first duties latched with the outputs off: on at the
                                     next period's start (a flying start at a diode pulse's low) */
+    bool fwe_active;             /* a RUN entry at speed: the flux into the voltage limit first
+                                    (mc/fw_entry.h) */
+    uint32_t fwe_n;              /* periods it has run since that entry */
     float offset[3];             /* calibrated [counts]                      */
 
     const mc_angle_src_desc_t *src;

@@ -1,0 +1,63 @@
+/* Entry into field weakening at speed: the voltage law that takes the stator flux of a rotor
+ * caught above the generation speed into the voltage limit with the least current (protection
+ * issue, flying start). Not in the thesis.
+ *
+ * WHY. Enabled at speed, the stator flux is about the magnet's, psi_pm, and |omega| psi_pm is more
+ * than the inverter can hold (sqrt3 |omega| psi_pm > Vdc): the flux must shrink to
+ * rho = u_max / |omega| while the rotor turns on. A current loop asked for the field-weakening
+ * current at its voltage limit does that late and overshoots (16.6 A on the thesis motor at
+ * 1500 rpm, the limit 13.29 A); the least peak a search over voltage sequences finds is 12.9 A
+ * (`mctools handover`, docs/protection.md), and its sequence is this law.
+ *
+ * PRINCIPLE (stator frame, Rs neglected). The stator flux psi_s moves with its voltage,
+ * d psi_s / dt = u_s, at most u_max fast; the magnet's flux turns at |omega| on a circle of radius
+ * psi_pm; the current is set by their difference. Write psi_s = r e^{j (omega t - phi)}: r the
+ * flux's magnitude, phi its lag behind the rotor. A voltage split into a part along psi_s (radial,
+ * -u_max sin(beta)) and a part ahead of it (tangential, u_max cos(beta)) gives
+ *     dr/dt = -u_max sin(beta),   dphi/dt = |omega| - u_max cos(beta) / r                   (F.1)
+ * While r > rho the lag only grows (u_max / r < |omega|); it costs current (a braking q current
+ * and more d current), so the law brings r down to rho with the least lag: minimising
+ * dphi/dr = (|omega| - u_max cos(beta) / r) / (u_max sin(beta)) over beta gives
+ *     cos(beta) = u_max / (|omega| r)                                                       (F.2)
+ * and the lag at r = rho is phi = sqrt(k^2 - 1) - acos(1 / k), k = psi_pm / rho (18 deg on the
+ * thesis motor at 1500 rpm, 300 V). In the rotor frame the voltage then points
+ *     angle(u) = angle(psi) + sign(omega) (pi / 2 + beta),   |u| = u_max                     (F.3)
+ * from 140 deg (against the flux, ahead of it) at the start down to 90 deg + the lag at rho. The
+ * search of `mctools handover` (the preset's saturation model, Rs, one vector per period) found
+ * this sequence on its own: 140 deg falling to 75 deg over 1.4 ms, lag 17.8 deg, 12.9 A.
+ *
+ * With Rs the flux that counts is need / |omega|, need = |Rs i + j omega psi| (2.7), the voltage
+ * that holds it: a braking, field-weakening current's Rs i points against j omega psi, and a flux
+ * a few per cent beyond rho can be held (the search's end state: 3 % beyond).
+ * Once held, the law keeps the voltage tangential (beta = 0) until the lag is gone (F.4): with
+ * more voltage than |omega| r, dphi/dt = |omega| - u / r < 0 at a constant radius, and the
+ * current falls as the lag does. That needs more than u_max: the law asks the modulator for the
+ * hexagon's (direction-preserving overmodulation); at exactly u_max the lag would stay.
+ *
+ * USE. Once per period from a RUN entry at speed while the flux is not holdable: the flux at the
+ * sample from the model psi(i), predicted 1.5 periods on (the middle of the period the result
+ * acts in) with the voltage already latched (d psi / dt = u - Rs i - j omega psi, rotor frame),
+ * and (F.2), (F.3) there; the result is the rotor-frame voltage for the next period. Done (false)
+ * once the predicted flux can be held without lag: the current loop takes over from the current
+ * that flows. The law has no current feedback of its own: a model error shows as a flux off by
+ * the same share, and the current loop after it corrects what is left. Units SI, rotor frame,
+ * rad/s electrical. */
+#ifndef MC_FW_ENTRY_H
+#define MC_FW_ENTRY_H
+#include <stdbool.h>
+
+#include "mc/types.h"
+
+#define MC_FWE_LAG_END 0.05f        /* [rad] the lag left to the current loop */
+#define MC_FWE_TAN_LAG_END 0.0500417f   /* tan(MC_FWE_LAG_END) */
+
+/* psi: the flux at the sample [Wb]; i: the current [A]; u_now: the voltage acting until the next
+ * sample [V]; rs [ohm]; omega [rad/s el]; ts [s]; u_max: the voltage (F.2) plans with [V]; u_req:
+ * the magnitude asked of the modulator (above u_max: the hexagon's, scaled by mc_svpwm, same
+ * direction) [V]; started: it ran in an earlier period. *u_out: the voltage for the period after
+ * [V]. Returns false (and *u_out = u_now) where the flux, 1.5 periods on, can be held: at once if
+ * not started, else once it also lags by at most MC_FWE_LAG_END; and for non-finite inputs. */
+bool mc_fwe_step(mc_dq_t psi, mc_dq_t i, mc_dq_t u_now, float rs, float omega, float ts, float u_max,
+                 float u_req, bool started, mc_dq_t *u_out);
+
+#endif

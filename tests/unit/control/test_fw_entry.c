@@ -1,0 +1,108 @@
+/* Entry into field weakening at speed (mc/fw_entry.h, (F.1)-(F.3)). */
+#include <math.h>
+
+#include "../mc_test.h"
+#include "mc/fw_entry.h"
+
+#define PI_D 3.14159265358979323846
+/* the thesis motor (sun2016-ipm-5kw) at 1500 rpm and 300 V, linear model */
+#define LD 10.5e-3
+#define LQ 12.9e-3
+#define PSI 0.34305
+#define RS 0.4
+#define W (1500.0 / 60.0 * 2.0 * PI_D * 5.0)
+#define UMAX (300.0 / 1.7320508075688772)
+#define TS 1e-4
+
+static mc_dq_t flux(mc_dq_t i)
+{
+    return (mc_dq_t){(float)(LD * i.d + PSI), (float)(LQ * i.q)};
+}
+
+/* The first vector from the magnet's flux: |u| as asked, at 90 deg + beta ahead of the flux with
+ * cos(beta) = u_max / |omega psi| (F.2), (F.3); mirrored for the other direction. */
+static void test_first_vector(void **st)
+{
+    (void)st;
+    const mc_dq_t i0 = {0.0f, 0.0f}, u0 = {0.0f, 0.0f};
+    mc_dq_t u;
+    assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 200.0f, true, &u));
+    const double beta = acos(UMAX / (W * PSI));
+    assert_near(atan2(u.q, u.d), PI_D / 2.0 + beta, 1e-4);   /* 140 deg */
+    assert_near(hypot(u.d, u.q), 200.0, 1e-3);
+    assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)-W, 0.0f, (float)UMAX, 0.0f, false, &u));
+    assert_near(atan2(u.q, u.d), -(PI_D / 2.0 + beta), 1e-4);
+    assert_near(hypot(u.d, u.q), UMAX, 1e-3);   /* never below u_max */
+}
+
+/* Held and without lag: done, the voltage untouched; below the generation speed it never starts;
+ * non-finite inputs end it. */
+static void test_done_and_bad_input(void **st)
+{
+    (void)st;
+    /* a flux that 170.5 V hold, under the voltage that holds it (2.7) */
+    const mc_dq_t i = {-12.0f, 0.0f};
+    const mc_dq_t u0 = {(float)(RS * i.d), (float)(W * (LD * i.d + PSI))};
+    mc_dq_t u;
+    assert_false(mc_fwe_step(flux(i), i, u0, (float)RS, (float)W, (float)TS, (float)UMAX, 200.0f, true, &u));
+    assert_near(u.d, u0.d, 0.0);
+    assert_near(u.q, u0.q, 0.0);
+    const mc_dq_t z = {0.0f, 0.0f};
+    /* below the generation speed under V(000) the flux lags (4 deg in 1.5 periods): not a start */
+    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, (float)(0.6 * W), (float)TS, (float)UMAX, 200.0f, false, &u));
+    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, NAN, (float)TS, (float)UMAX, 200.0f, true, &u));
+    const mc_dq_t bad = {NAN, 0.0f};
+    assert_false(mc_fwe_step(bad, z, z, (float)RS, (float)W, (float)TS, (float)UMAX, 200.0f, true, &u));
+    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, (float)W, (float)TS, 0.0f, 200.0f, true, &u));
+}
+
+/* Closed loop on the linear machine (Rs = 0, the law's voltage acting at once, fine steps): the
+ * flux shrinks to rho without ever growing, with the least lag there, sqrt(k^2 - 1) - acos(1/k)
+ * (k = psi_pm / rho: 18.3 deg). With more voltage than planned (the hexagon's), the law then takes
+ * the lag back at the held radius and ends. */
+static void test_min_lag_path(void **st)
+{
+    (void)st;
+    for (int dir = -1; dir <= 1; dir += 2) {
+        const double w = dir * W;
+        double pd = PSI, pq = 0.0, r_last = PSI, lag_at_rho = NAN;
+        const double h = TS / 20.0;
+        const mc_dq_t z = {0.0f, 0.0f};
+        bool on = true;
+        for (int k = 0; on && k < 400000; ++k) {
+            const mc_dq_t i = {(float)((pd - PSI) / LD), (float)(pq / LQ)};
+            /* until rho the planned voltage, then the hexagon's 15 % more */
+            const float u_req = isnan(lag_at_rho) ? (float)UMAX : (float)(1.15 * UMAX);
+            mc_dq_t u;
+            on = mc_fwe_step((mc_dq_t){(float)pd, (float)pq}, i, z, 0.0f, (float)w, 0.0f, (float)UMAX, u_req, k > 0, &u);
+            if (!on) {
+                break;
+            }
+            pd += h * (u.d + w * pq);
+            pq += h * (u.q - w * pd);
+            const double r = hypot(pd, pq);
+            if (isnan(lag_at_rho)) {
+                assert_true(r <= r_last + 1e-7);   /* shrinking until rho */
+                if (fabs(w) * r <= UMAX) {
+                    lag_at_rho = -dir * atan2(pq, pd);
+                }
+            }
+            r_last = r;
+        }
+        assert_false(on);
+        const double kk = PSI * W / UMAX;
+        assert_near(lag_at_rho, sqrt(kk * kk - 1.0) - acos(1.0 / kk), 0.01);
+        assert_true(-dir * atan2(pq, pd) <= MC_FWE_LAG_END + 1e-3);
+        assert_true(fabs(w) * hypot(pd, pq) <= UMAX * 1.0001);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_first_vector),
+        cmocka_unit_test(test_done_and_bad_input),
+        cmocka_unit_test(test_min_lag_path),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
