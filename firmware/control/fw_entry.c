@@ -29,13 +29,23 @@ bool mc_fwe_step(mc_dq_t psi, mc_dq_t i, mc_dq_t u_now, float rs, float omega, f
     if (!(need > u_max) && (!started || !lags)) {
         return false;
     }
-    /* (F.2) with Rs: the radius that counts is need / |omega|; held: tangential (F.4) */
-    const float cb = need > u_max ? u_max / need : 1.0f;
-    const float sb = sqrtf(fmaxf(1.0f - cb * cb, 0.0f));
+    /* (F.2) with Rs: the radius that counts is need / |omega|; held: tangential (F.4). In
+     * discrete time the last step lands on rho: the radial part moves the flux at most the
+     * (need - u_max) / |omega| left in one period (else it overshoots rho by ~1 % a period, the
+     * continuous law's radial speed vanishing only at rho itself) */
+    float cb = need > u_max ? u_max / need : 1.0f;
+    float sb = sqrtf(fmaxf(1.0f - cb * cb, 0.0f));
+    const float sb_land = (need - u_max) / (fabsf(omega) * ts * u_max);
+    if (sb > sb_land) {
+        sb = sb_land > 0.0f ? sb_land : 0.0f;
+        cb = sqrtf(1.0f - sb * sb);
+    }
     /* (F.3): the flux's direction turned by sign(omega) (pi / 2 + beta), without a libm call (the
      * same bits on every target) */
     const float ed = p.d / r, eq = p.q / r;
-    const float m = u_req > u_max ? u_req : u_max;
+    /* (F.2) plans with u_max: more there would take the flux past rho (by 3 % with the
+     * hexagon's); held, the more the faster the lag goes */
+    const float m = need > u_max || !(u_req > u_max) ? u_max : u_req;
     *u_out = (mc_dq_t){m * (-sb * ed - s * cb * eq), m * (s * cb * ed - sb * eq)};
     return true;
 }

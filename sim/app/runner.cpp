@@ -275,7 +275,9 @@ DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& m
     ds.cfg.est.lq = static_cast<float>(mp.lq * sc.f("estimator.l_scale"));
     ds.cfg.est.psi_pm = static_cast<float>(mp.psi_pm * sc.f("estimator.psi_scale"));
     const mc_angle_src_desc_t* src = mc_angle_src_get(ds.cfg.p.angle_src);
-    if (src != nullptr && src->needs_injection) {
+    // The machine's flux map is the drive's model of the motor, not only the estimator's: an
+    // encoder drive uses it too (the current loop's decoupling, the field-weakening entry law).
+    if (src != nullptr) {
         const double span = sc.has("estimator.map_span_a") ? sc.f("estimator.map_span_a") : 1.5 * mp.i_rated_peak;
         try {
             ds.est_map = make_estimator_map(magnetics, static_cast<int>(sc.i("estimator.map_points")), span,

@@ -29,10 +29,33 @@ static void test_first_vector(void **st)
     assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 200.0f, true, &u));
     const double beta = acos(UMAX / (W * PSI));
     assert_near(atan2(u.q, u.d), PI_D / 2.0 + beta, 1e-4);   /* 140 deg */
-    assert_near(hypot(u.d, u.q), 200.0, 1e-3);
+    assert_near(hypot(u.d, u.q), UMAX, 1e-3);   /* (F.2) plans with u_max: no more before rho */
     assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)-W, 0.0f, (float)UMAX, 0.0f, false, &u));
     assert_near(atan2(u.q, u.d), -(PI_D / 2.0 + beta), 1e-4);
     assert_near(hypot(u.d, u.q), UMAX, 1e-3);   /* never below u_max */
+}
+
+/* Held but lagging: tangential (F.4) with the voltage asked (the hexagon's); close to rho the
+ * radial part moves the flux no further than rho within the period (landing). */
+static void test_held_and_landing(void **st)
+{
+    (void)st;
+    const float rho = (float)(UMAX / W);
+    const float lag = 0.2f;
+    const mc_dq_t z = {0.0f, 0.0f};
+    mc_dq_t u;
+    /* held (0.98 rho), lagging 0.2 rad: tangential, |u| = u_req */
+    const mc_dq_t ph = {0.98f * rho * cosf(lag), -0.98f * rho * sinf(lag)};
+    assert_true(mc_fwe_step(ph, z, z, 0.0f, (float)W, 0.0f, (float)UMAX, 200.0f, true, &u));
+    assert_near(hypot(u.d, u.q), 200.0, 1e-3);
+    assert_near(u.d * ph.d + u.q * ph.q, 0.0, 1e-3);   /* no radial part */
+    /* 0.3 % beyond rho: the radial part covers exactly what is left in one period */
+    const mc_dq_t pn = {1.003f * rho, 0.0f};
+    const mc_dq_t hold = {0.0f, (float)W * pn.d};   /* j omega psi: the prediction stays put */
+    assert_true(mc_fwe_step(pn, z, hold, 0.0f, (float)W, (float)TS, (float)UMAX, 200.0f, true, &u));
+    const double radial = -(u.d * pn.d + u.q * pn.q) / hypot(pn.d, pn.q);
+    assert_near(radial * TS, 0.003 * rho, 2e-6);
+    assert_near(hypot(u.d, u.q), UMAX, 1e-3);
 }
 
 /* Held and without lag: done, the voltage untouched; below the generation speed it never starts;
@@ -101,6 +124,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_first_vector),
+        cmocka_unit_test(test_held_and_landing),
         cmocka_unit_test(test_done_and_bad_input),
         cmocka_unit_test(test_min_lag_path),
     };
