@@ -308,10 +308,9 @@ void mc_drive_isr(mc_drive_t *d)
         d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, vdc * MC_1_SQRT3,
                                     vdc * (2.0f / 3.0f), d->fwe_n > 0u, &u_dq);
         /* the law has no current feedback: with its model off (psi_pm 10 % high) it takes the
-         * flux too far; at the current limit the loop takes over whatever the law would do */
+         * flux too far; at 1.1 x i_max the loop takes over, whatever the law would do */
         if (d->fwe_active && !(i_dq.d * i_dq.d + i_dq.q * i_dq.q < c->fwe_i_stop * c->fwe_i_stop)) {
             d->fwe_active = false;
-            u_dq = mc_park(u_now_ab, mc_sincos(mc_wrap_pi(ang.theta + 1.5f * ang.omega * c->ts)));
         }
         if (d->fwe_active) {
             d->fwe_n++;

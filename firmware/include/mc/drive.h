@@ -106,7 +106,7 @@ typedef struct {
     int32_t adc_max;             /* the ADC's upper rail [counts]                            */
     float i_trip, vdc_min, vdc_max;
     float i_ref_max, i_slew;     /* [A], [A/s]                                               */
-    float fwe_i_stop;            /* the field-weakening entry law hands over at this |i| [A]   */
+    float fwe_i_stop;            /* the field-weakening entry law hands over at this |i|: 1.1 i_max [A] */
     uint32_t cal_samples;
     float step3_speed_tol;       /* [rad/s el]                                               */
     uint32_t step3_hold;         /* [periods]                                                */
