@@ -153,7 +153,11 @@ static bool offsets_plausible(const mc_drive_t *d, const float off[3])
 static mc_ab_t offsets_at_speed(mc_drive_t *d, float omega)
 {
     float off[3];
-    if (!mc_ocal_periodic(&d->ocal, omega, d->cfg->p.ts, off) || !offsets_plausible(d, off)) {
+    const bool ok = mc_ocal_periodic(&d->ocal, omega, d->cfg->p.ts, off) && offsets_plausible(d, off);
+    /* once: the samples belong to this enable's calibration, not to a later catch (a recovery
+     * at another speed would pair them at the wrong lag) */
+    mc_ocal_reset(&d->ocal);
+    if (!ok) {
         return (mc_ab_t){0.0f, 0.0f};
     }
     const float k = d->cfg->blk.amps_per_count;
