@@ -129,14 +129,13 @@ static void take_config(mc_drive_t *d)
 }
 
 /* The stator voltage with the outputs off while the phase currents flow: each phase at the rail
- * its current returns through (the lower diode for a current into the machine), sign softened
- * within +-i_band; Clarke (2.4) drops the common part. */
+ * its current returns through (the lower diode for a current into the machine), with the dead-time
+ * compensation's smooth sign; Clarke (2.4) drops the common part. */
 static mc_ab_t diode_voltage(mc_abc_t i, float vdc, float i_band)
 {
-    const float h = 0.5f * vdc, k = i_band > 0.0f ? 1.0f / i_band : 1.0e6f;
-    const float a = fmaxf(-1.0f, fminf(1.0f, k * i.a)), b = fmaxf(-1.0f, fminf(1.0f, k * i.b)),
-                c = fmaxf(-1.0f, fminf(1.0f, k * i.c));
-    return mc_clarke((mc_abc_t){-h * a, -h * b, -h * c});
+    const float h = -0.5f * vdc;
+    return mc_clarke((mc_abc_t){h * mc_dtc_sgn_smooth(i.a, i_band), h * mc_dtc_sgn_smooth(i.b, i_band),
+                                h * mc_dtc_sgn_smooth(i.c, i_band)});
 }
 
 /* The selected angle source (mc/angle_source.h), with its diagnostics into the telemetry. */
@@ -294,16 +293,16 @@ void mc_drive_isr(mc_drive_t *d)
      *    first takes the flux into the voltage limit with the least current (mc/fw_entry.h); the
      *    loop starts from the current that then flows. */
     hal_stage_mark(HAL_STAGE_CURRENT);
+    /* the voltage acting until the next sample: the duties latched last period, or the diodes'
+     * with the outputs still off (a RUN entry at gate_on_next) */
+    const mc_ab_t u_acting = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
     mc_dq_t u_dq;
     if (d->fwe_active) {
         /* the raw currents: the injection's notch would delay a current that moves by a
          * tenth of the limit per period */
         mc_dq_t psi;
         mc_flux_eval(&c->src.model, i_dq, &psi, 0, 0);
-        /* the voltage acting until the next sample: the duties latched last period, or the
-         * diodes' with the outputs still off (a RUN entry at gate_on_next) */
-        const mc_ab_t u_now_ab = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
-        const mc_dq_t u_now = mc_park(u_now_ab, mc_sincos(mc_wrap_pi(ang.theta + 0.5f * ang.omega * c->ts)));
+        const mc_dq_t u_now = mc_park(u_acting, mc_sincos(mc_wrap_pi(ang.theta + 0.5f * ang.omega * c->ts)));
         /* planned on the circle, asked of the hexagon (mc_svpwm scales it, same direction) */
         d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, vdc * MC_1_SQRT3,
                                     vdc * (2.0f / 3.0f), d->fwe_n > 0u, &u_dq);
@@ -377,9 +376,7 @@ void mc_drive_isr(mc_drive_t *d)
     hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
 
     /* 10. Keep what the estimators need next period, and the telemetry. */
-    /* with the outputs off until the next period (a RUN entry at gate_on_next) the diodes set
-     * the voltage of (k, k+1): each phase at the rail its current flows back to */
-    d->u_hist[1] = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
+    d->u_hist[1] = u_acting;   /* (k, k+1): the diodes' voltage with the outputs still off */
     d->u_hist[0] = duty.u_real;
     d->i_ab_prev = i_ab;
     d->tm.theta = ang.theta;

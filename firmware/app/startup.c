@@ -134,6 +134,16 @@ static void refs_from_current(mc_drive_t *d, mc_ab_t i_ab, float theta)
     d->i_ref_prev = mc_park(i_ab, mc_sincos(mc_wrap_pi(theta)));
 }
 
+/* A RUN entry that may find the rotor turning (the catch, an angle-sensor drive): the field-
+ * weakening entry law first (mc/fw_entry.h; it ends at once where the flux can be held), and,
+ * with the outputs off at this sample, RUN's first duties come on with them next period. */
+static void run_at_speed(mc_drive_t *d, bool outputs_off_now)
+{
+    d->gate_on_next = outputs_off_now;
+    d->fwe_active = true;
+    d->fwe_n = 0u;
+}
+
 /* Offsets within the plausible range of mid-scale, or false (then none changes). */
 static bool offsets_plausible(const mc_drive_t *d, const float off[3])
 {
@@ -227,9 +237,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         /* RUN's first duties, latched by the pipeline in this period, act with the outputs from
          * the next one: switched on now, the last latched duties (zero voltage) would short the
          * back-EMF for a period first (-2 A in q at 1500 rpm on the thesis motor) */
-        d->gate_on_next = true;
-        d->fwe_active = true;
-        d->fwe_n = 0u;
+        run_at_speed(d, true);
         return;
     }
     hal_pwm_enable(d->hal.pwm, true);
@@ -319,9 +327,7 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
         refs_from_current(d, i_ab, res.theta);
         d->pol.unsure = false;
         /* a pulse ended with the outputs off (mc/catch.h): they come on with RUN's first duties */
-        d->gate_on_next = !hal_pwm_enabled(d->hal.pwm);
-        d->fwe_active = true;   /* ends at once where the flux can be held */
-        d->fwe_n = 0u;
+        run_at_speed(d, !hal_pwm_enabled(d->hal.pwm));
         mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
         return;
     }

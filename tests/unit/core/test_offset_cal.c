@@ -23,7 +23,8 @@ static double noise(unsigned *state)
     return ((double)((*state >> 8) & 0xffff) / 65535.0 - 0.5) * 2.0;   /* uniform, +-1 */
 }
 
-static void fill(mc_ocal_t *s, double omega, double ts, unsigned n, double amp, double noise_a)
+static void fill_from(mc_ocal_t *s, double omega, double ts, unsigned n, double amp, double noise_a,
+                      unsigned n_transient)
 {
     unsigned st = 7u;
     mc_ocal_reset(s);
@@ -31,11 +32,18 @@ static void fill(mc_ocal_t *s, double omega, double ts, unsigned n, double amp, 
         uint16_t raw[3];
         for (int k = 0; k < 3; ++k) {
             const double th = omega * ts * j + 0.3 - 2.0 * PI_D / 3.0 * k;
-            const double i = amp * diode_current(th) + noise_a * noise(&st);
+            /* the first n_transient samples carry 5 A more on every phase (a transient) */
+            const double tr = j < n_transient ? 5.0 : 0.0;
+            const double i = amp * diode_current(th) + noise_a * noise(&st) + tr;
             raw[k] = (uint16_t)lround(OFF[k] + i / APC);
         }
         mc_ocal_add(s, raw);
     }
+}
+
+static void fill(mc_ocal_t *s, double omega, double ts, unsigned n, double amp, double noise_a)
+{
+    fill_from(s, omega, ts, n, amp, noise_a, 0u);
 }
 
 static double worst_err_a(const float off[3])
@@ -89,7 +97,7 @@ static void test_ring(void **st)
     (void)st;
     mc_ocal_t s;
     float per[3];
-    fill(&s, 785.4, 1e-4, MC_OCAL_N + 50u, 1.0, 0.0);
+    fill_from(&s, 785.4, 1e-4, MC_OCAL_N + 50u, 1.0, 0.0, 50u);
     assert_true(mc_ocal_periodic(&s, 785.4f, 1e-4f, per));
     assert_true(worst_err_a(per) < 0.05);
 }
