@@ -288,10 +288,13 @@ void mc_drive_isr(mc_drive_t *d)
     const bool step3 = d->seq.state == MC_STATE_INIT_POS;
     mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : references(d, ang.omega, vdc);
 
-    /* 7. Current control, limited to the inscribed circle of the voltage hexagon; the HF
-     *    injection (6.6) rides on the estimated d axis. A RUN entry above the generation speed
-     *    first takes the flux into the voltage limit with the least current (mc/fw_entry.h); the
-     *    loop starts from the current that then flows. */
+    /* 7. Current control, limited to a circle of u_loop vdc/sqrt3: the inscribed circle of the
+     *    voltage hexagon (linear), or beyond it up to the corners, which mc_svpwm scales into the
+     *    hexagon keeping the direction (overmodulation, mc/svpwm.h (2.14a)); the HF injection
+     *    (6.6) rides on the estimated d axis. A RUN entry above the generation speed first takes
+     *    the flux into the voltage limit with the least current (mc/fw_entry.h); the loop starts
+     *    from the current that then flows. */
+    const float u_loop = vdc * MC_1_SQRT3 * c->u_loop;
     hal_stage_mark(HAL_STAGE_CURRENT);
     /* the voltage acting until the next sample: the duties latched last period, or the diodes'
      * with the outputs still off (a RUN entry at gate_on_next) */
@@ -303,12 +306,21 @@ void mc_drive_isr(mc_drive_t *d)
         mc_dq_t psi;
         mc_flux_eval(&c->src.model, i_dq, &psi, 0, 0);
         const mc_dq_t u_now = mc_park(u_acting, mc_sincos(mc_wrap_pi(ang.theta + 0.5f * ang.omega * c->ts)));
-        /* planned on the circle, asked of the hexagon (mc_svpwm scales it, same direction) */
-        d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, vdc * MC_1_SQRT3,
-                                    vdc * (2.0f / 3.0f), d->fwe_n > 0u, &u_dq);
+        /* lands on the flux the references will hold (control.u_margin), but not beyond the
+         * inscribed circle: the tangential phase (F.4) takes the lag back only where the hexagon
+         * reaches beyond the held flux's voltage, and its sides reach no more than the circle (at
+         * u_margin 1.04 the lag never went and the law ran on, braking at -15 N m). Moved with
+         * what the hexagon gives in each direction (sc_u: where the vector will act) when the
+         * loop may overmodulate. */
+        const float u_land = vdc * MC_1_SQRT3 * (c->u_plan < 1.0f ? c->u_plan : 1.0f);
+        d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, u_land,
+                                    c->u_loop > 1.0f ? vdc : 0.0f, sc_u, d->fwe_n > 0u, &u_dq);
         /* the law has no current feedback: with its model off (psi_pm 10 % high) it takes the
-         * flux too far; at 1.1 x i_max the loop takes over, whatever the law would do */
-        if (d->fwe_active && !(i_dq.d * i_dq.d + i_dq.q * i_dq.q < c->fwe_i_stop * c->fwe_i_stop)) {
+         * flux too far; at 1.1 x i_max the loop takes over, whatever the law would do. Nor does
+         * it run longer than one electrical turn (every direction of the hexagon has passed):
+         * what it has not done by then it will not do, and meanwhile it ignores the command */
+        if (d->fwe_active && (!(i_dq.d * i_dq.d + i_dq.q * i_dq.q < c->fwe_i_stop * c->fwe_i_stop) ||
+                              (float)d->fwe_n * c->ts * fabsf(ang.omega) > MC_2PI)) {
             d->fwe_active = false;
         }
         if (d->fwe_active) {
@@ -330,9 +342,9 @@ void mc_drive_isr(mc_drive_t *d)
         /* the decoupling from the flux map's psi(i): the machine's own back-EMF (mc_cc_step_psi) */
         mc_dq_t psi;
         mc_flux_eval(&c->src.model, i_fb, &psi, 0, 0);
-        u_dq = mc_cc_step_psi(&d->cc, i_ref, i_fb, psi, ang.omega, vdc * MC_1_SQRT3);
+        u_dq = mc_cc_step_psi(&d->cc, i_ref, i_fb, psi, ang.omega, u_loop);
     } else {
-        u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, vdc * MC_1_SQRT3);
+        u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, u_loop);
     }
     d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
     u_dq.d += d->tm.u_inj;

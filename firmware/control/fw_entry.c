@@ -3,8 +3,27 @@
 
 #include <math.h>
 
+#include "mc/svpwm.h"
+#include "mc/transforms.h"
+
+/* what the modulator gives in the rotor-frame direction (cos, sin) = (ed, eq): the hexagon's
+ * reach there (sc: the rotation into the stator frame), or the circle u_max without one */
+static float reach(float ed, float eq, float u_max, float vdc, mc_sincos_t sc)
+{
+    if (!(vdc > 0.0f)) {
+        return u_max;
+    }
+    return mc_svpwm_reach(mc_park_inv((mc_dq_t){ed, eq}, sc), vdc);
+}
+
+/* the rotor-frame unit vector at sign(omega) (pi / 2 + beta) from the flux's (ed, eq) (F.3) */
+static mc_dq_t ahead(float ed, float eq, float s, float cb, float sb)
+{
+    return (mc_dq_t){-sb * ed - s * cb * eq, s * cb * ed - sb * eq};
+}
+
 bool mc_fwe_step(mc_dq_t psi, mc_dq_t i, mc_dq_t u_now, float rs, float omega, float ts, float u_max,
-                 float u_req, bool started, mc_dq_t *u_out)
+                 float vdc, mc_sincos_t sc, bool started, mc_dq_t *u_out)
 {
     *u_out = u_now;
     /* the flux in the middle of the period the result acts in, 1.5 periods on, under the
@@ -25,27 +44,33 @@ bool mc_fwe_step(mc_dq_t psi, mc_dq_t i, mc_dq_t u_now, float rs, float omega, f
     /* the lag behind the d axis, as a test on the flux's components: phi > MC_FWE_LAG_END */
     const bool lags = -s * p.q > MC_FWE_TAN_LAG_END * p.d || !(p.d > 0.0f);
     /* never started where the flux can be held; done once it can and its lag is gone (the lag is
-     * a braking q current the loop would otherwise have to remove at its voltage limit) */
-    if (!(need > u_max) && (!started || !lags)) {
+     * a braking q current the loop would otherwise have to remove at its voltage limit), or at
+     * once without overmodulation (no voltage beyond the held flux's to take the lag back) */
+    if (!(need > u_max) && (!started || !lags || !(vdc > 0.0f))) {
         return false;
     }
-    /* (F.2) with Rs: the radius that counts is need / |omega|; held: tangential (F.4). In
-     * discrete time the last step lands on rho: the radial part moves the flux at most the
-     * (need - u_max) / |omega| left in one period (else it overshoots rho by ~1 % a period, the
-     * continuous law's radial speed vanishing only at rho itself) */
-    float cb = need > u_max ? u_max / need : 1.0f;
-    float sb = sqrtf(fmaxf(1.0f - cb * cb, 0.0f));
-    const float sb_land = (need - u_max) / (fabsf(omega) * ts * u_max);
-    if (sb > sb_land) {
-        sb = sb_land > 0.0f ? sb_land : 0.0f;
-        cb = sqrtf(1.0f - sb * sb);
-    }
-    /* (F.3): the flux's direction turned by sign(omega) (pi / 2 + beta), without a libm call (the
-     * same bits on every target) */
+    /* (F.2) with Rs: the radius that counts is need / |omega|, and the voltage that moves the
+     * flux is what the modulator gives in the vector's direction, U (the hexagon's reach,
+     * overmodulation): cos(beta) = U / need. U depends on the direction: two passes, the first
+     * with u_max. Held: tangential (F.4). In discrete time the last step lands on rho: the
+     * radial part moves the flux at most the (need - u_max) / |omega| left in one period (else
+     * it overshoots rho by ~1 % a period, the continuous law's radial speed vanishing only at
+     * rho itself). The (F.3) direction is formed without a libm call (the same bits on every
+     * target). */
     const float ed = p.d / r, eq = p.q / r;
-    /* (F.2) plans with u_max: more there would take the flux past rho (by 3 % with the
-     * hexagon's); held, the more the faster the lag goes */
-    const float m = need > u_max || !(u_req > u_max) ? u_max : u_req;
-    *u_out = (mc_dq_t){m * (-sb * ed - s * cb * eq), m * (s * cb * ed - sb * eq)};
+    float m = u_max;
+    mc_dq_t e = {0.0f, 0.0f};
+    for (int pass = 0; pass < 2; ++pass) {
+        float cb = need > m ? m / need : 1.0f;
+        float sb = sqrtf(fmaxf(1.0f - cb * cb, 0.0f));
+        const float sb_land = (need - u_max) / (fabsf(omega) * ts * m);
+        if (sb > sb_land) {
+            sb = sb_land > 0.0f ? sb_land : 0.0f;
+            cb = sqrtf(1.0f - sb * sb);
+        }
+        e = ahead(ed, eq, s, cb, sb);
+        m = reach(e.d, e.q, u_max, vdc, sc);
+    }
+    *u_out = (mc_dq_t){m * e.d, m * e.q};
     return true;
 }

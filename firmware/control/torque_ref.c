@@ -12,6 +12,8 @@
 
 #include <math.h>
 
+#include "mc/svpwm.h"
+
 #define TREF_MAX_IT 32
 
 typedef enum {
@@ -143,8 +145,8 @@ void mc_tref_init(mc_tref_t *s, const mc_tref_cfg_t *cfg)
     s->cfg = *cfg;
     if (!(s->cfg.u_margin > 0.0f)) {
         s->cfg.u_margin = 0.0f;
-    } else if (s->cfg.u_margin > 1.0f) {
-        s->cfg.u_margin = 1.0f;
+    } else if (s->cfg.u_margin > MC_SVPWM_FUND_MAX) {
+        s->cfg.u_margin = MC_SVPWM_FUND_MAX;   /* (2.14a): no modulator holds more */
     }
     if (!(s->cfg.i_max > 0.0f)) {
         s->cfg.i_max = 0.0f;

@@ -76,6 +76,15 @@ void mc_svpwm(mc_ab_t u, float vdc, mc_duty_t *out)
     finish(out, vdc);
 }
 
+float mc_svpwm_reach(mc_ab_t dir, float vdc)
+{
+    const mc_abc_t v = mc_clarke_inv(dir);
+    const float span = maxf(v.a, maxf(v.b, v.c)) - minf(v.a, minf(v.b, v.c));
+    /* a unit vector's span is 1.5 (a corner) .. sqrt(3) (a side's middle): anything else (not a
+     * unit vector, NaN) gets the inscribed circle */
+    return (span > 1.45f && span < 1.78f) ? vdc / span : vdc * MC_1_SQRT3;
+}
+
 void mc_svpwm_sector(mc_ab_t u, float vdc, mc_duty_t *out)
 {
     /* Which legs are high in each active vector U1..U6 (Table 2.1 / Figure 2.6). */

@@ -66,6 +66,28 @@ def test_search_at_1500_rpm_on_the_thesis_motor():
     assert worse["peak_a"] > res["circle"]["peak_a"]
 
 
+def test_rotor_angle_matters_with_the_hexagon_only():
+    # the voltage that shrinks the flux keeps about one stator direction: with the hexagon the
+    # rotor angle at the start decides whether that is a corner or a side; the circle has none
+    m = load_preset(str(REPO_PRESETS / "sun2016-ipm-5kw.toml"))
+    w = 1500 / 60 * 2 * math.pi * 5
+    kw = dict(margin=1.0, horizon_s=3e-3, seed=0, iterations=80, i0=(-0.69, -3.0))
+    hexa = {d: search_peak(m, w, 300.0, 1e-4, limit="hexagon", theta0=math.radians(d), **kw)["peak_a"]
+            for d in (-135.0, -165.0)}
+    assert hexa[-165.0] - hexa[-135.0] > 0.8           # 13.6 A against 12.2 A
+    circ = {d: search_peak(m, w, 300.0, 1e-4, limit="circle", theta0=math.radians(d), **kw)["peak_a"]
+            for d in (-135.0, -165.0)}
+    assert abs(circ[-165.0] - circ[-135.0]) < 0.3
+
+
+def test_overmodulated_hold_lowers_the_floor():
+    # an end state held with overmodulation (margin above 1, up to the hexagon's mean radius)
+    m = load_preset(str(REPO_PRESETS / "sun2016-ipm-5kw.toml"))
+    w = 1500 / 60 * 2 * math.pi * 5
+    u = 300.0 / math.sqrt(3)
+    assert floor_current(m, w, 1.049 * u) < floor_current(m, w, u) - 0.8   # 10.35 A against 11.33 A
+
+
 def test_cli_json_and_below_base_speed(capsys):
     rc = cli.main(["handover", str(REPO_PRESETS / "sun2016-ipm-5kw.toml"), "--rpm", "300",
                    "--json"])
@@ -82,6 +104,8 @@ def test_cli_json_and_below_base_speed(capsys):
     (["--limit", "square"], "--limit"),
     (["--vdc", "-5"], "--vdc"),
     (["--margin", "2"], "--margin"),
+    (["--margin", "1.06"], "--margin"),
+    (["--theta0-deg", "nan"], "--theta0-deg"),
     (["--i0", "1"], "--i0"),
     (["--seeds", "0"], "--seeds"),
 ])

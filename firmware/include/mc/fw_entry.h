@@ -33,6 +33,18 @@
  * more voltage than |omega| r, dphi/dt = |omega| - u / r < 0 at a constant radius, and the
  * current falls as the lag does. That needs more than u_max: the law asks the modulator for the
  * hexagon's (direction-preserving overmodulation); at exactly u_max the lag would stay.
+ * With overmodulation the voltage that moves the flux while it shrinks is also the hexagon's
+ * reach U in the vector's direction (vdc/sqrt3 at a side's middle to 2 vdc/3 at a corner), not
+ * the circle: (F.2) with U, cos(beta) = U / (|omega| r), the more tangential the more U, so the
+ * lag grows less. rho stays u_max / |omega|: the flux the references hold (control.u_margin),
+ * the drive caps it at the inscribed circle's (the hexagon's sides reach no further, so beyond
+ * it the lag of (F.4) may never go) and ends the law after one electrical turn (drive.c).
+ * Measured on the thesis motor: the vector's stator-frame direction stays nearly fixed while the
+ * flux shrinks (its rotor-frame angle falls about as fast as the rotor turns), and the catch's
+ * entry instant, a diode pulse's low, puts it near a side of the hexagon, so the gain is small
+ * (+-1400 rpm 12.5-12.7 -> 12.4 A, +-1500 rpm 0.02 A). A corner instead (the tangent from
+ * (need, 0) to the hexagon in the (tangential, radial) plane) alternated between the two corners
+ * of that side, the same mean: no gain, not kept.
  *
  * USE. Once per period from a RUN entry at speed while the flux is not holdable: the flux at the
  * sample from the model psi(i), predicted 1.5 periods on (the middle of the period the result
@@ -52,12 +64,15 @@
 #define MC_FWE_TAN_LAG_END 0.0500417f   /* tan(MC_FWE_LAG_END) */
 
 /* psi: the flux at the sample [Wb]; i: the current [A]; u_now: the voltage acting until the next
- * sample [V]; rs [ohm]; omega [rad/s el]; ts [s]; u_max: the voltage (F.2) plans with [V]; u_req:
- * the magnitude asked of the modulator (above u_max: the hexagon's, scaled by mc_svpwm, same
- * direction) [V]; started: it ran in an earlier period. *u_out: the voltage for the period after
- * [V]. Returns false (and *u_out = u_now) where the flux, 1.5 periods on, can be held: at once if
- * not started, else once it also lags by at most MC_FWE_LAG_END; and for non-finite inputs. */
+ * sample [V]; rs [ohm]; omega [rad/s el]; ts [s]; u_max: the voltage the flux is to be held with,
+ * rho = u_max / |omega| [V]; vdc > 0: the modulator may overmodulate, and what it gives in a
+ * direction is the hexagon's reach there (mc_svpwm_reach; sc: the rotation from this rotor frame
+ * into the stator frame in the middle of the period the result acts in) [V]; vdc <= 0: a circle
+ * of u_max. started: it ran in an earlier period. *u_out: the voltage for the period after [V].
+ * Returns false (and *u_out = u_now) where the flux, 1.5 periods on, can be held: at once if not
+ * started or without overmodulation, else once it also lags by at most MC_FWE_LAG_END; and for
+ * non-finite inputs. */
 bool mc_fwe_step(mc_dq_t psi, mc_dq_t i, mc_dq_t u_now, float rs, float omega, float ts, float u_max,
-                 float u_req, bool started, mc_dq_t *u_out);
+                 float vdc, mc_sincos_t sc, bool started, mc_dq_t *u_out);
 
 #endif

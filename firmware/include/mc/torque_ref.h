@@ -9,7 +9,8 @@ typedef struct {
     int   pole_pairs;
     mc_lin_params_t mach;       /* Ld, Lq, psi_pm used for MTPA and the voltage ellipse     */
     float i_max;                /* current circle radius (peak) [A]                         */
-    float u_margin;             /* fraction of vdc/sqrt(3) the references may plan for (0..1) */
+    float u_margin;             /* fraction of vdc/sqrt(3) the references may plan for (0..1.049:
+                                   above 1 with overmodulation, mc/svpwm.h (2.14a)) */
     bool  use_table;            /* MTPA from `table` instead of (2.24)                      */
     float ts;                   /* control period [s] for mc_tref_fw_feedback (0: feedback off) */
     mc_mtpa_table_t table;

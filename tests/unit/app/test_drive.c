@@ -581,6 +581,32 @@ static void test_param_write_range(void **st)
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 200.0f, &err));
 }
 
+/* The references may not plan for more voltage than the loop may ask (control.u_margin against
+ * control.u_loop, overmodulation): the pair is checked whichever is written, with both names. */
+static void test_param_write_u_margin_cross(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_running(&r);
+    mc_param_err_t err;
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 1.04f, &err));
+    run_plant(&r, 1);
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_u_loop, 1.02f, &err));
+    assert_int_equal(err.kind, MC_PERR_CROSS);
+    assert_int_equal(err.param, MC_PARAM_u_margin);
+    assert_int_equal(err.param2, MC_PARAM_u_loop);
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 0.95f, &err));
+    run_plant(&r, 1);
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_u_loop, 1.0f, &err));
+    run_plant(&r, 1);
+    assert_true(r.d.cfg->blk.u_loop == 1.0f && r.d.cfg->blk.u_plan == 0.95f);
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 1.02f, &err));
+    assert_int_equal(err.kind, MC_PERR_CROSS);
+    assert_float_equal(err.max, 1.0f, 0.0f);
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 1.06f, &err));   /* beyond (2.14a) */
+    assert_int_equal(err.kind, MC_PERR_RANGE);
+}
+
 /* (e) An INIT parameter: refused while running and while idle. */
 static void test_param_write_init_refused(void **st)
 {
@@ -805,6 +831,7 @@ int main(void)
         cmocka_unit_test(test_param_write_standstill_while_running),
         cmocka_unit_test(test_param_write_busy),
         cmocka_unit_test(test_param_write_range),
+        cmocka_unit_test(test_param_write_u_margin_cross),
         cmocka_unit_test(test_param_write_init_refused),
         cmocka_unit_test(test_param_write_standstill_idle),
         cmocka_unit_test(test_param_write_rule_follows),

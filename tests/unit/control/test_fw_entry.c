@@ -14,29 +14,51 @@
 #define UMAX (300.0 / 1.7320508075688772)
 #define TS 1e-4
 
+static const mc_sincos_t SC0 = {0.0f, 1.0f};   /* rotor frame = stator frame */
+
+/* the hexagon's distance from the centre in the direction of (d, q) at theta = 0, 300 V */
+static double hex_reach(double d, double q)
+{
+    const double n = hypot(d, q), a = d / n, b = -0.5 * a + 0.8660254037844386 * q / n,
+                 c = -0.5 * a - 0.8660254037844386 * q / n;
+    return 300.0 / (fmax(a, fmax(b, c)) - fmin(a, fmin(b, c)));
+}
+
 static mc_dq_t flux(mc_dq_t i)
 {
     return (mc_dq_t){(float)(LD * i.d + PSI), (float)(LQ * i.q)};
 }
 
-/* The first vector from the magnet's flux: |u| as asked, at 90 deg + beta ahead of the flux with
- * cos(beta) = u_max / |omega psi| (F.2), (F.3); mirrored for the other direction. */
+/* The first vector from the magnet's flux, without overmodulation: |u| = u_max at 90 deg + beta
+ * ahead of the flux with cos(beta) = u_max / |omega psi| (F.2), (F.3); mirrored for the other
+ * direction. With it: |u| the hexagon's reach in the vector's direction, and (F.2) with that. */
 static void test_first_vector(void **st)
 {
     (void)st;
     const mc_dq_t i0 = {0.0f, 0.0f}, u0 = {0.0f, 0.0f};
     mc_dq_t u;
-    assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 200.0f, true, &u));
+    assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 0.0f, SC0, true, &u));
     const double beta = acos(UMAX / (W * PSI));
     assert_near(atan2(u.q, u.d), PI_D / 2.0 + beta, 1e-4);   /* 140 deg */
-    assert_near(hypot(u.d, u.q), UMAX, 1e-3);   /* (F.2) plans with u_max: no more before rho */
-    assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)-W, 0.0f, (float)UMAX, 0.0f, false, &u));
+    assert_near(hypot(u.d, u.q), UMAX, 1e-3);
+    assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)-W, 0.0f, (float)UMAX, 0.0f, SC0, false, &u));
     assert_near(atan2(u.q, u.d), -(PI_D / 2.0 + beta), 1e-4);
-    assert_near(hypot(u.d, u.q), UMAX, 1e-3);   /* never below u_max */
+    assert_near(hypot(u.d, u.q), UMAX, 1e-3);
+    /* overmodulation, at two rotor angles: the reach there, and (F.2) with it */
+    for (int k = 0; k < 2; ++k) {
+        const double th = k * 0.5;
+        const mc_sincos_t sc = {(float)sin(th), (float)cos(th)};
+        assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 300.0f, sc, true, &u));
+        const double a = atan2(u.q, u.d), m = hypot(u.d, u.q);
+        assert_near(m, hex_reach(cos(a + th), sin(a + th)), 1e-2);
+        assert_true(m > UMAX - 1e-3);
+        /* two passes: the direction from the reach one pass before, within a degree */
+        assert_near(a, PI_D / 2.0 + acos(m / (W * PSI)), 0.02);
+    }
 }
 
-/* Held but lagging: tangential (F.4) with the voltage asked (the hexagon's); close to rho the
- * radial part moves the flux no further than rho within the period (landing). */
+/* Held but lagging: tangential (F.4) with what the hexagon gives in that direction; close to rho
+ * the radial part moves the flux no further than rho within the period (landing). */
 static void test_held_and_landing(void **st)
 {
     (void)st;
@@ -44,15 +66,17 @@ static void test_held_and_landing(void **st)
     const float lag = 0.2f;
     const mc_dq_t z = {0.0f, 0.0f};
     mc_dq_t u;
-    /* held (0.98 rho), lagging 0.2 rad: tangential, |u| = u_req */
+    /* held (0.98 rho), lagging 0.2 rad: tangential, |u| the hexagon's reach there */
     const mc_dq_t ph = {0.98f * rho * cosf(lag), -0.98f * rho * sinf(lag)};
-    assert_true(mc_fwe_step(ph, z, z, 0.0f, (float)W, 0.0f, (float)UMAX, 200.0f, true, &u));
-    assert_near(hypot(u.d, u.q), 200.0, 1e-3);
+    assert_true(mc_fwe_step(ph, z, z, 0.0f, (float)W, 0.0f, (float)UMAX, 300.0f, SC0, true, &u));
+    assert_near(hypot(u.d, u.q), hex_reach(u.d, u.q), 1e-2);
+    /* without overmodulation nothing takes the lag back: held is done */
+    assert_false(mc_fwe_step(ph, z, z, 0.0f, (float)W, 0.0f, (float)UMAX, 0.0f, SC0, true, &u));
     assert_near(u.d * ph.d + u.q * ph.q, 0.0, 1e-3);   /* no radial part */
     /* 0.3 % beyond rho: the radial part covers exactly what is left in one period */
     const mc_dq_t pn = {1.003f * rho, 0.0f};
     const mc_dq_t hold = {0.0f, (float)W * pn.d};   /* j omega psi: the prediction stays put */
-    assert_true(mc_fwe_step(pn, z, hold, 0.0f, (float)W, (float)TS, (float)UMAX, 200.0f, true, &u));
+    assert_true(mc_fwe_step(pn, z, hold, 0.0f, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
     const double radial = -(u.d * pn.d + u.q * pn.q) / hypot(pn.d, pn.q);
     assert_near(radial * TS, 0.003 * rho, 2e-6);
     assert_near(hypot(u.d, u.q), UMAX, 1e-3);
@@ -67,22 +91,22 @@ static void test_done_and_bad_input(void **st)
     const mc_dq_t i = {-12.0f, 0.0f};
     const mc_dq_t u0 = {(float)(RS * i.d), (float)(W * (LD * i.d + PSI))};
     mc_dq_t u;
-    assert_false(mc_fwe_step(flux(i), i, u0, (float)RS, (float)W, (float)TS, (float)UMAX, 200.0f, true, &u));
+    assert_false(mc_fwe_step(flux(i), i, u0, (float)RS, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
     assert_near(u.d, u0.d, 0.0);
     assert_near(u.q, u0.q, 0.0);
     const mc_dq_t z = {0.0f, 0.0f};
     /* below the generation speed under V(000) the flux lags (4 deg in 1.5 periods): not a start */
-    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, (float)(0.6 * W), (float)TS, (float)UMAX, 200.0f, false, &u));
-    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, NAN, (float)TS, (float)UMAX, 200.0f, true, &u));
+    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, (float)(0.6 * W), (float)TS, (float)UMAX, 0.0f, SC0, false, &u));
+    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, NAN, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
     const mc_dq_t bad = {NAN, 0.0f};
-    assert_false(mc_fwe_step(bad, z, z, (float)RS, (float)W, (float)TS, (float)UMAX, 200.0f, true, &u));
-    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, (float)W, (float)TS, 0.0f, 200.0f, true, &u));
+    assert_false(mc_fwe_step(bad, z, z, (float)RS, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
+    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, (float)W, (float)TS, 0.0f, 0.0f, SC0, true, &u));
 }
 
 /* Closed loop on the linear machine (Rs = 0, the law's voltage acting at once, fine steps): the
  * flux shrinks to rho without ever growing, with the least lag there, sqrt(k^2 - 1) - acos(1/k)
- * (k = psi_pm / rho: 18.3 deg). With more voltage than planned (the hexagon's), the law then takes
- * the lag back at the held radius and ends. */
+ * (k = psi_pm / rho: 18.3 deg), on the circle u_max. Then with overmodulation (the hexagon's
+ * reach, the rotor turning under it) the law takes the lag back at the held radius and ends. */
 static void test_min_lag_path(void **st)
 {
     (void)st;
@@ -94,10 +118,12 @@ static void test_min_lag_path(void **st)
         bool on = true;
         for (int k = 0; on && k < 400000; ++k) {
             const mc_dq_t i = {(float)((pd - PSI) / LD), (float)(pq / LQ)};
-            /* until rho the planned voltage, then the hexagon's 15 % more */
-            const float u_req = isnan(lag_at_rho) ? (float)UMAX : (float)(1.15 * UMAX);
+            /* until rho the circle, then the hexagon (the rotor at w k h) */
+            const float vdc = isnan(lag_at_rho) ? 0.0f : 300.0f;
+            const double th = w * k * h;
+            const mc_sincos_t sc = {(float)sin(th), (float)cos(th)};
             mc_dq_t u;
-            on = mc_fwe_step((mc_dq_t){(float)pd, (float)pq}, i, z, 0.0f, (float)w, 0.0f, (float)UMAX, u_req, k > 0, &u);
+            on = mc_fwe_step((mc_dq_t){(float)pd, (float)pq}, i, z, 0.0f, (float)w, 0.0f, (float)UMAX, vdc, sc, k > 0, &u);
             if (!on) {
                 break;
             }

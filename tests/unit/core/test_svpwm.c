@@ -121,6 +121,37 @@ static void test_overmodulation_keeps_angle(void **st)
     printf("over-modulation: max angle error of u_real %.3g rad\n", worst_ang);
 }
 
+/* mc_svpwm_reach: the hexagon's distance in a direction, what mc_svpwm gives there when asked for
+ * more; and (2.14a): a circle of 2/sqrt3 vdc/sqrt3 turned through mc_svpwm keeps a fundamental of
+ * (3/pi) ln 3 vdc/sqrt3 (MC_SVPWM_FUND_MAX), a circle of 1 all of it. */
+static void test_reach_and_fundamental(void **st)
+{
+    (void)st;
+    assert_near(mc_svpwm_reach((mc_ab_t){1.0f, 0.0f}, VDC), 2.0 * VDC / 3.0, 1e-3);   /* V(100) */
+    assert_near(mc_svpwm_reach((mc_ab_t){0.8660254f, 0.5f}, VDC), VDC / sqrt(3.0), 1e-3);   /* a side */
+    assert_near(mc_svpwm_reach((mc_ab_t){0.0f, 0.0f}, VDC), VDC / sqrt(3.0), 1e-3);   /* not a unit vector */
+    assert_near(mc_svpwm_reach((mc_ab_t){NAN, 0.0f}, VDC), VDC / sqrt(3.0), 1e-3);
+    const double mags[2] = {1.0, 2.0 / sqrt(3.0)}, fund[2] = {1.0, 3.0 / PI_D * log(3.0)};
+    for (int m = 0; m < 2; ++m) {
+        double f = 0.0;
+        const int n = 3600;
+        for (int k = 0; k < n; ++k) {
+            const double th = 2.0 * PI_D * (k + 0.5) / n;
+            mc_ab_t u = {(float)(mags[m] * VDC / sqrt(3.0) * cos(th)), (float)(mags[m] * VDC / sqrt(3.0) * sin(th))};
+            mc_duty_t o;
+            mc_svpwm(u, VDC, &o);
+            f += (o.u_real.alpha * cos(th) + o.u_real.beta * sin(th)) / n;   /* the fundamental */
+            if (m == 1) {
+                const float r = 1.0f / hypotf(u.alpha, u.beta);
+                assert_near(hypot(o.u_real.alpha, o.u_real.beta),
+                            mc_svpwm_reach((mc_ab_t){u.alpha * r, u.beta * r}, VDC), 2e-3);
+            }
+        }
+        assert_near(f / (VDC / sqrt(3.0)), fund[m], 1e-4);
+    }
+    assert_near(MC_SVPWM_FUND_MAX, 3.0 / PI_D * log(3.0), 1e-4);
+}
+
 static void test_bad_vdc(void **st)
 {
     (void)st;
@@ -137,6 +168,7 @@ int main(void)
         cmocka_unit_test(test_minmax_equals_sector),
         cmocka_unit_test(test_inscribed_circle_linear),
         cmocka_unit_test(test_overmodulation_keeps_angle),
+        cmocka_unit_test(test_reach_and_fundamental),
         cmocka_unit_test(test_bad_vdc),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
