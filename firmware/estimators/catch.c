@@ -16,7 +16,7 @@ static bool finite_pos(float x)
 
 bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg)
 {
-    *s = (mc_catch_t){.cfg = *cfg, .phase = WAIT, .status = MC_IP_RUNNING};
+    *s = (mc_catch_t){.cfg = *cfg, .phase = WAIT, .status = MC_IP_RUNNING, .corner_w = -1, .corner_a = -1};
     const bool ok = finite_pos(cfg->ts) && finite_pos(cfg->ld) && finite_pos(cfg->lq) && finite_pos(cfg->psi_pm) &&
                     finite_pos(cfg->i_pulse) && finite_pos(cfg->i_detect) && cfg->i_detect <= cfg->i_pulse &&
                     finite_pos(cfg->i_rest) && finite_pos(cfg->rot_target) && cfg->rot_target < 2.0f &&
@@ -143,6 +143,58 @@ static bool single_pulse_sign(mc_catch_t *s)
     return true;
 }
 
+/* the hexagon's corners V(100), V(110), ..., V(101): duties and the stator-frame unit vectors */
+static const mc_abc_t corner_duty[6] = {{1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f},
+                                         {0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 1.0f}};
+static const mc_ab_t corner_dir[6] = {{1.0f, 0.0f},  {0.5f, 0.8660254f},   {-0.5f, 0.8660254f},
+                                      {-1.0f, 0.0f}, {-0.5f, -0.8660254f}, {0.5f, -0.8660254f}};
+
+/* (C.6): the corner nearest to phi_i - sigma 130 deg (the entry's first vector) */
+static int corner_for(mc_ab_t i_dir, int sigma)
+{
+    const float a = atan2f(i_dir.beta, i_dir.alpha) - (float)sigma * 2.2689280f;   /* 130 deg */
+    const float k = floorf(mc_wrap_pi(a) * (3.0f / 3.14159265f) + 0.5f);            /* 60 deg steps */
+    const int n = (int)k;
+    return ((n % 6) + 6) % 6;
+}
+
+/* (C.6): angle and speed from one period of the known vector u_kv (plus the drop's flux psi):
+ * i0, i1 the currents at its start and end. */
+static bool known_vector(mc_catch_t *s, mc_ab_t i0, mc_ab_t i1)
+{
+    const mc_catch_cfg_t *c = &s->cfg;
+    const float sg = (float)s->passive;
+    const float lbar = 0.5f * (c->ld + c->lq), dl2 = 0.5f * (c->ld - c->lq);
+    const mc_ab_t dpsi = {s->u_kv.alpha * c->ts + s->psi.alpha, s->u_kv.beta * c->ts + s->psi.beta};
+    float th0 = 0.0f, th1 = 0.0f, dl = 0.0f;
+    for (int pass = 0; pass < 3; ++pass) {
+        mc_ab_t w = {dpsi.alpha - lbar * (i1.alpha - i0.alpha), dpsi.beta - lbar * (i1.beta - i0.beta)};
+        if (pass > 0) {
+            /* (Ld - Lq)/2 e^{j 2 theta} conj(i): the saliency's part of L i */
+            const float c1 = cosf(2.0f * th1), s1 = sinf(2.0f * th1), c0 = cosf(2.0f * th0), s0 = sinf(2.0f * th0);
+            w.alpha -= dl2 * ((c1 * i1.alpha + s1 * i1.beta) - (c0 * i0.alpha + s0 * i0.beta));
+            w.beta -= dl2 * ((s1 * i1.alpha - c1 * i1.beta) - (s0 * i0.alpha - c0 * i0.beta));
+        }
+        const float x = mag(w) / (2.0f * c->psi_pm);
+        if (!(x < 1.0f)) {
+            return false;   /* more than the magnet can give: the model or the sensing is far off */
+        }
+        dl = sg * 2.0f * atan2f(x, sqrtf(1.0f - x * x));                       /* (C.6) */
+        const float thm = atan2f(w.beta, w.alpha) - sg * 1.5707963f;
+        th0 = thm - 0.5f * dl;
+        th1 = thm + 0.5f * dl;
+    }
+    s->n1 = 1u;
+    s->di1 = sub(i1, i0);
+    s->omega = dl / c->ts;
+    s->theta = mc_wrap_pi(th1);
+    s->rotation = dl;
+    s->fit = 1.0f;
+    s->single = true;
+    s->moving = true;
+    return true;
+}
+
 /* (C.5) sign known from the wait: |Delta| from (C.1), theta from (C.2) at this sample. */
 static void known_sign(mc_catch_t *s, mc_ab_t di)
 {
@@ -207,6 +259,9 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         s->i_peak = im;
     }
     const uint32_t call = s->calls++;
+    /* (C.6): what was written last period is latched now */
+    s->corner_a = s->corner_w;
+    s->corner_w = -1;
     if (s->phase == WAIT) {
         /* (C.5): the diodes' current turning with the rotor, step by step within one pulse */
         /* measured from the diode pulse's low (the sample after a fall), so that an offset
@@ -214,8 +269,8 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
          * out, as in (C.1)-(C.3) */
         const float i_min = 0.25f * c->i_pulse;
         const mc_ab_t d_now = sub(i_ab, s->i0), d_last = sub(s->i_last, s->i0);
-        const float dm_now = mag(d_now), dm_last = mag(d_last);
-        if (s->n == 0u || im < mag(s->i_last)) {
+        const float dm_now = mag(d_now), dm_last = mag(d_last), im_last = mag(s->i_last);
+        if (s->n == 0u || im < im_last) {
             s->i0 = i_ab;   /* a new low */
         } else if (dm_now >= i_min && dm_last >= i_min && dm_now > dm_last) {
             const float dphi = mc_wrap_pi(atan2f(d_now.beta, d_now.alpha) - atan2f(d_last.beta, d_last.alpha));
@@ -227,6 +282,16 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         if (dm_now >= i_min) {
             s->diodes = true;
         }
+        /* (C.6): the diodes' current from the last real low (a fall by i_min or more in one
+         * period: a pulse's end, not a dip of |i| within it), so that no offset error of the
+         * sensing turns its direction; taken where it has grown to twice i_min */
+        if (s->n == 0u || im < im_last - i_min) {
+            s->i_low = i_ab;
+        }
+        const mc_ab_t d_low = sub(i_ab, s->i_low);
+        if (mag(d_low) >= 2.0f * i_min) {
+            s->i_dir = d_low;
+        }
         if (s->pas_n >= MC_CATCH_PASSIVE_N && fabsf(s->pas_sum) >= 0.1745f &&
             fabsf(s->pas_sum) >= 0.8f * s->pas_abs) {
             s->passive = s->pas_sum > 0.0f ? 1 : -1;
@@ -235,8 +300,15 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
          * uncontrolled-generation speed it is; after a recovery the outputs were just switched
          * off), or, where the diodes conduct, at a diode pulse's low once (C.5) has its sign;
          * or after the longest wait */
+        /* (C.6): with the diodes conducting and the sign known, the pulse will be the corner for
+         * the diodes' last direction; its duties are latched ahead, the outputs still off */
+        const bool kv_ok = s->diodes && s->passive != 0 && vdc > 0.0f;
         const bool ready = s->diodes ? (mc_catch_at_low(c, i_ab) && s->passive != 0) : im <= c->i_rest;
         if (!ready && s->n++ < c->n_wait_max) {
+            if (kv_ok) {
+                s->corner_w = corner_for(s->i_dir, s->passive);
+                *duty = corner_duty[s->corner_w];
+            }
             return MC_IP_RUNNING;
         }
         s->i0 = i_ab;
@@ -244,6 +316,14 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         s->psi = (mc_ab_t){0.0f, 0.0f};
         s->phase = PULSE1;
         s->n = 0u;
+        s->kv = kv_ok && s->corner_a >= 0;
+        if (s->kv) {
+            /* the latched corner acts from now; written again, it also acts in the period after */
+            const float u = (2.0f / 3.0f) * vdc;
+            s->u_kv = (mc_ab_t){u * corner_dir[s->corner_a].alpha, u * corner_dir[s->corner_a].beta};
+            s->corner_w = s->corner_a;
+            *duty = corner_duty[s->corner_w];
+        }
         *off = false;
         return MC_IP_RUNNING;
     }
@@ -265,6 +345,19 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         if (s->n <= MC_CATCH_HIST) {
             s->hist[s->n - 1u] = di;
             s->hist_psi[s->n - 1u] = s->psi;
+        }
+        if (s->kv) {
+            /* (C.6): one period of the known corner; the outputs stay on with it (written again:
+             * the history the caller keeps then holds the vector that acts until its own duties) */
+            const bool ok = known_vector(s, s->i0, i_ab);
+            s->phase = END;
+            s->status = ok ? MC_IP_DONE : MC_IP_FAILED;
+            if (ok) {
+                s->corner_w = s->corner_a;
+                *duty = corner_duty[s->corner_w];
+                *off = false;
+            }
+            return s->status;
         }
         if (s->passive != 0) {
             /* the sign known from the wait (C.5): one pulse of i_pulse gives the angle */

@@ -53,6 +53,28 @@
  * uses it with (C.1) for |Delta| and (C.2) for theta. The rotation in the rotor frame within a
  * diode pulse is small against the rotor's and in its direction (measured: the thesis motor at
  * 1500 rpm turns the current 6.2 deg per period for the rotor's 4.5), so only the sign is used.
+ * (C.6) KNOWN-VECTOR PULSE. Where the diodes conduct and (C.5) has the sign, a V(000) pulse is a
+ * period of lag that the field-weakening entry after it must carry (mc/fw_entry.h): on the thesis
+ * motor at 1500 rpm the best hand-over a search finds from a V(000) pulse's current is 13.6 A, from
+ * a pulse of the hexagon's corner against the back-EMF 12.6 A (`mctools handover`,
+ * docs/protection.md). So the pulse there is an active vector u (a corner, 2 vdc / 3, the gates
+ * held one period): the one nearest to where the entry's first vector will point, from the diode
+ * current's direction phi_i (against q: theta ~ phi_i + sigma pi/2, the entry's vector ~ theta +
+ * sigma (pi/2 + 50 deg), so phi_i - sigma 130 deg; a corner is within 30 deg of it, and the search
+ * finds no loss within 40 deg). Its duties are latched while the outputs are still off, so the pulse
+ * starts at the low with the enable, and they are written once more so that the same vector
+ * acts in the period after, when the entry's first vector is computed. With the flux change
+ * known, Delta psi_s = u Ts (+ the devices' drop), and the linear model psi_s = L i + psi_pm e^{j theta}
+ * with L = Lbar + (Ld - Lq)/2 e^{j 2 theta} conj(.) (stator frame, complex):
+ *     w = Delta psi_s - Lbar Delta i - (Ld - Lq)/2 (e^{j 2 theta1} conj(i1) - e^{j 2 theta0} conj(i0))
+ *       = psi_pm (e^{j theta1} - e^{j theta0}) = 2 psi_pm sin(Delta / 2) j e^{j theta_m}            (C.6)
+ * gives |Delta| = 2 asin(|w| / (2 psi_pm)), theta_m = arg(w) - sigma pi/2, theta1 = theta_m +
+ * Delta / 2 from one period, the saliency term by three fixed-point passes (from 0). With u = 0 it
+ * is (C.1), (C.2) for Ld = Lq. FAILED when |w| exceeds 2 psi_pm (a model or sensor far off; a
+ * psi_pm only a few times too small reads a speed as many times too high, which the over-speed
+ * check then trips on at RUN entry: a checked fault, not a guess that runs). A check against the
+ * diode pulses' rate (six to a turn) was tried and dropped: near the generation speed their
+ * falls are not regular enough (1100-1200 rpm: a fall 3 periods after another).
  * FAILED when the rotation is too small to give its sign (|phi2 - phi1| < 5 deg) or the second
  * current does not fit (C.1) within a factor of 2 (a model or sensor far off): the caller faults
  * rather than guess. The current peaks at about i_pulse plus one period's rise.
@@ -104,6 +126,11 @@ typedef struct {
     uint32_t pas_n;           /* ... and how many */
     int passive;              /* (C.5) sign: +1, -1, or 0 (none) */
     bool diodes;              /* the wait saw the diodes' current (above i_pulse / 4) */
+    mc_ab_t i_dir;            /* (C.6): the diodes' current since their last real low [A] */
+    mc_ab_t i_low;            /* (C.6): the current at that low [A] */
+    int corner_w, corner_a;   /* (C.6): the corner written this period, the one latched (-1: V(000)) */
+    mc_ab_t u_kv;             /* (C.6): the pulse's voltage, stator frame [V] */
+    bool kv;                  /* (C.6): this pulse is a known active vector */
     mc_ip_status_t status;
     /* results */
     bool moving;              /* false: the rotor stands (below omega_min) */
@@ -123,8 +150,10 @@ static inline bool mc_catch_at_low(const mc_catch_cfg_t *c, mc_ab_t i_ab)
 
 /* false on a bad configuration (non-positive or non-finite values): the engine then FAILs */
 bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg);
-/* One period: sample i_ab; duty always V(000); *off: the outputs are off from this sample on
- * (a gate disable acts at once, unlike the duties, which act a period later). */
+/* One period: sample i_ab; *duty: V(000), or a corner of the hexagon (C.6), acting a period later;
+ * *off: the outputs are off from this sample on (a gate disable acts at once, unlike the duties).
+ * A (C.6) pulse ends with the outputs on and its corner written again: the caller's control
+ * takes over with that vector acting until its own first duties. */
 mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty, bool *off);
 
 #endif
