@@ -334,6 +334,20 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
     }
     switch (s->phase) {
     case PULSE1: {
+        if (s->kv) {
+            /* (C.6), before the probe (the diodes conduct: not standing): one period of the
+             * known corner; the outputs stay on with it (written again: the history the caller
+             * keeps then holds the vector that acts until its own duties) */
+            const bool ok = known_vector(s, s->i0, i_ab);
+            s->phase = END;
+            s->status = ok ? MC_IP_DONE : MC_IP_FAILED;
+            if (ok) {
+                s->corner_w = s->corner_a;
+                *duty = corner_duty[s->corner_w];
+                *off = false;
+            }
+            return s->status;
+        }
         const mc_ab_t di = sub(i_ab, s->i0);
         const float dm = mag(di);
         if (s->n == c->n_probe && dm < c->i_detect) {
@@ -345,19 +359,6 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         if (s->n <= MC_CATCH_HIST) {
             s->hist[s->n - 1u] = di;
             s->hist_psi[s->n - 1u] = s->psi;
-        }
-        if (s->kv) {
-            /* (C.6): one period of the known corner; the outputs stay on with it (written again:
-             * the history the caller keeps then holds the vector that acts until its own duties) */
-            const bool ok = known_vector(s, s->i0, i_ab);
-            s->phase = END;
-            s->status = ok ? MC_IP_DONE : MC_IP_FAILED;
-            if (ok) {
-                s->corner_w = s->corner_a;
-                *duty = corner_duty[s->corner_w];
-                *off = false;
-            }
-            return s->status;
         }
         if (s->passive != 0) {
             /* the sign known from the wait (C.5): one pulse of i_pulse gives the angle */
