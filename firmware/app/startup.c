@@ -54,6 +54,7 @@ void mc_drive_startup_reset(mc_drive_t *d)
     mc_ocal_reset(&d->ocal);
     d->offsets_moved = false;
     d->gate_on_next = false;
+    d->entry_corner = false;
     d->fwe_active = false;
     d->fwe_n = 0u;
     mc_drive_init_blocks(d);
@@ -182,6 +183,27 @@ static mc_ab_t offsets_at_speed(mc_drive_t *d, float omega)
     return dab;
 }
 
+/* An angle-sensor drive above the generation speed latches, every period its outputs are off
+ * before RUN, the corner the field-weakening entry would start with (the sensor's angle +
+ * sign(omega) 135 deg, as (C.6) of mc/catch.h): entering at a diode pulse's low, the outputs come
+ * on with it at once, a step into the voltage limit instead of a period of the diodes. False
+ * (nothing latched) where the entry will not run: the flux can be held, or no overmodulation. */
+static bool latch_entry_corner(mc_drive_t *d)
+{
+    const mc_drive_blk_t *b = &d->cfg->blk;
+    const float vdc = d->tm.vdc, w = d->tm.omega;
+    const float u_land = vdc * MC_1_SQRT3 * (b->u_plan < 1.0f ? b->u_plan : 1.0f);
+    if (!b->src_measures || !(b->u_loop > 1.0f) || !(vdc > 0.0f) || !(fabsf(w) * b->fly.psi_pm > u_land)) {
+        return false;
+    }
+    /* the sensor's angle is a period old: the middle of the period after the next sample */
+    const float s = w < 0.0f ? -1.0f : 1.0f;
+    mc_ab_t dir;
+    const mc_abc_t duty = mc_catch_corner(mc_wrap_pi(d->tm.theta + 2.0f * w * b->ts + s * 2.3561945f), &dir);
+    write_duties(d, duty, vdc);
+    return true;
+}
+
 /* Average the current channels with the outputs off; the offsets must be plausible. At a speed
  * where the diodes conduct, the plain mean is biased: the catch or the angle sensor replaces it
  * by offsets_at_speed() once the speed is known. */
@@ -191,6 +213,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     if (d->cal_count < b->cal_samples) {
         mc_ocal_add(&d->ocal, raw->i);
         if (++d->cal_count < b->cal_samples) {
+            d->entry_corner = latch_entry_corner(d);
             return;
         }
         float off[3];
@@ -213,6 +236,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         /* a sensor drive needs no catch, but above the uncontrolled-generation speed the diodes
          * conduct: it waits (outputs off, at most the catch's longest wait) for a diode pulse's
          * low, as the catch does (C.5), and starts from there */
+        d->entry_corner = latch_entry_corner(d);
         return;
     }
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
@@ -234,6 +258,12 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     if (d->seq.state == MC_STATE_RUN && b->src_measures) {
         /* the sensor's angle (tracked through the calibration, a period old) one period on */
         refs_from_current(d, i_now, d->tm.theta + d->tm.omega * b->ts);
+        if (d->entry_corner) {
+            /* the corner latched last period acts from now (latch_entry_corner) */
+            hal_pwm_enable(d->hal.pwm, true);
+            run_at_speed(d, false);
+            return;
+        }
         /* RUN's first duties, latched by the pipeline in this period, act with the outputs from
          * the next one: switched on now, the last latched duties (zero voltage) would short the
          * back-EMF for a period first (-2 A in q at 1500 rpm on the thesis motor) */

@@ -149,13 +149,25 @@ static const mc_abc_t corner_duty[6] = {{1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, 
 static const mc_ab_t corner_dir[6] = {{1.0f, 0.0f},  {0.5f, 0.8660254f},   {-0.5f, 0.8660254f},
                                       {-1.0f, 0.0f}, {-0.5f, -0.8660254f}, {0.5f, -0.8660254f}};
 
+/* the corner nearest to the stator-frame angle a */
+static int corner_at(float a)
+{
+    const float k = floorf(mc_wrap_pi(a) * (3.0f / 3.14159265f) + 0.5f);   /* 60 deg steps */
+    const int n = (int)k;
+    return ((n % 6) + 6) % 6;
+}
+
+mc_abc_t mc_catch_corner(float angle, mc_ab_t *dir)
+{
+    const int k = corner_at(angle);
+    *dir = corner_dir[k];
+    return corner_duty[k];
+}
+
 /* (C.6): the corner nearest to phi_i - sigma 130 deg (the entry's first vector) */
 static int corner_for(mc_ab_t i_dir, int sigma)
 {
-    const float a = atan2f(i_dir.beta, i_dir.alpha) - (float)sigma * 2.2689280f;   /* 130 deg */
-    const float k = floorf(mc_wrap_pi(a) * (3.0f / 3.14159265f) + 0.5f);            /* 60 deg steps */
-    const int n = (int)k;
-    return ((n % 6) + 6) % 6;
+    return corner_at(atan2f(i_dir.beta, i_dir.alpha) - (float)sigma * 2.2689280f);   /* 130 deg */
 }
 
 /* (C.6): angle and speed from one period of the known vector u_kv (plus the drop's flux psi):

@@ -187,6 +187,7 @@ typedef struct {
     uint32_t cal_count;
     mc_ocal_t ocal;              /* the calibration's samples (mc/offset_cal.h)  */
     bool offsets_moved;          /* (O.1) changed the offsets in this period      */
+    bool entry_corner;           /* an angle-sensor drive latched the entry's corner (startup.c) */
     bool gate_on_next;           /* RUN's first duties latched with the outputs off: on at the
                                     next period's start (a flying start at a diode pulse's low) */
     bool fwe_active;             /* a RUN entry at speed: the flux into the voltage limit first
