@@ -75,7 +75,7 @@
  * check then trips on at RUN entry: a checked fault, not a guess that runs). A check against the
  * diode pulses' rate (six to a turn) was tried and dropped: near the generation speed their
  * falls are not regular enough (1100-1200 rpm: a fall 3 periods after another).
- * FAILED when the rotation is too small to give its sign (|phi2 - phi1| < 5 deg) or the second
+ * V(000) PULSES, (C.1)-(C.5): FAILED when the rotation is too small to give its sign (|phi2 - phi1| < 5 deg) or the second
  * current does not fit (C.1) within a factor of 2 (a model or sensor far off): the caller faults
  * rather than guess. The current peaks at about i_pulse plus one period's rise.
  *
