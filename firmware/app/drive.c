@@ -312,8 +312,7 @@ void mc_drive_isr(mc_drive_t *d)
          * u_margin 1.04 the lag never went and the law ran on, braking at -15 N m). Moved with
          * what the hexagon gives in each direction (sc_u: where the vector will act) when the
          * loop may overmodulate. */
-        const float u_land = vdc * MC_1_SQRT3 * (c->u_plan < 1.0f ? c->u_plan : 1.0f);
-        d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, u_land,
+        d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, mc_drive_u_land(d, vdc),
                                     c->u_loop > 1.0f ? vdc : 0.0f, sc_u, d->fwe_n > 0u, &u_dq);
         /* the law has no current feedback: with its model off (psi_pm 10 % high) it takes the
          * flux too far; at 1.1 x i_max the loop takes over, whatever the law would do. Nor does

@@ -261,7 +261,6 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     b->i_ref_max = p->i_max * (1.0f - p->i_headroom);
     b->fwe_i_stop = 1.1f * p->i_max;
     b->u_loop = p->u_loop;
-    b->u_plan = p->u_margin;
     b->i_slew = p->i_slew;
     b->cal_samples = (uint32_t)p->offset_cal_samples;
     build_startup(p, &m, b);

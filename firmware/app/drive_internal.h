@@ -8,6 +8,14 @@
 
 /* The phase currents of a raw sample with the calibrated offsets [A] (ISR step 2, and the
  * offset calibration once it has its offsets). */
+/* The voltage the field-weakening entry lands the flux on (mc/fw_entry.h): the references' share
+ * (control.u_margin), but not beyond the inscribed circle, Vdc/sqrt3 (drive.c step 7). */
+static inline float mc_drive_u_land(const mc_drive_t *d, float vdc)
+{
+    const float m = d->cfg->tref.u_margin;
+    return vdc * MC_1_SQRT3 * (m < 1.0f ? m : 1.0f);
+}
+
 static inline mc_abc_t mc_drive_currents(const mc_drive_t *d, const hal_adc_sample_t *raw)
 {
     const float k = d->cfg->blk.amps_per_count;

@@ -192,15 +192,14 @@ static bool latch_entry_corner(mc_drive_t *d)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
     const float vdc = d->tm.vdc, w = d->tm.omega;
-    const float u_land = vdc * MC_1_SQRT3 * (b->u_plan < 1.0f ? b->u_plan : 1.0f);
-    if (!b->src_measures || !(b->u_loop > 1.0f) || !(vdc > 0.0f) || !(fabsf(w) * b->fly.psi_pm > u_land)) {
+    if (!b->src_measures || !(b->u_loop > 1.0f) || !(vdc > 0.0f) ||
+        !(fabsf(w) * b->fly.psi_pm > mc_drive_u_land(d, vdc))) {
         return false;
     }
     /* the sensor's angle is a period old: the middle of the period after the next sample */
     const float s = w < 0.0f ? -1.0f : 1.0f;
-    mc_ab_t dir;
-    const mc_abc_t duty = mc_catch_corner(mc_wrap_pi(d->tm.theta + 2.0f * w * b->ts + s * 2.3561945f), &dir);
-    write_duties(d, duty, vdc);
+    const int k = mc_svpwm_corner_near(d->tm.theta + 2.0f * w * b->ts + s * 2.3561945f);
+    write_duties(d, mc_svpwm_corner(k, NULL), vdc);
     return true;
 }
 

@@ -2,12 +2,21 @@
 #include "mc/svpwm.h"
 
 #include <math.h>
+#include <stddef.h>
 
+#include "mc/angle.h"
 #include "mc/transforms.h"
 
 /* Requests this close to the hexagon (relative) count as inside: a vector exactly on the
  * inscribed circle must not be flagged as saturated because of float rounding. */
 #define SAT_TOL 1.0e-6f
+
+/* The active vectors U1..U6, the hexagon's corners (Table 2.1 / Figure 2.6): which legs are high,
+ * and the stator-frame unit vector (2.4) of each. */
+static const mc_abc_t active_duty[6] = {{1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f},
+                                        {0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 1.0f}};
+static const mc_ab_t active_dir[6] = {{1.0f, 0.0f},  {0.5f, 0.8660254f},   {-0.5f, 0.8660254f},
+                                      {-1.0f, 0.0f}, {-0.5f, -0.8660254f}, {0.5f, -0.8660254f}};
 
 /* plain compares: fmaxf/fminf are library calls on the Cortex-M4 */
 static float maxf(float a, float b)
@@ -85,13 +94,24 @@ float mc_svpwm_reach(mc_ab_t dir, float vdc)
     return (span > 1.45f && span < 1.78f) ? vdc / span : vdc * MC_1_SQRT3;
 }
 
+int mc_svpwm_corner_near(float angle)
+{
+    const float k = floorf(mc_wrap_pi(angle) * (3.0f / MC_PI) + 0.5f);   /* 60 deg steps */
+    const int n = (int)k;
+    return ((n % 6) + 6) % 6;
+}
+
+mc_abc_t mc_svpwm_corner(int k, mc_ab_t *dir)
+{
+    k = ((k % 6) + 6) % 6;
+    if (dir != NULL) {
+        *dir = active_dir[k];
+    }
+    return active_duty[k];
+}
+
 void mc_svpwm_sector(mc_ab_t u, float vdc, mc_duty_t *out)
 {
-    /* Which legs are high in each active vector U1..U6 (Table 2.1 / Figure 2.6). */
-    static const float sw[6][3] = {
-        {1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f},
-        {0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 1.0f},
-    };
     if (bad_vdc(vdc, out)) {
         return;
     }
@@ -122,11 +142,11 @@ void mc_svpwm_sector(mc_ab_t u, float vdc, mc_duty_t *out)
     if (t0 < 0.0f) {
         t0 = 0.0f;
     }
-    const float *r = sw[n];
-    const float *l = sw[(n + 1) % 6];
+    const mc_abc_t r = active_duty[n];
+    const mc_abc_t l = active_duty[(n + 1) % 6];
     /* (2.12) with T0 split equally between U0 and U7 */
-    out->a = 0.5f * t0 + tr * r[0] + tl * l[0];
-    out->b = 0.5f * t0 + tr * r[1] + tl * l[1];
-    out->c = 0.5f * t0 + tr * r[2] + tl * l[2];
+    out->a = 0.5f * t0 + tr * r.a + tl * l.a;
+    out->b = 0.5f * t0 + tr * r.b + tl * l.b;
+    out->c = 0.5f * t0 + tr * r.c + tl * l.c;
     finish(out, vdc);
 }

@@ -1,10 +1,12 @@
-/* Flying-start catch (mc/catch.h): two zero-vector pulses, (C.1)-(C.3). */
+/* Flying-start catch (mc/catch.h): zero-vector pulses (C.1)-(C.5), or one known corner (C.6). */
 #include "mc/catch.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #include "mc/angle.h"
 #include "mc/sincos.h"
+#include "mc/svpwm.h"
 #include "mc/transforms.h"
 
 enum { WAIT = 0, PULSE1, GAP, PULSE2, END };
@@ -143,31 +145,10 @@ static bool single_pulse_sign(mc_catch_t *s)
     return true;
 }
 
-/* the hexagon's corners V(100), V(110), ..., V(101): duties and the stator-frame unit vectors */
-static const mc_abc_t corner_duty[6] = {{1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f},
-                                         {0.0f, 1.0f, 1.0f}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 1.0f}};
-static const mc_ab_t corner_dir[6] = {{1.0f, 0.0f},  {0.5f, 0.8660254f},   {-0.5f, 0.8660254f},
-                                      {-1.0f, 0.0f}, {-0.5f, -0.8660254f}, {0.5f, -0.8660254f}};
-
-/* the corner nearest to the stator-frame angle a */
-static int corner_at(float a)
-{
-    const float k = floorf(mc_wrap_pi(a) * (3.0f / 3.14159265f) + 0.5f);   /* 60 deg steps */
-    const int n = (int)k;
-    return ((n % 6) + 6) % 6;
-}
-
-mc_abc_t mc_catch_corner(float angle, mc_ab_t *dir)
-{
-    const int k = corner_at(angle);
-    *dir = corner_dir[k];
-    return corner_duty[k];
-}
-
 /* (C.6): the corner nearest to phi_i - sigma 130 deg (the entry's first vector) */
 static int corner_for(mc_ab_t i_dir, int sigma)
 {
-    return corner_at(atan2f(i_dir.beta, i_dir.alpha) - (float)sigma * 2.2689280f);   /* 130 deg */
+    return mc_svpwm_corner_near(atan2f(i_dir.beta, i_dir.alpha) - (float)sigma * 2.2689280f);   /* 130 deg */
 }
 
 /* (C.6): angle and speed from one period of the known vector u_kv (plus the drop's flux psi):
@@ -319,7 +300,7 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         if (!ready && s->n++ < c->n_wait_max) {
             if (kv_ok) {
                 s->corner_w = corner_for(s->i_dir, s->passive);
-                *duty = corner_duty[s->corner_w];
+                *duty = mc_svpwm_corner(s->corner_w, NULL);
             }
             return MC_IP_RUNNING;
         }
@@ -332,9 +313,11 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         if (s->kv) {
             /* the latched corner acts from now; written again, it also acts in the period after */
             const float u = (2.0f / 3.0f) * vdc;
-            s->u_kv = (mc_ab_t){u * corner_dir[s->corner_a].alpha, u * corner_dir[s->corner_a].beta};
+            mc_ab_t dir;
+            (void)mc_svpwm_corner(s->corner_a, &dir);
+            s->u_kv = (mc_ab_t){u * dir.alpha, u * dir.beta};
             s->corner_w = s->corner_a;
-            *duty = corner_duty[s->corner_w];
+            *duty = mc_svpwm_corner(s->corner_w, NULL);
         }
         *off = false;
         return MC_IP_RUNNING;
@@ -355,7 +338,7 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
             s->status = ok ? MC_IP_DONE : MC_IP_FAILED;
             if (ok) {
                 s->corner_w = s->corner_a;
-                *duty = corner_duty[s->corner_w];
+                *duty = mc_svpwm_corner(s->corner_w, NULL);
                 *off = false;
             }
             return s->status;

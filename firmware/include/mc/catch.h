@@ -148,10 +148,6 @@ static inline bool mc_catch_at_low(const mc_catch_cfg_t *c, mc_ab_t i_ab)
     return sqrtf(i_ab.alpha * i_ab.alpha + i_ab.beta * i_ab.beta) <= c->i_rest + 0.3f * c->i_pulse;
 }
 
-/* The hexagon's corner (an active vector, 2 vdc / 3) nearest to the stator-frame angle [rad]: its
- * duties; *dir its unit vector. (C.6), and an angle-sensor drive's entry at speed (startup.c). */
-mc_abc_t mc_catch_corner(float angle, mc_ab_t *dir);
-
 /* false on a bad configuration (non-positive or non-finite values): the engine then FAILs */
 bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg);
 /* One period: sample i_ab; *duty: V(000), or a corner of the hexagon (C.6), acting a period later;

@@ -108,7 +108,6 @@ typedef struct {
     float i_ref_max, i_slew;     /* [A], [A/s]                                               */
     float fwe_i_stop;            /* the field-weakening entry law hands over at this |i|: 1.1 i_max [A] */
     float u_loop;                /* the current loop's voltage circle / (vdc/sqrt3): control.u_loop */
-    float u_plan;                /* the references' and the entry law's / (vdc/sqrt3): control.u_margin */
     uint32_t cal_samples;
     float step3_speed_tol;       /* [rad/s el]                                               */
     uint32_t step3_hold;         /* [periods]                                                */

@@ -31,6 +31,13 @@ void mc_svpwm(mc_ab_t u, float vdc, mc_duty_t *out);
  * (beyond a few per cent): vdc/sqrt(3). */
 float mc_svpwm_reach(mc_ab_t dir, float vdc);
 
+/* The active vector (a corner of the hexagon, 2 vdc / 3, U1..U6 as k = 0..5 from phase a) nearest
+ * to the stator-frame angle [rad]; and for index k its duties, with *dir (if not NULL) its unit
+ * vector. A corner held a whole period is the flying start's known-vector pulse (mc/catch.h (C.6))
+ * and an angle-sensor drive's first step at speed. */
+int      mc_svpwm_corner_near(float angle);
+mc_abc_t mc_svpwm_corner(int k, mc_ab_t *dir);
+
 /* Reference implementation by sectors (2.10)-(2.13), used by tests to check mc_svpwm. */
 void mc_svpwm_sector(mc_ab_t u, float vdc, mc_duty_t *out);
 

@@ -599,7 +599,7 @@ static void test_param_write_u_margin_cross(void **st)
     run_plant(&r, 1);
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_u_loop, 1.0f, &err));
     run_plant(&r, 1);
-    assert_true(r.d.cfg->blk.u_loop == 1.0f && r.d.cfg->blk.u_plan == 0.95f);
+    assert_true(r.d.cfg->blk.u_loop == 1.0f && r.d.cfg->tref.u_margin == 0.95f);
     assert_false(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 1.02f, &err));
     assert_int_equal(err.kind, MC_PERR_CROSS);
     assert_float_equal(err.max, 1.0f, 0.0f);
