@@ -275,7 +275,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    const uint32_t recoverable = MC_FAULT_LOSS_OF_LOCK | MC_FAULT_VOLTAGE_MODEL | MC_FAULT_TRACKING;
+    const uint32_t recoverable = MC_FAULTS_RECOVERABLE;
     if (!b->recover || (reason & ~recoverable) != 0u || d->retries >= b->retries ||
         d->seq.state != MC_STATE_RUN) {
         return false;
@@ -299,7 +299,7 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
 bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    if (!b->hold_fw || reason != MC_FAULT_OVERSPEED || d->seq.state != MC_STATE_RUN ||
+    if (!b->hold_fw || (reason & ~MC_FAULTS_HOLD_FW) != 0u || d->seq.state != MC_STATE_RUN ||
         !(b->ug_coef * fabsf(omega) > vdc)) {
         return false;   /* below it, outputs off is current-free: the plain trip */
     }

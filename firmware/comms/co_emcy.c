@@ -1,30 +1,23 @@
 /* Emergency messages (CiA 301 §7.2.7) and the pre-defined error field 0x1003 (§7.5.2.3) for the
- * drive's latched faults (mc/sequencer.h). Codes from CiA 301 Table 21 and CiA 402's drive
- * error codes; the manufacturer bytes carry the fault bit number and the whole fault word, so
- * that a tool names the drive's own reason (docs/protection.md). */
+ * drive's latched faults. The codes and error-register bits are the fault table's (mc/faults.h,
+ * CiA 301 Table 21 and CiA 402's drive error codes); the manufacturer bytes carry the fault bit
+ * number and the whole fault word, so that a tool names the drive's own reason. */
 #include "mc/co.h"
+
+/* By bit: the EMCY code (0: no fault has this bit) and the error-register bits besides generic.
+ * A bit given twice fails the build (-Woverride-init), one >= 32 too (beyond the array). */
+static const struct {
+    uint16_t code;
+    uint8_t reg;
+} by_bit[32] = {
+#define MC_FAULT_EMCY_(NAME, bit, name, emcy, reg_, reaction, rec, doc) [bit] = {emcy, MC_ERR_REG_##reg_},
+    MC_FAULTS(MC_FAULT_EMCY_)
+#undef MC_FAULT_EMCY_
+};
 
 uint16_t mc_co_emcy_code(uint32_t bit)
 {
-    switch (1u << bit) {
-    case MC_FAULT_OVERCURRENT: return 0x2310u;      /* continuous over-current, device output */
-    case MC_FAULT_OVERVOLTAGE: return 0x3210u;      /* DC link over-voltage */
-    case MC_FAULT_UNDERVOLTAGE: return 0x3220u;     /* DC link under-voltage */
-    case MC_FAULT_OFFSET_CAL:
-    case MC_FAULT_CURRENT_SENSOR: return 0x5210u;   /* measurement circuit */
-    case MC_FAULT_CONFIG: return 0x6320u;           /* parameter error */
-    case MC_FAULT_TIMEOUT:
-    case MC_FAULT_NUMERIC:
-    case MC_FAULT_OVERRUN: return 0x6100u;          /* internal software */
-    case MC_FAULT_INIT_POS:
-    case MC_FAULT_LOSS_OF_LOCK:
-    case MC_FAULT_VOLTAGE_MODEL: return 0x7300u;    /* sensor (the sensorless angle's plausibility) */
-    case MC_FAULT_STALL: return 0x7121u;            /* motor blocked */
-    case MC_FAULT_OVERSPEED: return 0x8400u;        /* velocity / speed monitoring */
-    case MC_FAULT_TRACKING:
-    case MC_FAULT_TORQUE: return 0x8300u;           /* torque control */
-    default: return 0x1000u;                        /* generic error */
-    }
+    return bit < 32u && by_bit[bit].code != 0u ? by_bit[bit].code : 0x1000u;   /* else generic */
 }
 
 uint8_t mc_co_error_register(uint32_t faults)
@@ -32,12 +25,11 @@ uint8_t mc_co_error_register(uint32_t faults)
     if (faults == 0u) {
         return 0u;
     }
-    uint8_t r = 0x01u;   /* generic */
-    if ((faults & (MC_FAULT_OVERCURRENT | MC_FAULT_OFFSET_CAL | MC_FAULT_CURRENT_SENSOR | MC_FAULT_TRACKING)) != 0u) {
-        r |= 0x02u;      /* current */
-    }
-    if ((faults & (MC_FAULT_OVERVOLTAGE | MC_FAULT_UNDERVOLTAGE)) != 0u) {
-        r |= 0x04u;      /* voltage */
+    uint8_t r = MC_ERR_REG_GENERIC;
+    for (uint32_t b = 0u; b < 32u; ++b) {
+        if ((faults & (1u << b)) != 0u) {
+            r |= by_bit[b].reg;
+        }
     }
     return r;
 }

@@ -21,6 +21,7 @@
 #ifndef MC_PARAMS_TABLE_H
 #define MC_PARAMS_TABLE_H
 #include "mc/angle_source.h"
+#include "mc/faults.h"
 
 /* clang-format off */
 #define MC_PARAMS(X) \
@@ -117,7 +118,7 @@ X(stall_time,     "protection.stall_time_s", F32, "s",     0,     10,     0.3f, 
 X(catch_on,       "startup.catch",         ENUM, "",       0,     1,      1,        NONE,    STARTUP, STANDSTILL, "off|on", "Sensorless start: first probe with the zero vector whether the rotor turns; if it does, take its angle and speed from two zero-vector pulses (mc/catch.h) and go straight to RUN, else go on with startup.init_pos. Not with an angle sensor.") \
 X(catch_i,        "startup.catch_i_a",     F32, "A",       1e-3f, 10000,  2.0f,     CATCH_I, STARTUP, STANDSTILL, "", "Catch pulse: the zero vector lasts until the current has changed by this (default: 15 % of motor.i_rated_a; the peak stays near it plus one period's rise; where the diodes conduct, one period of a hexagon corner instead, mc/catch.h (C.6)) ...") \
 X(catch_min_rpm,  "startup.catch_min_rpm", F32, "rpm",     0.1f,  1e5f,   24,       CATCH_MIN, STARTUP, STANDSTILL, "", "... and below this speed the rotor counts as standing: the probe lasts until the back-EMF at this speed would have driven a quarter of catch_i_a, and the standstill start follows (default: 2 Hz electrical, 24 rpm on the thesis motor).") \
-X(lock_action,    "protection.lock_action", ENUM, "",      0,     1,      0,        NONE,    PROTECTION, STANDSTILL, "fault|recover", "On loss of lock, a voltage-model or a tracking fault while sensorless: fault (outputs off, reason latched), or recover: outputs off, the flying-start catch (whatever startup.catch says), RUN with the caught angle; a standing rotor goes through Steps I-III (startup.init_pos = three_step) or faults. Default fault: with an estimator model that is wrong (docs/results.md, envelope) retries lose the angle again.") \
+X(lock_action,    "protection.lock_action", ENUM, "",      0,     1,      0,        NONE,    PROTECTION, STANDSTILL, "fault|recover", "On a recoverable fault (mc/faults.h:" MC_FAULTS_RECOVERABLE_NAMES ") while sensorless: fault (outputs off, reason latched), or recover: outputs off, the flying-start catch (whatever startup.catch says), RUN with the caught angle; a standing rotor goes through Steps I-III (startup.init_pos = three_step) or faults. Default fault: with an estimator model that is wrong (docs/results.md, envelope) retries lose the angle again.") \
 X(retries,        "protection.retries",    I32, "",        0,     10,     3,        NONE,    PROTECTION, STANDSTILL, "", "Recoveries allowed before the fault is latched ...") \
 X(retry_reset,    "protection.retry_reset_s", F32, "s",    0.01f, 600,    1,        NONE,    PROTECTION, STANDSTILL, "", "... counted again from zero after this long in RUN without one.") \
 X(overspeed_action, "protection.overspeed_action", ENUM, "", 0,   1,      1,        NONE,    PROTECTION, STANDSTILL, "off|hold_fw", "Over-speed above the uncontrolled-generation speed (sqrt3 |w| psi_pm > Vdc: with the outputs off the diodes would rectify the back-EMF into the link): off, or hold_fw: the fault is latched but the outputs stay on with zero torque and the field-weakening current until sqrt3 |w| psi_pm < 0.95 Vdc, then off (state FAULT_REACTION; any other fault turns the outputs off at once).") \

@@ -3,6 +3,7 @@
  * mc_seq_tick() once per period; every state that waits for something has a timeout. */
 #ifndef MC_SEQUENCER_H
 #define MC_SEQUENCER_H
+#include "mc/faults.h"
 #include "mc/types.h"
 
 typedef enum {
@@ -21,27 +22,7 @@ typedef enum {
  * from it straight to RUN, a standing one on to Step I (or RUN with the given angle). */
 typedef enum { MC_INIT_NONE = 0, MC_INIT_STEP1, MC_INIT_STEP2, MC_INIT_STEP3, MC_INIT_CATCH } mc_init_step_t;
 
-/* Fault reasons (bit mask, latched until the next enable). */
-#define MC_FAULT_OVERCURRENT   (1u << 0)
-#define MC_FAULT_OVERVOLTAGE   (1u << 1)
-#define MC_FAULT_UNDERVOLTAGE  (1u << 2)
-#define MC_FAULT_OFFSET_CAL    (1u << 3)   /* offsets out of the plausible range          */
-#define MC_FAULT_CONFIG        (1u << 4)   /* configuration rejected at init                */
-#define MC_FAULT_INIT_POS      (1u << 5)   /* an initial-position step failed               */
-#define MC_FAULT_TIMEOUT       (1u << 6)   /* a state waited longer than its timeout        */
-#define MC_FAULT_NUMERIC       (1u << 7)   /* a non-finite value reached the modulator      */
-#define MC_FAULT_OVERSPEED     (1u << 8)   /* filtered speed estimate above the limit       */
-#define MC_FAULT_CURRENT_SENSOR (1u << 9)  /* the three phase currents do not sum to zero   */
-#define MC_FAULT_TRACKING      (1u << 10)  /* the current does not follow its reference     */
-#define MC_FAULT_LOSS_OF_LOCK  (1u << 11)  /* estimator raw speed and filtered speed disagree */
-#define MC_FAULT_STALL         (1u << 12)  /* no speed at the torque limit                  */
-#define MC_FAULT_OVERRUN       (1u << 13)  /* the ISR overran its period (port flag)        */
-#define MC_FAULT_TORQUE        (1u << 15)  /* speed mode: strong torque commanded one way, the
-                                              speed estimate accelerating hard the other way (a
-                                              wrong angle, or an overload beyond the limit)  */
-#define MC_FAULT_VOLTAGE_MODEL (1u << 14)  /* the voltage the current loop needs does not fit
-                                              the motor model at the angle source's speed: a
-                                              frozen encoder, a wrong estimate, an open phase */
+/* Fault reasons: the MC_FAULT_* bit masks of mc/faults.h (latched until the next enable). */
 
 typedef struct {
     float ts;               /* [s] */

@@ -37,7 +37,7 @@ X(23, u_inj,      "V",      t->u_inj,               "Injected d voltage (6.4).")
 X(24, duty_a,     "1",      t->duty[0],             "Duty of phase a.") \
 X(25, duty_b,     "1",      t->duty[1],             "Duty of phase b.") \
 X(26, duty_c,     "1",      t->duty[2],             "Duty of phase c.") \
-X(27, faults,     "",       (float)(t->faults & 0xFFFFu), "Latched fault bits (mc/sequencer.h MC_FAULT_*).")
+X(27, faults,     "",       (float)(t->faults & MC_FAULTS_ALL), "Latched fault bits (mc/faults.h MC_FAULT_*).")
 /* clang-format on */
 
 #define MC_TELEM_CHANNEL_COUNT 27
