@@ -3,19 +3,26 @@
 the scenario key table in docs/simulator.md (`mcsim keys`, the schema), the drive's parameter
 table in docs/parameters.md (`mcsim params`, the firmware's params_table.h), the CANopen object
 tables in docs/can.md and the EDS tools/mctools/data/drive.eds (`co-gen`, the firmware's object
-dictionary). co-gen is looked for beside mcsim's build tree (BUILD/sim/tools/co-gen)."""
+dictionary), and the fault tables of docs/protection.md (`mcsim faults`) and docs/can.md with
+tools/mctools/data/faults.json (`co-gen faults`, the firmware's mc/faults.h). co-gen is looked for
+beside mcsim's build tree (BUILD/sim/tools/co-gen)."""
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-BEGIN, END = "<!-- keys:begin -->", "<!-- keys:end -->"
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def splice(text, table):
-    a, b = text.index(BEGIN) + len(BEGIN), text.index(END)
+def splice(text, table, tag="keys"):
+    """text with the part between <!-- TAG:begin --> and <!-- TAG:end --> replaced by table."""
+    begin, end = f"<!-- {tag}:begin -->", f"<!-- {tag}:end -->"
+    a, b = text.index(begin) + len(begin), text.index(end)
     return text[:a] + "\n" + table + text[b:]
+
+
+def run(*cmd):
+    return subprocess.run([str(c) for c in cmd], check=True, capture_output=True, text=True).stdout
 
 
 def main():
@@ -28,12 +35,15 @@ def main():
     status = 0
     outputs = []   # (path, new text, what it comes from)
     for name, cmd in (("simulator.md", "keys"), ("parameters.md", "params")):
-        table = subprocess.run([str(mcsim), cmd], check=True, capture_output=True, text=True).stdout
         doc = docs / name
-        outputs.append((doc, splice(doc.read_text(), table), f"`mcsim {cmd}`"))
-    table = subprocess.run([str(co_gen), "md"], check=True, capture_output=True, text=True).stdout
+        outputs.append((doc, splice(doc.read_text(), run(mcsim, cmd)), f"`mcsim {cmd}`"))
+    doc = docs / "protection.md"
+    outputs.append((doc, splice(doc.read_text(), run(mcsim, "faults"), "faults"), "`mcsim faults`"))
     doc = docs / "can.md"
-    outputs.append((doc, splice(doc.read_text(), table), "`co-gen md`"))
+    text = splice(doc.read_text(), run(co_gen, "md"))
+    outputs.append((doc, splice(text, run(co_gen, "faults", "md"), "faults"), "`co-gen md`, `co-gen faults md`"))
+    outputs.append((ROOT / "tools" / "mctools" / "data" / "faults.json", run(co_gen, "faults", "json"),
+                    "`co-gen faults json`"))
     with tempfile.TemporaryDirectory() as tmp:
         eds = Path(tmp) / "drive.eds"
         subprocess.run([str(co_gen), "eds", str(eds)], check=True)

@@ -61,7 +61,8 @@ const char* kUsage =
     "                (the scenario's drive configuration written into a firmware image, for flashing)\n"
     "       mcsim bench [--seconds S] [--repeat N] [--integrator taylor|hermite|rk4]\n"
     "       mcsim keys      (the scenario keys)\n"
-    "       mcsim params    (the drive's parameter table: ids, CANopen objects, rules)\n";
+    "       mcsim params    (the drive's parameter table: ids, CANopen objects, rules)\n"
+    "       mcsim faults    (the drive's fault table: bits, metrics names, reactions)\n";
 
 // The standard closed-loop benchmark: encoder FOC speed step 0 -> 600 rpm with 76 % rated load,
 // default realism profile (switching inverter with 0.5 us dead time, 12-bit ADC, noise), 10 kHz.
@@ -247,6 +248,10 @@ int main(int argc, char** argv)
         }
         if (cmd == "params") {
             std::printf("%s", mcsim::params_markdown().c_str());
+            return 0;
+        }
+        if (cmd == "faults") {
+            std::printf("%s", mcsim::faults_markdown().c_str());
             return 0;
         }
         if (cmd == "-h" || cmd == "--help" || cmd == "help") {

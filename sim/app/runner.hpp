@@ -32,5 +32,7 @@ void check_scenario(const Scenario& sc);
 // The drive's configuration for a scenario (parameters, the estimator's model and map), as
 // run_scenario hands it to the drive.
 DriveSetup drive_setup_for(const Scenario& sc);
+// The fault table (mc/faults.h) as docs/protection.md shows it (`mcsim faults`).
+std::string faults_markdown();
 
 }  // namespace mcsim
