@@ -21,7 +21,8 @@ from pathlib import Path
 from mctools.mctune_drive import (
     CONFIG_SOURCES, DEFAULT_BUS, DEFAULT_TIMEOUT_S, ERROR_REGISTER_BITS, INT_RANGES, MODE_NAMES, MODES,
     NMT_COMMANDS, NMT_STATES, STORE_STATUS, CommError, Drive, Eds, InputError, MctuneError, check_range,
-    default_eds_path, describe_statusword, fmt_num, format_value, match_pattern, scope_channel,
+    default_eds_path, describe_statusword, emcy_fault, fault_names, fmt_num, format_value, match_pattern,
+    scope_channel,
 )
 
 EXIT_INTERRUPTED = 130
@@ -71,6 +72,9 @@ def cmd_info(args, drive: Drive) -> int:
     if isinstance(sw, int) and sw & 0x4F in (0x08, 0x0F):
         ec = opt(0x603F)
         rows.append(("error code (0x603F)", f"0x{ec:04X}" if isinstance(ec, int) else ec))
+        word = opt(0x221B)   # telem.faults: the latched fault bits (REAL32)
+        if isinstance(word, float):
+            rows.append(("drive faults", ", ".join(fault_names(int(word))) or "none"))
     md = opt(0x6061)
     rows.append(("mode of operation", f"{MODE_NAMES.get(md, '?')} ({md})" if isinstance(md, int) else md))
     eds_h, dev_h = drive.table_hashes()
@@ -269,10 +273,12 @@ def cmd_monitor(args, drive: Drive) -> int:
     if args.sync:
         drive.network.sync.start(args.sync / 1000.0)
     rec.attach()
-    drive.node.emcy.add_callback(
-        lambda e: _err(f"EMCY from node {drive.node_id}: error code 0x{e.code:04X} "
-                       f"({getattr(e, 'get_desc', lambda: '')() or 'unknown'}), error register "
-                       f"0x{e.register:02X}, data {bytes(e.data).hex(' ')}"))
+    def on_emcy(e):
+        fault = emcy_fault(e.code, bytes(e.data))
+        _err(f"EMCY from node {drive.node_id}: error code 0x{e.code:04X} "
+             f"({getattr(e, 'get_desc', lambda: '')() or 'unknown'}), error register "
+             f"0x{e.register:02X}, data {bytes(e.data).hex(' ')}" + (f": drive fault {fault}" if fault else ""))
+    drive.node.emcy.add_callback(on_emcy)
     live = None
     if args.plot:
         if has_display():

@@ -415,6 +415,7 @@ def test_monitor_csv_from_tpdos(capsys, bus, drive, tmp_path, monkeypatch):
     assert "TPDO3 0x383" in out and "telem.theta" in out
     assert "PRE-OPERATIONAL" in err   # the node would need an NMT start to send them
     assert "EMCY from node 3: error code 0x2310 (Current), error register 0x03" in err
+    assert "00 01 00 00 00: drive fault overcurrent\n" in err   # named from faults.json
     rows = list(csv.DictReader(open(f"{prefix}.csv")))
     header = list(rows[0])
     assert header == ["t [s]", "Statusword", "Modes of operation display", "Velocity actual value [rpm]",
@@ -461,3 +462,19 @@ def test_nmt_and_list_reads(capsys, bus, drive):
     assert out.splitlines()[0].split() == ["name", "value", "unit", "range", "access"]
     rc, out, err = run(capsys, bus, "list", "--telem", "i_q*")
     assert rc == 0 and "telem.i_q " in out and "3.5" in out
+
+
+def test_fault_names_from_the_generated_table():
+    """mctune names faults from tools/mctools/data/faults.json (generated from mc/faults.h)."""
+    from mctools.mctune_drive import emcy_fault, fault_names, load_faults
+    faults = load_faults()
+    assert faults[0]["name"] == "overcurrent" and faults[11]["name"] == "loss_of_lock"
+    assert fault_names(0x0801) == ["overcurrent", "loss_of_lock"]
+    assert fault_names(1 << 30, faults) == ["bit30"]
+    word = (1 << 8) | (1 << 10)   # over-speed latched, then tracking in its reaction
+    assert emcy_fault(0x8300, struct.pack("<BI", 10, word)) == "tracking (latched with overspeed)"
+    assert emcy_fault(0x8400, struct.pack("<BI", 8, 1 << 8)) == "overspeed"
+    # the device's own EMCYs are not faults: a refused parameter set (kind, id), an error reset
+    assert emcy_fault(0x6320, bytes([3, 17, 0, 0, 0])) is None
+    assert emcy_fault(0x0000, bytes(5)) is None
+    assert emcy_fault(0x2310, bytes([0])) is None
