@@ -2,8 +2,11 @@
  * mc_seq_t.faults), in bit order; everything else is generated from it: the MC_FAULT_<NAME>
  * masks below, the class masks (MC_FAULTS_*), the EMCY code and error register (co_emcy.c), the
  * simulator's metrics names (sim/app/runner.cpp), the telemetry's fault word and the fault tables
- * of docs/protection.md (`mcsim faults`) and docs/can.md (`co-gen faults`). A new fault is one
- * row here plus its detector. tests/unit/control/test_faults.c checks the table.
+ * of docs/protection.md (`mcsim faults`) and docs/can.md (`co-gen faults`), the tools'
+ * faults.json (scripts/gen_docs.py writes the last three). A new fault is one row here (and one in
+ * MC_EMCY_CODES if its code is new) plus its detector, the code that latches MC_FAULT_<NAME>.
+ * ctest comms_faults checks the table, faults_table that the sources, simulator, docs and tools
+ * follow it.
  *
  * X(NAME, bit, "name", emcy, REG, REACTION, recoverable, "doc")
  *   NAME        the constant MC_FAULT_<NAME>
@@ -39,7 +42,8 @@ X(LOSS_OF_LOCK,   11, "loss_of_lock",       0x7300u, GENERIC, OFF,     1, "A sen
 X(STALL,          12, "stall",              0x7121u, GENERIC, OFF,     0, "Speed mode: the speed loop at its torque limit and no speed.") \
 X(OVERRUN,        13, "isr_overrun",        0x6100u, GENERIC, OFF,     0, "The ISR overran its period (the port's flag).") \
 X(VOLTAGE_MODEL,  14, "voltage_model",      0x7300u, GENERIC, OFF,     1, "The voltage the current loop needs does not fit the motor model at the angle source's speed: a frozen encoder, a wrong estimate, an open phase.") \
-X(TORQUE,         15, "torque_plausibility", 0x8300u, GENERIC, OFF,    0, "Speed mode: strong torque one way, the speed estimate accelerating hard the other way (a wrong angle, an overload beyond the limit).")
+X(TORQUE,         15, "torque_plausibility", 0x8300u, GENERIC, OFF,    0, "Speed mode: strong torque one way, the speed estimate accelerating hard the other way (a wrong angle, an overload beyond the limit).") \
+/* end of MC_FAULTS: a new row goes above this line */
 
 /* The emergency codes the table may use (CiA 301 Table 21, CiA 402 Annex), with their meaning. */
 #define MC_EMCY_CODES(X) \
@@ -52,7 +56,8 @@ X(0x6320u, "parameter error") \
 X(0x7121u, "motor blocked") \
 X(0x7300u, "sensor (the angle's plausibility)") \
 X(0x8300u, "torque control") \
-X(0x8400u, "velocity / speed monitoring")
+X(0x8400u, "velocity / speed monitoring") \
+/* end of MC_EMCY_CODES */
 /* clang-format on */
 
 /* The fault reasons (bit masks, latched until the next enable). */
