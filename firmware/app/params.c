@@ -6,10 +6,21 @@
 #include <string.h>
 #include "mc/svpwm.h"
 
+/* "a|b|c" from a choice list: each choice with a bar before it, the first bar skipped */
+#define MC_CH_TEXT(m, c) "|" #c
+#define MC_CHOICE_TEXT(choices) (sizeof("" choices(MC_CH_TEXT)) > 1u ? &("" choices(MC_CH_TEXT))[1] : "")
+
+/* An ENUM's range is its choice list: the table's max is the last position. */
+#define MC_X(m, name, type, unit, lo, hi, def, rule, group, access, choices, doc) \
+    _Static_assert(MC_PT_##type != MC_PT_ENUM || ((int)(lo) == 0 && (int)(hi) == MC_CHOICE_##m##_COUNT - 1), \
+                   name ": min..max must span the choice list");
+MC_PARAMS(MC_X)
+#undef MC_X
+
 /* clang-format off */
 const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
 #define MC_X(m, name_, type_, unit_, lo, hi, def_, rule_, group_, access_, choices_, doc_) \
-    {.name = name_, .unit = unit_, .choices = choices_, .doc = doc_, \
+    {.name = name_, .unit = unit_, .choices = MC_CHOICE_TEXT(choices_), .doc = doc_, \
      .offset = (uint16_t)offsetof(mc_params_t, m), .type = (uint8_t)MC_PT_##type_, \
      .group = (uint8_t)MC_PG_##group_, .access = (uint8_t)MC_PA_##access_, \
      .rule = (uint8_t)MC_RULE_##rule_, .min = (float)(lo), .max = (float)(hi), .def = (float)(def_)},

@@ -91,9 +91,6 @@ typedef enum {
     MC_ANGLE_SRC_COUNT
 } mc_angle_src_kind_t;
 
-/* "encoder|unop|": the choices of control.angle_source (a trailing bar is ignored). */
-#define MC_ANGLE_SRC_CHOICE_(name) #name "|"
-#define MC_ANGLE_SRC_CHOICES MC_ANGLE_SOURCES(MC_ANGLE_SRC_CHOICE_)
 
 #define MC_X2(name) extern const mc_angle_src_desc_t mc_angle_src_##name;
 MC_ANGLE_SOURCES(MC_X2)

@@ -44,6 +44,15 @@ typedef enum {
 
 #define MC_PARAM_MASK_WORDS ((MC_PARAM_COUNT + 31) / 32)
 
+/* The named choices of every ENUM parameter: MC_CHOICE_<member>_<choice> is its stored value
+ * (p->est_model == MC_CHOICE_est_model_fluxmap), MC_CHOICE_<member>_COUNT how many there are
+ * (0 for the other types). */
+#define MC_CH_ENUM(m, c) MC_CHOICE_##m##_##c,
+#define MC_X(m, name, type, unit, lo, hi, def, rule, group, access, choices, doc) \
+    enum { choices(MC_CH_ENUM) MC_CHOICE_##m##_COUNT };
+MC_PARAMS(MC_X)
+#undef MC_X
+
 typedef struct {
 #define MC_X(m, name, type, unit, lo, hi, def, rule, group, access, choices, doc) MC_PCTYPE_##type m;
     MC_PARAMS(MC_X)
@@ -54,7 +63,7 @@ typedef struct {
 typedef struct {
     const char *name;        /* "group.key", stable: scenario key, tuning name, docs        */
     const char *unit;
-    const char *choices;     /* ENUM: "a|b|c", the stored value is the position             */
+    const char *choices;     /* ENUM: "a|b|c", the stored value is the position; else ""    */
     const char *doc;
     uint16_t offset;         /* of the member in mc_params_t                                */
     uint8_t type;            /* mc_param_type_t   */
