@@ -58,6 +58,14 @@ static void unop_init(mc_angle_src_state_t *st, const mc_angle_src_cfg_t *cfg)
     s->raw = (mc_angle_out_t){0.0f, 0.0f};
 }
 
+/* Running: the solver takes its whole configuration (injection.n1_rpm, where K1, K2 fade out, is
+ * RUNTIME); the PLL's parameters change only with the outputs off. */
+static void unop_retune(mc_angle_src_state_t *st, const mc_angle_src_cfg_t *cfg)
+{
+    src_unop_t *s = (src_unop_t *)(void *)st;
+    mc_unop_retune(&s->unop, &((const src_unop_cfg_t *)(const void *)cfg)->unop);
+}
+
 static void unop_reset(mc_angle_src_state_t *st, float theta, float omega)
 {
     src_unop_t *s = (src_unop_t *)(void *)st;
@@ -110,6 +118,6 @@ static bool unop_cfg_equal(const mc_angle_src_cfg_t *cfg_a, const mc_angle_src_c
 const mc_angle_src_desc_t mc_angle_src_unop = {
     .name = "unop", .cls = MC_ANGLE_ESTIMATOR,
     .needs_injection = true, .lock_checks = true, .map_models = 1u << 1,   /* estimator.model = fluxmap */
-    .build = unop_build, .init = unop_init, .retune = 0, .reset = unop_reset, .step = unop_step,
+    .build = unop_build, .init = unop_init, .retune = unop_retune, .reset = unop_reset, .step = unop_step,
     .diag = unop_diag, .cfg_of = unop_cfg_of, .cfg_equal = unop_cfg_equal,
 };
