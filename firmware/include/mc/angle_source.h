@@ -106,8 +106,10 @@ typedef struct mc_angle_src_desc {
     /* ISR side, copies only: */
     void (*init)(mc_angle_src_state_t *s, const mc_angle_src_cfg_t *cfg);
     /* while running: a new configuration in which only RUNTIME parameters (mc/params_table.h)
-     * changed; takes the ones it reads at run time, keeps its estimate. NULL: it reads none.
-     * tests/unit/app/test_runtime_params.c checks every such parameter against a fresh build. */
+     * changed; takes the ones it reads at run time, keeps its estimate. NULL: it reads none. It
+     * gets them built (by build, in the background), not the parameters: it runs in the ISR at
+     * the configuration swap (mc_drive_retune). tests/unit/app/test_runtime_params.c checks
+     * every RUNTIME parameter against a fresh build. */
     void (*retune)(mc_angle_src_state_t *s, const mc_angle_src_cfg_t *cfg);
     /* estimate set to (theta, omega), filters primed: at enable and after the initial position */
     void (*reset)(mc_angle_src_state_t *s, float theta, float omega);
