@@ -31,7 +31,7 @@ void mc_drive_init_blocks(mc_drive_t *d)
     d->tref.mtpa_valid = false;
     d->tref.fw_active = false;
     d->step3_speed = b->step3_lpf;   /* filters as built in the background, their state at rest */
-    d->src->init(&d->src_state, &b->src);
+    d->src->init(&d->src_state, &b->src.cfg);
     mc_inj_init(&d->inj, &b->inj);
     d->notch_d = b->notch;
     d->notch_q = b->notch;
@@ -43,6 +43,9 @@ void mc_drive_init_blocks(mc_drive_t *d)
 void mc_drive_retune(mc_drive_t *d, const mc_drive_built_t *b)
 {
     d->cfg = b;   /* limits, slew, protection: read from it from now on */
+    if (d->src->retune != 0) {   /* the source takes what it reads at run time (injection.n1_rpm) */
+        d->src->retune(&d->src_state, &b->blk.src.cfg);
+    }
     d->inj.cfg.v1 = b->blk.inj.v1;
     d->inj.cfg.omega_n1 = b->blk.inj.omega_n1;
     const float integ_d = d->cc.pi_d.integ, integ_q = d->cc.pi_q.integ;

@@ -141,44 +141,33 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     const float cal = 2.0f * (float)p->offset_cal_samples * p->ts;
     b->seq = (mc_seq_cfg_t){.ts = p->ts, .init_pos = b->three_step, .timeout_cal = cal > 0.1f ? cal : 0.1f,
                             .timeout_step12 = p->timeout_step12, .timeout_step3 = p->timeout_step3};
-    b->seq.catch_first = p->catch_on != 0 && !mc_angle_src_get(p->angle_src)->measures_angle;
-    b->src_measures = mc_angle_src_get(p->angle_src)->measures_angle;
+    b->seq.catch_first = p->catch_on != 0 && mc_angle_src_get(p->angle_src)->cls == MC_ANGLE_ESTIMATOR;
+    b->src_measures = mc_angle_src_get(p->angle_src)->cls == MC_ANGLE_SENSOR;
     build_catch(p, m, b);
     b->step3_speed_tol = p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
     b->step3_hold = (uint32_t)(p->step3_hold / p->ts + 0.5f);
     mc_lpf1_init(&b->step3_lpf, 50.0f, p->ts, 0.0f);
 }
 
-static void build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
+/* The selected angle source: the machine model it gets (estimator.model's form of the estimator's
+ * model; the drive's decoupling and field-weakening entry use the same one), then its own
+ * configuration by its descriptor; the injection follows its capabilities. */
+static bool build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b, mc_param_err_t *err)
 {
-    const float pp = (float)p->pole_pairs;
-    mc_angle_src_cfg_t *s = &b->src;
-    *s = (mc_angle_src_cfg_t){0};
-    s->ts = p->ts;
-    s->pole_pairs = (int)p->pole_pairs;
-    s->enc_counts_per_rev = 4u * (uint32_t)p->enc_lines;
-    s->enc_offset_rad = p->enc_offset;
-    s->enc_pll_bw_hz = p->enc_pll_bw_hz;
-    s->enc_speed_fc_hz = p->enc_speed_fc_hz;
-    s->rs = m->rs;
-    s->model = p->est_model == 1 ? (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map}
-                                 : (mc_flux_model_t){MC_FLUX_CONST, m->ld, m->lq, m->psi_pm, 0};
-    s->iter_max = (int)p->iter_max;
-    s->step_tol = p->step_tol;
-    s->k1 = p->k1;
-    s->k2 = p->k2;
-    s->omega_n1 = p->n1_rpm * RPM_TO_RAD_S * pp;
-    s->omega_base = p->speed_scale_rpm * RPM_TO_RAD_S * pp;
-    s->mid_sample = p->mid_sample != 0;
-    s->reg_predicted = p->reg_predicted != 0;
-    s->pll_bw_hz = p->pll_bw_hz;
-    s->pll_speed_fc_hz = p->pll_speed_fc_hz;
-    b->inject = mc_angle_src_get(p->angle_src)->needs_injection && p->inj_kind != (int32_t)MC_INJ_OFF;
-    b->cc_map = s->model.kind == MC_FLUX_MAP && s->model.map != 0;
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
+    b->src.rs = m->rs;
+    b->src.model = p->est_model == 1 ? (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map}
+                                     : (mc_flux_model_t){MC_FLUX_CONST, m->ld, m->lq, m->psi_pm, 0};
+    if (!src->build(p, b->src.rs, &b->src.model, &b->src.cfg, err)) {
+        return false;
+    }
+    b->inject = src->needs_injection && p->inj_kind != (int32_t)MC_INJ_OFF;
+    b->cc_map = b->src.model.kind == MC_FLUX_MAP && b->src.model.map != 0;
     b->inj = (mc_inj_cfg_t){.kind = (mc_inj_kind_t)p->inj_kind, .v1 = p->inj_v1, .f_hz = p->inj_f_hz,
-                            .omega_n1 = s->omega_n1, .ts = p->ts};
+                            .omega_n1 = p->n1_rpm * RPM_TO_RAD_S * (float)p->pole_pairs, .ts = p->ts};
     const float f_notch = p->inj_f_hz < 0.45f / p->ts ? p->inj_f_hz : 0.45f / p->ts;
     mc_biquad_init_notch(&b->notch, f_notch, p->notch_q, p->ts);
+    return true;
 }
 
 static uint32_t periods_of(float seconds, float ts)
@@ -190,7 +179,8 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
 {
     const float el = RPM_TO_RAD_S * (float)p->pole_pairs;
     b->overspeed = p->overspeed_rpm * el;
-    b->recover = p->lock_action == 1 && !mc_angle_src_get(p->angle_src)->measures_angle;
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
+    b->recover = p->lock_action == 1 && src->cls == MC_ANGLE_ESTIMATOR;
     b->hold_fw = p->overspeed_action == 1;
     b->pol_check = p->pol_check != 0;
     b->pol_at_start = p->pol_check == 2;
@@ -216,8 +206,8 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     b->track_n = periods_of(p->track_time, p->ts);
     b->lock_tol = p->lock_tol;
     b->lock_floor = p->lock_floor_rpm * el;
-    b->lock_n = b->inject ? periods_of(p->lock_time, p->ts) : 0u;   /* estimators only */
-    b->jump_n = b->inject ? periods_of(p->jump_time, p->ts) : 0u;
+    b->lock_n = src->lock_checks ? periods_of(p->lock_time, p->ts) : 0u;
+    b->jump_n = src->lock_checks ? periods_of(p->jump_time, p->ts) : 0u;
     b->jump = p->jump_deg * (MC_PI / 180.0f);
     b->stall_speed = p->stall_rpm * el;
     b->stall_torque = 0.9f * p->torque_max;
@@ -238,8 +228,9 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     if (!mc_params_validate(p, err)) {
         return false;
     }
-    const bool estimator = mc_angle_src_get(p->angle_src)->needs_injection;
-    const bool need_map = (estimator && p->est_model == 1) ||
+    /* the flux map: where the source needs it with this estimator.model, and for Steps I-II's
+     * l_dd profile and nonlinear costs */
+    const bool need_map = (mc_angle_src_get(p->angle_src)->map_models & 1u << p->est_model) != 0u ||
                           (p->init_three_step != 0 && (p->ip2_dvi == 0 || (p->ip1_pulse3 == 0 && p->ip1_cost != 0)));
     mc_est_model_t m;
     if (!check_model(p, &cfg->est, &m, need_map, err)) {
@@ -264,7 +255,9 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     b->i_slew = p->i_slew;
     b->cal_samples = (uint32_t)p->offset_cal_samples;
     build_startup(p, &m, b);
-    build_source(p, &m, b);
+    if (!build_source(p, &m, b, err)) {
+        return false;
+    }
     build_protection(p, b);
 
     mc_cc_cfg_from_bandwidth(&out->cc, p->cc_bw_hz, p->rs, p->ld, p->lq, p->psi_pm, p->ts);

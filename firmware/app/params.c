@@ -224,7 +224,14 @@ static float maxf(float a, float b)
     return a > b ? a : b;
 }
 
+/* What the selected angle source is and needs (mc/angle_source.h) */
 static bool estimating(const mc_params_t *p)
+{
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
+    return src != NULL && src->cls == MC_ANGLE_ESTIMATOR;
+}
+
+static bool needs_injection(const mc_params_t *p)
 {
     const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
     return src != NULL && src->needs_injection;
@@ -232,7 +239,7 @@ static bool estimating(const mc_params_t *p)
 
 static bool injecting(const mc_params_t *p)
 {
-    return estimating(p) && p->inj_kind != 0;
+    return needs_injection(p) && p->inj_kind != 0;
 }
 
 static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
@@ -479,7 +486,7 @@ bool mc_params_validate(const mc_params_t *p, mc_param_err_t *err)
         return cross(err, MC_PARAM_step3_hold, MC_PARAM_ts, p, 2.0f * p->ts, mc_param_table[MC_PARAM_step3_hold].max,
                      "the Step III hold must last at least two periods");
     }
-    if (estimating(p)) {
+    if (needs_injection(p)) {
         if (p->inj_kind != 0 && p->inj_f_hz * p->ts > 0.5f) {
             return cross(err, MC_PARAM_inj_f_hz, MC_PARAM_ts, p, mc_param_table[MC_PARAM_inj_f_hz].min, 0.5f * fs,
                          "the injection frequency must be at most half the sampling frequency");
@@ -489,7 +496,7 @@ bool mc_params_validate(const mc_params_t *p, mc_param_err_t *err)
                          "the injection must fit inside the voltage circle Vdc/sqrt3");
         }
     }
-    if (p->init_three_step != 0 && !estimating(p)) {
+    if (p->init_three_step != 0 && !needs_injection(p)) {   /* Step III runs on the injection */
         return cross(err, MC_PARAM_init_three_step, MC_PARAM_angle_src, p, 0.0f, 0.0f,
                      "the three-step start needs control.angle_source = unop");
     }

@@ -1,16 +1,31 @@
 /* Angle source "encoder": the quadrature counter through (2.18) and the encoder's own speed PLL
- * (mc/encoder.h). Needs no injection. */
+ * (mc/encoder.h). An angle sensor: no injection, no loss-of-lock checks, no flux map.
+ * Parameters: hw.encoder_lines, hw.encoder_offset_rad, control.encoder_pll_bw_hz,
+ * control.encoder_speed_fc_hz (mc/params_table.h); none of them RUNTIME. */
 #include "mc/angle_source.h"
 #include "mc/encoder.h"
+#include "mc/params.h"
 
+MC_ANGLE_SRC_CFG_FITS(mc_encoder_cfg_t);
 MC_ANGLE_SRC_FITS(mc_encoder_t);
 
-static void enc_init(mc_angle_src_state_t *s, const mc_angle_src_cfg_t *c)
+static bool enc_build(const mc_params_t *p, float rs, const mc_flux_model_t *model, mc_angle_src_cfg_t *cfg,
+                      mc_param_err_t *err)
 {
-    const mc_encoder_cfg_t ec = {.pole_pairs = c->pole_pairs, .counts_per_rev = c->enc_counts_per_rev,
-                                 .offset_rad = c->enc_offset_rad, .ts = c->ts,
-                                 .pll_bw_hz = c->enc_pll_bw_hz, .speed_fc_hz = c->enc_speed_fc_hz};
-    mc_encoder_init((mc_encoder_t *)(void *)s, &ec);
+    (void)rs;
+    (void)model;
+    (void)err;   /* the table's ranges cover everything it reads */
+    *cfg = (mc_angle_src_cfg_t){0};
+    *(mc_encoder_cfg_t *)(void *)cfg =
+        (mc_encoder_cfg_t){.pole_pairs = (int)p->pole_pairs, .counts_per_rev = 4u * (uint32_t)p->enc_lines,
+                           .offset_rad = p->enc_offset, .ts = p->ts, .pll_bw_hz = p->enc_pll_bw_hz,
+                           .speed_fc_hz = p->enc_speed_fc_hz};
+    return true;
+}
+
+static void enc_init(mc_angle_src_state_t *s, const mc_angle_src_cfg_t *cfg)
+{
+    mc_encoder_init((mc_encoder_t *)(void *)s, (const mc_encoder_cfg_t *)(const void *)cfg);
 }
 
 /* The counter is absolute (after the offset): its estimate needs no seed. */
@@ -32,7 +47,23 @@ static void enc_diag(const mc_angle_src_state_t *s, mc_angle_diag_t *d)
     *d = (mc_angle_diag_t){.theta_raw = e->pll.theta, .omega_raw = e->pll.omega};
 }
 
+static void enc_cfg_of(const mc_angle_src_state_t *s, mc_angle_src_cfg_t *cfg)
+{
+    *cfg = (mc_angle_src_cfg_t){0};
+    *(mc_encoder_cfg_t *)(void *)cfg = ((const mc_encoder_t *)(const void *)s)->cfg;
+}
+
+static bool enc_cfg_equal(const mc_angle_src_cfg_t *cfg_a, const mc_angle_src_cfg_t *cfg_b)
+{
+    const mc_encoder_cfg_t *a = (const mc_encoder_cfg_t *)(const void *)cfg_a;
+    const mc_encoder_cfg_t *b = (const mc_encoder_cfg_t *)(const void *)cfg_b;
+    return a->pole_pairs == b->pole_pairs && a->counts_per_rev == b->counts_per_rev &&
+           a->offset_rad == b->offset_rad && a->ts == b->ts && a->pll_bw_hz == b->pll_bw_hz &&
+           a->speed_fc_hz == b->speed_fc_hz;
+}
+
 const mc_angle_src_desc_t mc_angle_src_encoder = {
-    .name = "encoder", .needs_injection = false, .measures_angle = true,
-    .init = enc_init, .reset = enc_reset, .step = enc_step, .diag = enc_diag,
+    .name = "encoder", .cls = MC_ANGLE_SENSOR, .needs_injection = false, .lock_checks = false, .map_models = 0u,
+    .build = enc_build, .init = enc_init, .retune = 0, .reset = enc_reset, .step = enc_step, .diag = enc_diag,
+    .cfg_of = enc_cfg_of, .cfg_equal = enc_cfg_equal,
 };

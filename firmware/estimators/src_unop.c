@@ -1,10 +1,19 @@
 /* Angle source "unop": the Newton-based estimator (thesis ch. 6, mc/unop.h) followed by the PLL
  * as a filter with the estimated speed as feed-forward (Fig. 6.9). The controller uses the PLL's
- * angle and filtered speed; the raw estimate is the diagnostic. Needs the HF injection (6.4)
- * at low speed. */
+ * angle and filtered speed; the raw estimate is the diagnostic and what the loss-of-lock checks
+ * compare. Needs the HF injection (6.4) at low speed; needs the flux map with
+ * estimator.model = fluxmap. Parameters: estimator.* and injection.n1_rpm (mc/params_table.h). */
 #include "mc/angle_source.h"
+#include "mc/params.h"
 #include "mc/pll.h"
 #include "mc/unop.h"
+
+#define RPM_TO_RAD_S (MC_2PI / 60.0f)
+
+typedef struct {
+    mc_unop_cfg_t unop;
+    mc_pll_cfg_t pll;
+} src_unop_cfg_t;
 
 typedef struct {
     mc_unop_t unop;
@@ -12,30 +21,49 @@ typedef struct {
     mc_angle_out_t raw;
 } src_unop_t;
 
+MC_ANGLE_SRC_CFG_FITS(src_unop_cfg_t);
 MC_ANGLE_SRC_FITS(src_unop_t);
 
-static void unop_init(mc_angle_src_state_t *st, const mc_angle_src_cfg_t *c)
+static bool unop_build(const mc_params_t *p, float rs, const mc_flux_model_t *model, mc_angle_src_cfg_t *cfg,
+                       mc_param_err_t *err)
+{
+    (void)err;   /* the table's ranges and the drive's model check cover everything it reads */
+    *cfg = (mc_angle_src_cfg_t){0};
+    src_unop_cfg_t *c = (src_unop_cfg_t *)(void *)cfg;
+    const float pp = (float)p->pole_pairs;
+    mc_unop_cfg_default(&c->unop);
+    c->unop.ts = p->ts;
+    c->unop.rs = rs;
+    c->unop.model = *model;
+    c->unop.iter_max = (int)p->iter_max;
+    c->unop.step_tol = p->step_tol;
+    c->unop.k1 = p->k1;
+    c->unop.k2 = p->k2;
+    c->unop.omega_n1 = p->n1_rpm * RPM_TO_RAD_S * pp;
+    c->unop.omega_base = p->speed_scale_rpm * RPM_TO_RAD_S * pp;
+    c->unop.mid_sample = p->mid_sample != 0;
+    c->unop.reg_predicted = p->reg_predicted != 0;
+    /* critically damped PLL (3.9) */
+    const float w = MC_2PI * p->pll_bw_hz;
+    c->pll = (mc_pll_cfg_t){.kp = 2.0f * w, .ki = w * w, .ts = p->ts, .speed_fc_hz = p->pll_speed_fc_hz};
+    return true;
+}
+
+static void unop_init(mc_angle_src_state_t *st, const mc_angle_src_cfg_t *cfg)
 {
     src_unop_t *s = (src_unop_t *)(void *)st;
-    mc_unop_cfg_t u;
-    mc_unop_cfg_default(&u);
-    u.ts = c->ts;
-    u.rs = c->rs;
-    u.model = c->model;
-    u.iter_max = c->iter_max;
-    u.step_tol = c->step_tol;
-    u.k1 = c->k1;
-    u.k2 = c->k2;
-    u.omega_n1 = c->omega_n1;
-    u.omega_base = c->omega_base;
-    u.mid_sample = c->mid_sample;
-    u.reg_predicted = c->reg_predicted;
-    mc_unop_init(&s->unop, &u);
-    /* critically damped PLL (3.9) */
-    const float w = MC_2PI * c->pll_bw_hz;
-    const mc_pll_cfg_t pc = {.kp = 2.0f * w, .ki = w * w, .ts = c->ts, .speed_fc_hz = c->pll_speed_fc_hz};
-    mc_pll_init(&s->pll, &pc);
+    const src_unop_cfg_t *c = (const src_unop_cfg_t *)(const void *)cfg;
+    mc_unop_init(&s->unop, &c->unop);
+    mc_pll_init(&s->pll, &c->pll);
     s->raw = (mc_angle_out_t){0.0f, 0.0f};
+}
+
+/* Running: the solver takes its whole configuration (injection.n1_rpm, where K1, K2 fade out, is
+ * RUNTIME); the PLL's parameters change only with the outputs off. */
+static void unop_retune(mc_angle_src_state_t *st, const mc_angle_src_cfg_t *cfg)
+{
+    src_unop_t *s = (src_unop_t *)(void *)st;
+    mc_unop_retune(&s->unop, &((const src_unop_cfg_t *)(const void *)cfg)->unop);
 }
 
 static void unop_reset(mc_angle_src_state_t *st, float theta, float omega)
@@ -65,7 +93,31 @@ static void unop_diag(const mc_angle_src_state_t *st, mc_angle_diag_t *d)
                            .cost = s->unop.cost, .cond = s->unop.cond};
 }
 
+static void unop_cfg_of(const mc_angle_src_state_t *st, mc_angle_src_cfg_t *cfg)
+{
+    const src_unop_t *s = (const src_unop_t *)(const void *)st;
+    *cfg = (mc_angle_src_cfg_t){0};
+    src_unop_cfg_t *c = (src_unop_cfg_t *)(void *)cfg;
+    c->unop = s->unop.cfg;
+    c->pll = s->pll.cfg;
+}
+
+static bool unop_cfg_equal(const mc_angle_src_cfg_t *cfg_a, const mc_angle_src_cfg_t *cfg_b)
+{
+    const src_unop_cfg_t *ca = (const src_unop_cfg_t *)(const void *)cfg_a;
+    const src_unop_cfg_t *cb = (const src_unop_cfg_t *)(const void *)cfg_b;
+    const mc_unop_cfg_t *a = &ca->unop, *b = &cb->unop;
+    return a->ts == b->ts && a->rs == b->rs && mc_flux_model_same(&a->model, &b->model) &&
+           a->iter_max == b->iter_max && a->step_tol == b->step_tol && a->k1 == b->k1 && a->k2 == b->k2 &&
+           a->omega_n1 == b->omega_n1 && a->omega_base == b->omega_base && a->mid_sample == b->mid_sample &&
+           a->reg_predicted == b->reg_predicted && a->u_norm == b->u_norm && a->step_max == b->step_max &&
+           a->zoh_gain == b->zoh_gain && ca->pll.kp == cb->pll.kp && ca->pll.ki == cb->pll.ki &&
+           ca->pll.ts == cb->pll.ts && ca->pll.speed_fc_hz == cb->pll.speed_fc_hz;
+}
+
 const mc_angle_src_desc_t mc_angle_src_unop = {
-    .name = "unop", .needs_injection = true,
-    .init = unop_init, .reset = unop_reset, .step = unop_step, .diag = unop_diag,
+    .name = "unop", .cls = MC_ANGLE_ESTIMATOR,
+    .needs_injection = true, .lock_checks = true, .map_models = 1u << 1,   /* estimator.model = fluxmap */
+    .build = unop_build, .init = unop_init, .retune = unop_retune, .reset = unop_reset, .step = unop_step,
+    .diag = unop_diag, .cfg_of = unop_cfg_of, .cfg_equal = unop_cfg_equal,
 };

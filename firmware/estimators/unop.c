@@ -309,7 +309,7 @@ void mc_unop_cfg_default(mc_unop_cfg_t *cfg)
     cfg->zoh_gain = true;
 }
 
-void mc_unop_init(mc_unop_t *s, const mc_unop_cfg_t *cfg)
+void mc_unop_retune(mc_unop_t *s, const mc_unop_cfg_t *cfg)
 {
     s->cfg = *cfg;
     if (s->cfg.iter_max < 1) {
@@ -317,6 +317,11 @@ void mc_unop_init(mc_unop_t *s, const mc_unop_cfg_t *cfg)
     } else if (s->cfg.iter_max > MC_UNOP_ITER_MAX) {
         s->cfg.iter_max = MC_UNOP_ITER_MAX;
     }
+}
+
+void mc_unop_init(mc_unop_t *s, const mc_unop_cfg_t *cfg)
+{
+    mc_unop_retune(s, cfg);
     mc_unop_reset(s, 0.0f, 0.0f);
 }
 

@@ -282,7 +282,7 @@ DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& m
     mc_param_err_t err{};
     if (!mc_drive_build(&ds.cfg, built.get(), &err)) throw ScenarioError(explain_config_error(sc, err));
     ds.resolved = built->p;
-    ds.estimator = src != nullptr && src->needs_injection;
+    ds.estimator = src != nullptr && src->cls == MC_ANGLE_ESTIMATOR;
     return ds;
 }
 

@@ -138,7 +138,7 @@ typedef struct {
     float ug_coef;               /* sqrt3 psi_pm: the line-to-line back-EMF per rad/s el [V s]  */
     uint32_t retries, retry_reset_n;
     mc_seq_cfg_t seq;
-    mc_angle_src_cfg_t src;
+    mc_angle_src_built_t src;    /* the selected source: its model and own configuration */
     mc_inj_cfg_t inj;
     mc_initpos_cfg_t ip1;
     mc_pulse3_cfg_t pulse3;

@@ -39,4 +39,10 @@ typedef struct {
  *                                        d2psi_q/did2, d2psi_q/diddiq, d2psi_q/diq2]. */
 void mc_flux_eval(const mc_flux_model_t *m, mc_dq_t i, mc_dq_t *psi, float L[4], float dL[6]);
 
+/* The same model: kind, constants and the same map (by address: the map is data, not copied). */
+static inline bool mc_flux_model_same(const mc_flux_model_t *a, const mc_flux_model_t *b)
+{
+    return a->kind == b->kind && a->ld == b->ld && a->lq == b->lq && a->psi_pm == b->psi_pm && a->map == b->map;
+}
+
 #endif

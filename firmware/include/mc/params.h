@@ -53,7 +53,7 @@ typedef enum {
 MC_PARAMS(MC_X)
 #undef MC_X
 
-typedef struct {
+typedef struct mc_params {
 #define MC_X(m, name, type, unit, lo, hi, def, rule, group, access, choices, doc) MC_PCTYPE_##type m;
     MC_PARAMS(MC_X)
 #undef MC_X
@@ -90,7 +90,7 @@ typedef enum {
     MC_PERR_BUSY             /* the previous change is not taken by the ISR yet: retry    */
 } mc_param_err_kind_t;
 
-typedef struct {
+typedef struct mc_param_err {
     mc_param_err_kind_t kind;
     int param, param2;       /* ids, -1 if none                                            */
     float value, value2;

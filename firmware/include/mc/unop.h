@@ -54,6 +54,8 @@ typedef struct {
  * model, k1, k2, omega_n1 at zero for the caller. */
 void mc_unop_cfg_default(mc_unop_cfg_t *cfg);
 void mc_unop_init(mc_unop_t *s, const mc_unop_cfg_t *cfg);
+/* A new configuration while running (weights, N1, limits): the estimate and diagnostics stay. */
+void mc_unop_retune(mc_unop_t *s, const mc_unop_cfg_t *cfg);
 /* theta/omega at the current sample: the next step starts its search from them. */
 void mc_unop_reset(mc_unop_t *s, float theta, float omega);
 /* One estimation per control period. in: i_ab(k-1) = in->i_ab_prev, i_ab(k) = in->i_ab, voltage

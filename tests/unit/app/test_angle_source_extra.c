@@ -1,21 +1,19 @@
 /* The angle-source seam (mc/angle_source.h), shown with a test-only source.
  *
- * ADDING AN ANGLE SOURCE IS THIS FILE PLUS ONE REGISTRATION LINE:
- *   1. one file that defines `const mc_angle_src_desc_t mc_angle_src_NAME` (its state checked
- *      with MC_ANGLE_SRC_FITS), as below;
+ * ADDING AN ANGLE SOURCE IS ITS FILE, ONE REGISTRATION LINE AND ITS PARAMETER ROWS:
+ *   1. its file(s): `const mc_angle_src_desc_t mc_angle_src_NAME` with what it is (sensor or
+ *      estimator), what it needs (injection, loss-of-lock checks, the flux map for which
+ *      estimator.model) and its life cycle (build from the parameters, init, retune, reset, step,
+ *      diag, cfg_of, cfg_equal), its configuration and state checked with MC_ANGLE_SRC_CFG_FITS and
+ *      MC_ANGLE_SRC_FITS: here tests/unit/app/src_test_hold.c;
  *   2. one line X(NAME) in MC_ANGLE_SOURCES (mc/angle_source.h). This test build does not touch
  *      the header: it adds the line through the hook, on the compiler's command line
- *      (tests/unit/app/CMakeLists.txt, target app_angle_registry):
- *          target_compile_definitions(app_angle_registry PRIVATE "MC_ANGLE_SOURCES_EXTRA(X)=X(test_hold)")
- *      and compiles the drive's app sources (firmware/app, the list of mc_app) again with it.
+ *      (tests/unit/app/CMakeLists.txt, target app_angle_registry), and compiles the drive's app
+ *      sources (firmware/app, the list of mc_app) again with it;
+ *   3. the rows of the parameters it reads in mc/params_table.h (test_hold has none of its own).
  * Nothing else changes: the line adds the enum value MC_ANGLE_SRC_test_hold, the registry entry
  * (angle_registry.c), the choice "test_hold" of control.angle_source and the upper end of its
- * range (params_table.h), and the drive calls the descriptor at the same point of the ISR.
- *
- * The source "test_hold": holds the angle it is reset to (the one handed over with the enable
- * command, startup.init_pos = given) at speed 0, or, with test_hold_omega set, ramps from it at
- * that fixed electrical speed. It needs no injection (needs_injection = false), so the drive
- * injects nothing while it runs. */
+ * range (params_table.h); the drive builds, runs and checks the source by its descriptor. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -27,50 +25,7 @@
 #include "hal_host/host.h"
 #include "mc/angle.h"
 #include "mc/drive.h"
-
-/* ------------------------------------------------------------------ the source (the seam) */
-
-static float test_hold_omega = 0.0f;   /* ramp speed [rad/s el]; 0: hold */
-
-typedef struct {
-    float theta, omega, ts;
-} test_hold_t;
-
-MC_ANGLE_SRC_FITS(test_hold_t);
-
-static void hold_init(mc_angle_src_state_t *s, const mc_angle_src_cfg_t *cfg)
-{
-    test_hold_t *h = (test_hold_t *)(void *)s;
-    *h = (test_hold_t){.theta = 0.0f, .omega = 0.0f, .ts = cfg->ts};
-}
-
-static void hold_reset(mc_angle_src_state_t *s, float theta, float omega)
-{
-    test_hold_t *h = (test_hold_t *)(void *)s;
-    (void)omega;
-    h->theta = mc_wrap_pi(theta);
-    h->omega = test_hold_omega;
-}
-
-static void hold_step(mc_angle_src_state_t *s, const mc_angle_in_t *in, mc_angle_out_t *out)
-{
-    test_hold_t *h = (test_hold_t *)(void *)s;
-    (void)in;
-    out->theta = h->theta;
-    out->omega = h->omega;
-    h->theta = mc_wrap_pi(h->theta + h->omega * h->ts);   /* the angle of the next sample */
-}
-
-static void hold_diag(const mc_angle_src_state_t *s, mc_angle_diag_t *d)
-{
-    const test_hold_t *h = (const test_hold_t *)(const void *)s;
-    *d = (mc_angle_diag_t){.theta_raw = h->theta, .omega_raw = h->omega};
-}
-
-const mc_angle_src_desc_t mc_angle_src_test_hold = {
-    .name = "test_hold", .needs_injection = false,
-    .init = hold_init, .reset = hold_reset, .step = hold_step, .diag = hold_diag,
-};
+#include "src_test_hold.h"
 
 /* ------------------------------------------------------------------------------- the tests */
 
@@ -108,13 +63,18 @@ static void run(rig_t *r, int n)
     }
 }
 
-static void enable(rig_t *r, float theta_init)
+static void enable_iq(rig_t *r, float theta_init, float i_q)
 {
-    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = {0.0f, 1.0f},
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = {0.0f, i_q},
                               .theta_init = theta_init};
     mc_drive_command(&r->d, &c);
     run(r, (int)r->d.cfg->p.offset_cal_samples + 1);
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
+}
+
+static void enable(rig_t *r, float theta_init)
+{
+    enable_iq(r, theta_init, 1.0f);
 }
 
 /* The one line registered the source everywhere: enum, registry, the parameter's choices and range. */
@@ -156,7 +116,8 @@ static void test_registry_has_extra_source(void **st)
 }
 
 /* The drive runs on it: the controller's angle is the held one, and without needs_injection the
- * drive injects nothing (with injection.kind = sine, the default). */
+ * drive injects nothing (with injection.kind = sine, the default), yet as an estimator with
+ * lock_checks it has the loss-of-lock detectors (which stay quiet: its raw estimate agrees). */
 static void test_drive_runs_with_held_angle(void **st)
 {
     (void)st;
@@ -166,6 +127,7 @@ static void test_drive_runs_with_held_angle(void **st)
     assert_ptr_equal(r.d.src, &mc_angle_src_test_hold);
     assert_int_equal(r.d.cfg->p.inj_kind, 1);   /* sine: would inject with an estimator */
     assert_false(r.d.cfg->blk.inject);
+    assert_true(r.d.cfg->blk.lock_n > 0u);
     const float held = 1.234f;
     enable(&r, held);
     for (int k = 0; k < 200; ++k) {
@@ -194,6 +156,12 @@ static void test_drive_follows_ramp(void **st)
     static rig_t r;
     test_hold_omega = 300.0f;
     rig_init(&r, "test_hold");
+    /* it starts at its ramp speed from a hand-over at standstill: the loss-of-lock check's speed
+     * swing would rightly call that implausible, so that detector is off here (lock_time 0) */
+    mc_param_err_t err;
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_lock_time, 0.0f, &err));
+    run(&r, 1);
+    assert_int_equal(r.d.cfg->blk.lock_n, 0u);
     enable(&r, 3.0f);
     float prev = mc_drive_telemetry(&r.d)->theta;
     int wraps = 0;
@@ -228,6 +196,145 @@ static void test_estimator_source_injects(void **st)
     assert_true(peak > 1.0f);
 }
 
+
+static uint32_t periods(float s, float ts)
+{
+    return (uint32_t)(s / ts + 0.5f);
+}
+
+static bool build_with(const char *source, const char *model, mc_drive_built_t *out, mc_param_err_t *err)
+{
+    mc_drive_cfg_t cfg;
+    mc_drive_cfg_default(&cfg);
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_angle_src, source, NULL));
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_est_model, model, NULL));
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_lock_action, "recover", NULL));
+    return mc_drive_build(&cfg, out, err);
+}
+
+/* The drive's checks follow the descriptor's kind and capabilities, not needs_injection: an
+ * estimator that needs no injection gets the loss-of-lock detectors, the recovery, the catch
+ * and the flux-map requirement of its model; an angle sensor none of them. */
+static void test_checks_follow_capabilities(void **st)
+{
+    (void)st;
+    static mc_drive_built_t b;
+    mc_param_err_t err;
+    test_hold_omega = 0.0f;
+    assert_true(build_with("test_hold", "const", &b, &err));
+    assert_false(b.blk.inject);
+    assert_int_equal(b.blk.lock_n, periods(b.p.lock_time, b.p.ts));
+    assert_int_equal(b.blk.jump_n, periods(b.p.jump_time, b.p.ts));
+    assert_true(b.blk.lock_n > 0u && b.blk.jump_n > 0u);
+    assert_true(b.blk.recover);
+    assert_true(b.blk.seq.catch_first);   /* startup.catch = on, the default */
+    assert_false(b.blk.src_measures);
+
+    assert_true(build_with("encoder", "const", &b, &err));
+    assert_int_equal(b.blk.lock_n, 0u);
+    assert_int_equal(b.blk.jump_n, 0u);
+    assert_false(b.blk.recover);
+    assert_false(b.blk.seq.catch_first);
+    assert_true(b.blk.src_measures);
+
+    assert_true(build_with("unop", "const", &b, &err));
+    assert_true(b.blk.inject && b.blk.lock_n > 0u && b.blk.recover);
+
+    /* estimator.model = fluxmap without a map: refused for the sources that declare the need */
+    assert_false(build_with("test_hold", "fluxmap", &b, &err));
+    assert_int_equal(err.kind, MC_PERR_MODEL);
+    assert_int_equal(err.param, MC_PARAM_est_model);
+    assert_false(build_with("unop", "fluxmap", &b, &err));
+    assert_int_equal(err.kind, MC_PERR_MODEL);
+    assert_true(build_with("encoder", "fluxmap", &b, &err));
+}
+
+/* The source's build reports its own refusals through mc_param_err_t, and the drive refuses the
+ * whole configuration with it (init: MC_FAULT_CONFIG; a parameter write: nothing changes). */
+static void test_build_error_reaches_the_drive(void **st)
+{
+    (void)st;
+    static mc_drive_built_t b;
+    static rig_t r;
+    mc_param_err_t err;
+    test_hold_omega = 2000.0f;   /* above the default over-speed limit (~995 rad/s el) */
+    assert_false(build_with("test_hold", "const", &b, &err));
+    assert_int_equal(err.kind, MC_PERR_CROSS);
+    assert_int_equal(err.param, MC_PARAM_overspeed_rpm);
+    assert_string_equal(err.text, "test_hold's ramp must stay below the over-speed limit");
+
+    r = (rig_t){0};
+    hal_host_pwm_init(&r.pwm, 1e-4f, 0.5e-6f);
+    mc_drive_cfg_default(&r.cfg);
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_angle_src, "test_hold", NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_est_model, "const", NULL));   /* no map */
+    assert_false(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    assert_int_equal(mc_drive_config_error(&r.d)->param, MC_PARAM_overspeed_rpm);
+    assert_true((mc_drive_faults(&r.d) & MC_FAULT_CONFIG) != 0u);
+
+    /* a ramp within the limit runs; a live write of the limit below it is refused */
+    test_hold_omega = 300.0f;
+    rig_init(&r, "test_hold");
+    enable(&r, 0.0f);
+    const float before = r.d.cfg->p.overspeed_rpm;
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_overspeed_rpm, 500.0f, &err));   /* 262 rad/s el */
+    assert_int_equal(err.param, MC_PARAM_overspeed_rpm);
+    run(&r, 2);
+    assert_true(r.d.cfg->p.overspeed_rpm == before);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    test_hold_omega = 0.0f;
+}
+
+/* The loss-of-lock detector acts on the estimator without injection: a raw speed that disagrees
+ * with the output trips it within protection.lock_time_s and its 20 Hz average. */
+static void test_lock_loss_detected_without_injection(void **st)
+{
+    (void)st;
+    static rig_t r;
+    test_hold_omega = 0.0f;
+    rig_init(&r, "test_hold");
+    enable_iq(&r, 0.5f, 0.0f);   /* no current asked of the rig's dead machine: no other detector */
+    run(&r, 1000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    test_hold_raw_offset = 500.0f;   /* lock band: 0.5 |w| + 52 rad/s el */
+    const uint32_t limit = r.d.cfg->blk.lock_n + 100u;
+    uint32_t n = 0u;
+    while (mc_drive_state(&r.d) == MC_STATE_RUN && n < limit) {
+        run(&r, 1);
+        ++n;
+    }
+    test_hold_raw_offset = 0.0f;
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_true((mc_drive_faults(&r.d) & MC_FAULT_LOSS_OF_LOCK) != 0u);
+    assert_true(n >= r.d.cfg->blk.lock_n);
+}
+
+/* cfg_of gives the configuration the running source holds; cfg_equal compares two by their
+ * fields (not their bytes) and tells a changed one apart. */
+static void test_cfg_of_and_equal(void **st)
+{
+    (void)st;
+    static rig_t r;
+    static mc_drive_built_t b;
+    test_hold_omega = 100.0f;
+    for (int k = 0; k < (int)MC_ANGLE_SRC_COUNT; ++k) {
+        const mc_angle_src_desc_t *src = mc_angle_src_get(k);
+        rig_init(&r, src->name);
+        mc_angle_src_cfg_t now;
+        memset(&now, 0xa5, sizeof now);   /* whatever cfg_of leaves alone must not matter */
+        src->cfg_of(&r.d.src_state, &now);
+        assert_true(src->cfg_equal(&now, &r.d.cfg->blk.src.cfg));
+        assert_true(src->cfg_equal(&r.d.cfg->blk.src.cfg, &now));
+        /* control.ts_s (read by every source) at another value: another configuration */
+        mc_drive_cfg_t cfg = r.cfg;
+        assert_true(mc_param_set(&cfg.p, MC_PARAM_ts, 2e-4f, NULL));
+        mc_param_err_t err;
+        assert_true(mc_drive_build(&cfg, &b, &err));
+        assert_false(src->cfg_equal(&now, &b.blk.src.cfg));
+    }
+    test_hold_omega = 0.0f;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -235,6 +342,10 @@ int main(void)
         cmocka_unit_test(test_drive_runs_with_held_angle),
         cmocka_unit_test(test_drive_follows_ramp),
         cmocka_unit_test(test_estimator_source_injects),
+        cmocka_unit_test(test_checks_follow_capabilities),
+        cmocka_unit_test(test_build_error_reaches_the_drive),
+        cmocka_unit_test(test_lock_loss_detected_without_injection),
+        cmocka_unit_test(test_cfg_of_and_equal),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
