@@ -31,6 +31,7 @@ typedef struct {
     bool fell_back;
     uint32_t seq_next;                  /* above every sane header                          */
     head_t head[2];
+    mc_store_report_t rep;              /* what the returned copy's parameter record gave    */
 } pick_t;
 
 static uint32_t round_up(uint32_t x, uint32_t a)
@@ -264,11 +265,11 @@ static void sink_close(sink_t *s)
 static void put_params(sink_t *s, const mc_params_t *p)
 {
     sink_put(s, MC_STORE_MAGIC_PARAMS);
-    sink_put(s, MC_STORE_VERSION);
+    sink_put(s, MC_STORE_PARAMS_VERSION);
     sink_put(s, mc_params_table_hash());
     sink_put(s, (uint32_t)MC_PARAM_COUNT);
     for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
-        sink_put(s, (uint32_t)id | (mc_param_is_auto(p, id) ? MC_STORE_AUTO : 0u));
+        sink_put(s, mc_store_param_key(id) | (mc_param_is_auto(p, id) ? MC_STORE_KEY_AUTO : 0u));
         sink_put(s, mc_f32_bits(mc_param_get(p, id)));
     }
     sink_close(s);
@@ -367,8 +368,10 @@ static copy_t src_crc(src_t *r)
     return w == want ? COPY_OK : COPY_BAD;
 }
 
-/* What mc_store_params_decode accepts, exactly len bytes, into the scratch q. */
-static copy_t get_params(src_t *r, uint32_t len, mc_params_t *q)
+/* What mc_store_params_decode accepts, exactly len bytes, into the scratch q; and a version 1
+ * record (the frozen table's positions turned into keys, mc/store.h), so that a set stored before
+ * the by-name format is migrated the same way. */
+static copy_t get_params(src_t *r, uint32_t len, mc_params_t *q, mc_store_report_t *rep)
 {
     uint32_t h[4];
     for (int k = 0; k < 4; ++k) {
@@ -376,29 +379,29 @@ static copy_t get_params(src_t *r, uint32_t len, mc_params_t *q)
             return src_fail(r);
         }
     }
-    if (h[0] != MC_STORE_MAGIC_PARAMS || h[1] != MC_STORE_VERSION || h[2] != mc_params_table_hash() ||
-        h[3] > (uint32_t)MC_PARAM_COUNT || len != 4u * (5u + 2u * h[3])) {
+    const bool v1 = h[1] == 1u;
+    if (h[0] != MC_STORE_MAGIC_PARAMS || !(v1 ? h[2] == MC_STORE_V1_TABLE : h[1] == MC_STORE_PARAMS_VERSION) ||
+        h[3] > len / 8u || len != 4u * (5u + 2u * h[3])) {
         return COPY_BAD;
     }
+    mc_store_report_clear(rep);
+    rep->other_table = v1 || h[2] != mc_params_table_hash();
     mc_params_default(q);
     for (uint32_t k = 0u; k < h[3]; ++k) {
         uint32_t w, v;
         if (!src_take(r, &w) || !src_take(r, &v)) {
             return src_fail(r);
         }
-        const uint32_t id = w & ~MC_STORE_AUTO;
-        if (id >= (uint32_t)MC_PARAM_COUNT) {
-            return COPY_BAD;
-        }
-        if ((w & MC_STORE_AUTO) != 0u) {
-            mc_param_set_auto(q, (int)id, true);
-        } else {
-            const float x = mc_bits_f32(v);
-            const mc_param_info_t *e = &mc_param_table[id];
-            if (!(x >= e->min && x <= e->max) || !mc_param_set(q, (int)id, x, NULL)) {
+        uint32_t hint = k;
+        if (v1) {
+            hint = w & ~MC_STORE_V1_AUTO;
+            const uint32_t key = mc_store_v1_key(hint);
+            if (key == 0u) {
                 return COPY_BAD;
             }
+            w = key | ((w & MC_STORE_V1_AUTO) != 0u ? MC_STORE_KEY_AUTO : 0u);
         }
+        mc_store_param_apply(q, w, v, hint, rep);
     }
     return src_crc(r);
 }
@@ -460,13 +463,14 @@ static copy_t get_model(src_t *r, uint32_t len, mc_est_model_t *m, mc_flux_map_t
 
 /* A copy whose header checks: its payload CRC and both records, decoded into q, m, map_out. */
 static copy_t check_copy(const hal_nvm_t *nvm, const geom_t *g, int slot, const head_t *h, uint8_t *work,
-                         mc_params_t *q, mc_est_model_t *m, mc_flux_map_t *map_out)
+                         mc_params_t *q, mc_est_model_t *m, mc_flux_map_t *map_out, mc_store_report_t *rep)
 {
+    mc_store_report_clear(rep);
     if ((h->flags & MC_PSTORE_FLAG_DEFAULTS) != 0u) {
         return COPY_OK;   /* nothing else in it (read_head checked the lengths are 0) */
     }
     src_t r = {nvm, g, slot, work, 0u, 0u, 0u, h->params_len + h->model_len, 0xFFFFFFFFu, 0xFFFFFFFFu, true};
-    copy_t st = get_params(&r, h->params_len, q);
+    copy_t st = get_params(&r, h->params_len, q, rep);
     if (st == COPY_OK) {
         st = get_model(&r, h->model_len, m, map_out);
     }
@@ -530,6 +534,7 @@ static mc_pstore_status_t pick(const hal_nvm_t *nvm, const geom_t *g, uint8_t *w
 {
     pk->slot = -1;
     pk->fell_back = false;
+    mc_store_report_clear(&pk->rep);
     for (int s = 0; s < 2; ++s) {
         if (!read_head(nvm, g, s, work, &pk->head[s])) {
             return MC_PSTORE_NVM_ERROR;
@@ -559,7 +564,7 @@ static mc_pstore_status_t pick(const hal_nvm_t *nvm, const geom_t *g, uint8_t *w
     }
     for (int k = 0; k < n; ++k) {
         const int s = order[k];
-        const copy_t c = h[s].sane ? check_copy(nvm, g, s, &h[s], work, q, m, map_out) : COPY_BAD;
+        const copy_t c = h[s].sane ? check_copy(nvm, g, s, &h[s], work, q, m, map_out, &pk->rep) : COPY_BAD;
         if (c == COPY_IO) {
             /* never taken for "bad": a save would then overwrite the copy a load returns */
             return MC_PSTORE_NVM_ERROR;
@@ -618,7 +623,11 @@ static mc_pstore_status_t commit(hal_nvm_t *nvm, const geom_t *g, int slot, head
     if (!back.sane || back.marked) {
         return MC_PSTORE_NVM_ERROR;
     }
-    const copy_t c = check_copy(nvm, g, slot, &back, work, q, mm, NULL);
+    mc_store_report_t rep;
+    const copy_t c = check_copy(nvm, g, slot, &back, work, q, mm, NULL, &rep);
+    if (c == COPY_OK && (rep.dropped != 0u || rep.unknown != 0u)) {
+        return MC_PSTORE_BAD_ARGS;   /* this table's own set reads back whole, or it is not committed */
+    }
     if (c != COPY_OK) {
         /* read back bit-exact yet refused: the set itself is one a load would not take */
         return c == COPY_IO ? MC_PSTORE_NVM_ERROR : MC_PSTORE_BAD_ARGS;
@@ -659,6 +668,7 @@ static void info_clear(mc_pstore_info_t *info)
     if (info != NULL) {
         memset(info, 0, sizeof *info);
         info->slot = -1;
+        mc_store_report_clear(&info->params);
     }
 }
 
@@ -724,6 +734,9 @@ mc_pstore_status_t mc_pstore_load(const hal_nvm_t *nvm, mc_drive_cfg_t *cfg, mc_
     if (st == MC_PSTORE_OK || st == MC_PSTORE_FELL_BACK) {
         cfg->p = q;
         cfg->est = m;
+        if (pk.rep.dropped != 0u) {
+            st = MC_PSTORE_PARTIAL;
+        }
     }
     if (info != NULL && pk.slot >= 0) {
         const head_t *h = &pk.head[pk.slot];
@@ -732,6 +745,7 @@ mc_pstore_status_t mc_pstore_load(const hal_nvm_t *nvm, mc_drive_cfg_t *cfg, mc_
         info->defaults = (h->flags & MC_PSTORE_FLAG_DEFAULTS) != 0u;
         info->map_dropped = (h->flags & MC_PSTORE_FLAG_NO_MAP) != 0u;
         info->fell_back = pk.fell_back;
+        info->params = pk.rep;
     }
     return st;
 }
@@ -772,7 +786,7 @@ mc_pstore_status_t mc_pstore_erase(hal_nvm_t *nvm, uint8_t *work, size_t work_le
 
 const char *mc_pstore_status_name(mc_pstore_status_t s)
 {
-    static const char *const names[] = {"ok",        "empty",     "fell_back", "corrupt",
-                                        "nvm_error", "too_large", "bad_args",  "map_dropped"};
+    static const char *const names[] = {"ok",        "empty",     "fell_back", "corrupt",  "nvm_error",
+                                        "too_large", "bad_args",  "map_dropped", "partial"};
     return (unsigned)s < sizeof names / sizeof names[0] ? names[s] : "?";
 }

@@ -34,6 +34,100 @@ static uint32_t get(const uint8_t *buf, size_t at)
 
 
 
+/* ---- parameters by name ------------------------------------------------------------------ */
+
+uint32_t mc_store_param_key(int id)
+{
+    const mc_param_info_t *e = &mc_param_table[id];
+    uint32_t h = 2166136261u;   /* FNV-1a-32: computed when a record is written or read, never in the ISR */
+    for (const char *c = e->name; *c != '\0'; ++c) {
+        h = (h ^ (uint8_t)*c) * 16777619u;
+    }
+    return (h & MC_STORE_KEY_NAME) | (uint32_t)e->type;
+}
+
+/* The keys of the last table that wrote version 1 records (main at 5265cfe, MC_STORE_V1_TABLE),
+ * by position. Such a record holds only positions, so without this list a drive in the field would
+ * lose its stored set with the first update: frozen, never to follow the table (generated from
+ * that table's names and types by mc_store_param_key's rule, checked against the live table while
+ * it was that one (app_store); the NVM image that version wrote over CANopen,
+ * tests/integration/data/nvm_main_5265cfe.bin, boots with its values through it). */
+static const uint32_t v1_keys[MC_STORE_V1_COUNT] = {
+    0x7F49A101u, 0x190E3AC0u, 0xF0607F60u, 0x7DA5E6E0u, 0xEBF98CB0u, 0x05EFC8C0u,
+    0x353C9650u, 0x19B9E210u, 0x178B7FB0u, 0x33238EC0u, 0xADADF6C1u, 0x767D2E80u,
+    0xB3E989C0u, 0x9FC50710u, 0x04D269F0u, 0x5176FB31u, 0xA82F8DF0u, 0x1B4FBE00u,
+    0xB7084F60u, 0x79199690u, 0xE75EEF93u, 0x40DC0491u, 0x649855A0u, 0xE1939780u,
+    0x81D979B0u, 0x5DC2EA60u, 0x51DB6772u, 0x8B9B1B40u, 0x9FA6A1A3u, 0xD5DFB860u,
+    0xD0D30AA0u, 0xC7D2FC80u, 0x4ECF03A1u, 0xEF206BB0u, 0x4F1D8AC2u, 0x4E1D9EA0u,
+    0xDAF0F520u, 0xF9E30600u, 0xDCA13193u, 0x6A2B2271u, 0xE9346FF0u, 0xCE5DAA90u,
+    0xCB5DA5E0u, 0xA3294AB0u, 0x6755FBB2u, 0x82B71782u, 0x63133A33u, 0xDE215480u,
+    0xD1C9AC70u, 0x3DB66580u, 0xDB07C9C0u, 0xA7E1B460u, 0x60735AD0u, 0x7DBDA960u,
+    0x4717AA23u, 0x35A31FE3u, 0x02B8F773u, 0x91B0AEF1u, 0x474356A1u, 0x74DC2640u,
+    0xC9ABED63u, 0x4A788BB1u, 0x14D11EC0u, 0x8128D891u, 0xCFB9FF80u, 0x06D15170u,
+    0x1E6313E0u, 0xE617A800u, 0x6BAE4D20u, 0x8BC6C4D0u, 0x498BA7C0u, 0x851FA670u,
+    0x3B8E7AE0u, 0xE15C8F00u, 0xC329C9D0u, 0xAE8E2F60u, 0x5AE50900u, 0xAD07F5C0u,
+    0x50D43C50u, 0x6A21EB20u, 0x82B73BC3u, 0x77D13900u, 0xDC17A4C0u, 0x22B69123u,
+    0x138DBAE1u, 0x36CCC810u, 0x44DE2853u, 0x0670E180u, 0xBE2F4130u, 0xCF265EA3u,
+    0xD7669B80u, 0xC2F1BDA0u, 0x6F668A90u, 0x0EBE2830u, 0x569C9350u,
+};
+
+uint32_t mc_store_v1_key(uint32_t pos)
+{
+    return pos < MC_STORE_V1_COUNT ? v1_keys[pos] : 0u;
+}
+
+void mc_store_report_clear(mc_store_report_t *rep)
+{
+    memset(rep, 0, sizeof *rep);
+    rep->first = -1;
+}
+
+static int find_key(uint32_t key, uint32_t hint)
+{
+    /* the same table (the common case) has it at the same position: one hash per value */
+    if (hint < (uint32_t)MC_PARAM_COUNT && ((mc_store_param_key((int)hint) ^ key) & MC_STORE_KEY_NAME) == 0u) {
+        return (int)hint;
+    }
+    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
+        if (((mc_store_param_key(id) ^ key) & MC_STORE_KEY_NAME) == 0u) {
+            return id;
+        }
+    }
+    return -1;
+}
+
+void mc_store_param_apply(mc_params_t *q, uint32_t key, uint32_t value, uint32_t hint, mc_store_report_t *rep)
+{
+    const int id = find_key(key, hint);
+    if (id < 0) {
+        rep->unknown++;
+        return;
+    }
+    mc_store_drop_t why = MC_STORE_DROP_NONE;
+    const mc_param_info_t *e = &mc_param_table[id];
+    if ((key & MC_STORE_KEY_TYPE) != (uint32_t)e->type) {
+        why = MC_STORE_DROP_TYPE;
+    } else if ((key & MC_STORE_KEY_AUTO) != 0u) {
+        if (e->rule != (uint8_t)MC_RULE_NONE) {
+            mc_param_set_auto(q, id, true);   /* else (a rule gone since) its constant default */
+        }
+    } else {
+        /* this table's range and type checks: a value it refuses keeps the default */
+        const float v = mc_bits_f32(value);
+        if (!(v >= e->min && v <= e->max) || !mc_param_set(q, id, v, NULL)) {
+            why = MC_STORE_DROP_RANGE;
+        }
+    }
+    if (why == MC_STORE_DROP_NONE) {
+        rep->kept++;
+    } else {
+        if (rep->dropped++ == 0u) {
+            rep->first = (int16_t)id;
+            rep->reason = (uint8_t)why;
+        }
+    }
+}
+
 static size_t close_record(uint8_t *buf, size_t at)
 {
     put(buf, &at, mc_crc32(buf, at));
@@ -48,12 +142,12 @@ size_t mc_store_params_encode(const mc_params_t *p, uint8_t *buf, size_t cap)
     }
     size_t at = 0u;
     put(buf, &at, MC_STORE_MAGIC_PARAMS);
-    put(buf, &at, MC_STORE_VERSION);
+    put(buf, &at, MC_STORE_PARAMS_VERSION);
     put(buf, &at, mc_params_table_hash());
     put(buf, &at, (uint32_t)MC_PARAM_COUNT);
     for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
         const bool is_auto = mc_param_is_auto(p, id);
-        put(buf, &at, (uint32_t)id | (is_auto ? MC_STORE_AUTO : 0u));
+        put(buf, &at, mc_store_param_key(id) | (is_auto ? MC_STORE_KEY_AUTO : 0u));
         put(buf, &at, mc_f32_bits(mc_param_get(p, id)));
     }
     return close_record(buf, at);
@@ -93,7 +187,7 @@ size_t mc_store_model_encode(const mc_est_model_t *m, uint8_t *buf, size_t cap)
     return close_record(buf, at);
 }
 
-static mc_store_status_t check_head(const uint8_t *buf, size_t n, uint32_t magic)
+static mc_store_status_t check_head(const uint8_t *buf, size_t n, uint32_t magic, uint32_t version)
 {
     if (n < 12u) {
         return MC_STORE_BAD_SIZE;
@@ -105,7 +199,7 @@ static mc_store_status_t check_head(const uint8_t *buf, size_t n, uint32_t magic
     if (m != magic) {
         return MC_STORE_BAD_MAGIC;
     }
-    return get(buf, 4u) == MC_STORE_VERSION ? MC_STORE_OK : MC_STORE_BAD_VERSION;
+    return get(buf, 4u) == version ? MC_STORE_OK : MC_STORE_BAD_VERSION;
 }
 
 static bool crc_ok(const uint8_t *buf, size_t len)
@@ -113,53 +207,42 @@ static bool crc_ok(const uint8_t *buf, size_t len)
     return mc_crc32(buf, len - 4u) == get(buf, len - 4u);
 }
 
-mc_store_status_t mc_store_params_decode(const uint8_t *buf, size_t n, mc_params_t *p)
+mc_store_status_t mc_store_params_decode(const uint8_t *buf, size_t n, mc_params_t *p, mc_store_report_t *rep)
 {
-    mc_store_status_t st = check_head(buf, n, MC_STORE_MAGIC_PARAMS);
+    mc_store_status_t st = check_head(buf, n, MC_STORE_MAGIC_PARAMS, MC_STORE_PARAMS_VERSION);
     if (st != MC_STORE_OK) {
         return st;
     }
     if (n < 20u) {
         return MC_STORE_BAD_SIZE;
     }
-    if (get(buf, 8u) != mc_params_table_hash()) {
-        return MC_STORE_OTHER_TABLE;
-    }
     const uint32_t count = get(buf, 12u);
-    if (count > (uint32_t)MC_PARAM_COUNT || 4u * (5u + 2u * (size_t)count) > n) {
+    if (count > (n - 20u) / 8u) {
         return MC_STORE_BAD_SIZE;
     }
     const size_t len = 4u * (5u + 2u * (size_t)count);
     if (!crc_ok(buf, len)) {
         return MC_STORE_BAD_CRC;
     }
+    mc_store_report_t r;
+    mc_store_report_clear(&r);
+    r.other_table = get(buf, 8u) != mc_params_table_hash();
     mc_params_t q;
     mc_params_default(&q);
     for (uint32_t k = 0; k < count; ++k) {
-        const uint32_t w = get(buf, 16u + 8u * k);
-        const int id = (int)(w & ~MC_STORE_AUTO);
-        if (id >= (int)MC_PARAM_COUNT) {
-            return MC_STORE_BAD_VALUE;
-        }
-        if ((w & MC_STORE_AUTO) != 0u) {
-            mc_param_set_auto(&q, id, true);
-        } else {
-            /* the table's range here already: a stored set is refused whole, not at the build */
-            const float v = mc_bits_f32(get(buf, 20u + 8u * k));
-            const mc_param_info_t *e = &mc_param_table[id];
-            if (!(v >= e->min && v <= e->max) || !mc_param_set(&q, id, v, NULL)) {
-                return MC_STORE_BAD_VALUE;
-            }
-        }
+        mc_store_param_apply(&q, get(buf, 16u + 8u * k), get(buf, 20u + 8u * k), k, &r);
     }
     *p = q;
+    if (rep != NULL) {
+        *rep = r;
+    }
     return MC_STORE_OK;
 }
 
 /* The model record's header checks and its length; nd, nq of its map (0 without one). */
 static mc_store_status_t model_head(const uint8_t *buf, size_t n, uint32_t *nd, uint32_t *nq)
 {
-    mc_store_status_t st = check_head(buf, n, MC_STORE_MAGIC_MODEL);
+    mc_store_status_t st = check_head(buf, n, MC_STORE_MAGIC_MODEL, MC_STORE_VERSION);
     if (st != MC_STORE_OK) {
         return st;
     }

@@ -91,6 +91,11 @@ void mc_co_set_defaults(mc_co_t *co, const mc_params_t *defaults)
     co->defaults = defaults;
 }
 
+void mc_co_set_boot_report(mc_co_t *co, const mc_store_report_t *rep)
+{
+    co->boot_params = *rep;
+}
+
 /* The power-on parameter set after a reset node: the stored one, else the defaults; taken when
  * the outputs are off (the 402 reset disables them), retried while the drive's hand-over is busy.
  * A set the drive refuses (an INIT parameter that differs, a cross-check) keeps the parameters
@@ -106,7 +111,7 @@ static void reload_step(mc_co_t *co)
         uint8_t work[MC_CO_STORE_WORK];
         mc_drive_cfg_t stored = cfg;
         const mc_pstore_status_t ls = mc_pstore_load(co->nvm, &stored, NULL, work, sizeof work, NULL);
-        if (ls == MC_PSTORE_OK || ls == MC_PSTORE_FELL_BACK) {
+        if (ls == MC_PSTORE_OK || ls == MC_PSTORE_FELL_BACK || ls == MC_PSTORE_PARTIAL) {
             cfg.p = stored.p;
         }
     }
@@ -132,23 +137,27 @@ void mc_co_emcy_send(mc_co_t *co, uint16_t code, uint8_t reg, const uint8_t info
 }
 
 mc_pstore_status_t mc_co_boot_config(const hal_nvm_t *nvm, const mc_drive_cfg_t *base, mc_drive_cfg_t *out,
-                                     mc_flux_map_t *map_out)
+                                     mc_flux_map_t *map_out, mc_store_report_t *rep)
 {
     *out = *base;
-    if (nvm == NULL) {
-        return MC_PSTORE_EMPTY;
-    }
-    uint8_t work[MC_CO_STORE_WORK];
     mc_pstore_info_t info;
-    mc_drive_cfg_t stored = *base;
-    const mc_pstore_status_t st = mc_pstore_load(nvm, &stored, map_out, work, sizeof work, &info);
-    if (st == MC_PSTORE_OK || st == MC_PSTORE_FELL_BACK) {
-        if (stored.est.map == NULL) {
-            /* saved without it (too large for the slot), or not loaded (map_out NULL): the
-             * integrator's map of the same machine */
-            stored.est.map = base->est.map;
+    mc_store_report_clear(&info.params);
+    mc_pstore_status_t st = MC_PSTORE_EMPTY;
+    if (nvm != NULL) {
+        uint8_t work[MC_CO_STORE_WORK];
+        mc_drive_cfg_t stored = *base;
+        st = mc_pstore_load(nvm, &stored, map_out, work, sizeof work, &info);
+        if (st == MC_PSTORE_OK || st == MC_PSTORE_FELL_BACK || st == MC_PSTORE_PARTIAL) {
+            if (stored.est.map == NULL) {
+                /* saved without it (too large for the slot), or not loaded (map_out NULL): the
+                 * integrator's map of the same machine */
+                stored.est.map = base->est.map;
+            }
+            *out = stored;
         }
-        *out = stored;
+    }
+    if (rep != NULL) {
+        *rep = info.params;
     }
     return st;
 }
@@ -395,6 +404,25 @@ static void ds_step(mc_co_t *co, bool advance)
     }
 }
 
+/* The stored set came from another table version and some of its values keep their defaults
+ * (mc/store.h): the EMCY "parameters lost" with the count, the first such parameter and why
+ * (mc_store_drop_t), and an entry in the error history 0x1003 that outlives the EMCY. */
+static void boot_partial(mc_co_t *co)
+{
+    const mc_store_report_t *r = &co->boot_params;
+    const uint16_t id = (uint16_t)r->first;
+    const uint8_t info[5] = {co->cfg_source, (uint8_t)(r->dropped > 255u ? 255u : r->dropped), (uint8_t)id,
+                             (uint8_t)(id >> 8), r->reason};
+    for (uint32_t k = 7u; k > 0u; --k) {
+        co->err_hist[k] = co->err_hist[k - 1u];
+    }
+    co->err_hist[0] = MC_EMCY_PARAMS_LOST | ((uint32_t)id << 16);
+    if (co->err_count < 8u) {
+        co->err_count++;
+    }
+    mc_co_emcy_send(co, MC_EMCY_PARAMS_LOST, 0x01u, info);
+}
+
 void mc_co_step(mc_co_t *co, uint32_t now_ms)
 {
     co->now_ms = now_ms;
@@ -408,6 +436,8 @@ void mc_co_step(mc_co_t *co, uint32_t now_ms)
         if (co->cfg_source == (uint8_t)MC_PSTORE_CORRUPT || co->cfg_source == (uint8_t)MC_PSTORE_NVM_ERROR) {
             const uint8_t info[5] = {co->cfg_source, 0u, 0u, 0u, 0u};
             mc_co_emcy_send(co, MC_EMCY_PARAMS_LOST, 0x01u, info);   /* defaults in force */
+        } else if (co->cfg_source == (uint8_t)MC_PSTORE_PARTIAL) {
+            boot_partial(co);
         }
     }
     hal_can_frame_t f;

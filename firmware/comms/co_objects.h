@@ -69,7 +69,7 @@ X(0x2306, 0, REAL32, RO, MC_NOPT, HOOK, HK(SCOPE_TS), 0, 0, "Scope sample period
 X(0x2307, 0, DOMAIN, RO, MC_NOPT, HOOK, HK(SCOPE_DATA), 0, 0, "Scope data", "", "", "The record by segmented upload: little-endian float32, sample-major (s0 ch1 .. ch n, s1 ch1 ..).") \
 X(0x2308, 0, U32, RO, MC_NOPT, HOOK, HK(SCOPE_CAP), 0, MC_U32MAX, "Scope capacity", "", "values", "Buffer size: samples x channels at most.") \
 X(0x2FF0, 0, U32, RO, MC_NOPT, HOOK, HK(HASH), 0, MC_U32MAX, "Parameter table hash", "", "", "Changes with the parameter table: a tool compares it with its EDS.") \
-X(0x2FF1, 0, U8, RO, MC_NOPT, FIELD, FLD(cfg_source), 0, 255, "Configuration source", "", "", "The store's answer at boot: 0 the stored set, 1 none stored (defaults), 2 the older copy (the newer was corrupt), 3 corrupt (defaults), 4 NVM error (defaults).") \
+X(0x2FF1, 0, U8, RO, MC_NOPT, FIELD, FLD(cfg_source), 0, 255, "Configuration source", "", "", "The store's answer at boot: 0 the stored set, 1 none stored (defaults), 2 the older copy (the newer was corrupt), 3 corrupt (defaults), 4 NVM error (defaults), 8 the stored set migrated from another table version with some values at their defaults (EMCY 0x6310, 0x1003).") \
 X(0x2FF2, 0, U32, RO, MC_NOPT, FIELD, FLD(store_status), 0, MC_U32MAX, "Store status", "", "", "The last 0x1010 / 0x1011: mc_pstore_status_t (0 ok, 4 NVM error, 5 too large, 7 saved without the flux map).") \
 X(0x603F, 0, U16, RO, MC_CO_F_TPDO, FIELD, FLD(ds.od.error_code), 0, 65535, "Error code", "", "", "The EMCY code of the fault that put the drive in Fault (0: none).") \
 X(0x6040, 0, U16, RW, MC_CO_F_RPDO, FIELD, FLD(ds.od.controlword), 0, 65535, "Controlword", "", "", "CiA 402 state machine commands.") \

@@ -59,7 +59,7 @@ static void board_cfg_from(const mc_params_t *p, hal_board_cfg_t *b)
 
 static void load_config(mc_drive_cfg_t *cfg)
 {
-    const mc_store_status_t sp = mc_store_params_decode(mc_config_area.records, MC_CONFIG_MODEL_OFFSET, &cfg->p);
+    const mc_store_status_t sp = mc_store_params_decode(mc_config_area.records, MC_CONFIG_MODEL_OFFSET, &cfg->p, NULL);
     const mc_store_status_t sm =
         mc_store_model_view(mc_config_area.records + MC_CONFIG_MODEL_OFFSET,
                             MC_CONFIG_RECORDS_SIZE - MC_CONFIG_MODEL_OFFSET, &cfg->est, &mc_config_area.map);
@@ -124,12 +124,13 @@ int main(void)
     static mc_drive_cfg_t base;
     base = cfg;
     load_config(&base);
-    mc_pstore_status_t src = mc_co_boot_config(board.nvm, &base, &cfg, NULL);
+    mc_store_report_t rep;
+    mc_pstore_status_t src = mc_co_boot_config(board.nvm, &base, &cfg, NULL, &rep);
     mc_monitor.store_nvm = (uint32_t)src;
     board_cfg_from(&cfg.p, &bcfg);
     bool board_ok = hal_board_init(&bcfg, &board);
     bool drive_ok = board_ok && mc_drive_init(&drive, &drive_link, &cfg, board.adc, board.pwm, board.qep);
-    if (board_ok && !drive_ok && (src == MC_PSTORE_OK || src == MC_PSTORE_FELL_BACK)) {
+    if (board_ok && !drive_ok && (src == MC_PSTORE_OK || src == MC_PSTORE_FELL_BACK || src == MC_PSTORE_PARTIAL)) {
         /* the stored set does not start this drive: the configuration area's, and say so */
         src = MC_PSTORE_CORRUPT;
         mc_monitor.store_nvm = (uint32_t)src;
@@ -153,6 +154,7 @@ int main(void)
                             .product_code = 1u, .revision = 0x00020000u, .serial = 0u};
     (void)mc_co_init(&co, &cc, board.can, &drive, board.nvm, &scope, src);
     mc_co_set_defaults(&co, &base.p);   /* a reset node: the stored set, else the area's */
+    mc_co_set_boot_report(&co, &rep);
     co.ds_on = false;   /* until a controlword comes */
     hal_board_attach_isr(control_isr, &drive);
     mc_monitor.boot = 1u;

@@ -36,12 +36,20 @@ public:
         defaults_ = ds.cfg.p;   // a CANopen reset node falls back to these after a restore
         if (!nvm_file_.empty()) {
             load_nvm();
-            boot_status_ = mc_co_boot_config(nvm_.get(), &ds.cfg, &cfg, map_.get());
+            boot_status_ = mc_co_boot_config(nvm_.get(), &ds.cfg, &cfg, map_.get(), &boot_report_);
             nvm_steps_ = nvm_->steps;
+            if (boot_status_ == MC_PSTORE_PARTIAL)   // also in 0x2FF1, the EMCY and 0x1003
+                std::fprintf(stderr,
+                             "mcsim: --nvm %s: a set stored by another parameter table; %u value(s) at their "
+                             "defaults, the first %s (%s)\n",
+                             nvm_file_.c_str(), static_cast<unsigned>(boot_report_.dropped),
+                             mc_param_table[boot_report_.first].name,
+                             boot_report_.reason == MC_STORE_DROP_TYPE ? "another type" : "out of range");
         }
         if (!mc_drive_init(drive_.get(), link_.get(), &cfg, &adc_, &pwm_, &qep_))
             throw ScenarioError(explain_config_error(sc, *mc_drive_config_error(drive_.get())) +
-                                (boot_status_ == MC_PSTORE_OK || boot_status_ == MC_PSTORE_FELL_BACK
+                                (boot_status_ == MC_PSTORE_OK || boot_status_ == MC_PSTORE_FELL_BACK ||
+                                         boot_status_ == MC_PSTORE_PARTIAL
                                      ? " (the configuration stored in " + nvm_file_ + ")"
                                      : ""));
         scope_buf_.assign(static_cast<size_t>(sc.i("can.scope_values")), 0.0f);
@@ -85,6 +93,7 @@ public:
         co_ = std::make_unique<mc_co_t>();
         if (!mc_co_init(co_.get(), &c, &can_, drive_.get(), nvm_.get(), &scope_, boot_status_)) return false;
         mc_co_set_defaults(co_.get(), &defaults_);
+        mc_co_set_boot_report(co_.get(), &boot_report_);
         co_->ds_on = commands;
         return true;
     }
@@ -143,6 +152,7 @@ private:
     std::unique_ptr<mc_flux_map_t> map_ = std::make_unique<mc_flux_map_t>();
     uint32_t nvm_steps_ = 0;
     mc_pstore_status_t boot_status_ = MC_PSTORE_EMPTY;
+    mc_store_report_t boot_report_{0, 0, 0, -1, 0, false};
     mc_params_t defaults_{};
     mc_scope_t scope_{};
     std::vector<float> scope_buf_;

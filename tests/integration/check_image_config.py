@@ -20,6 +20,13 @@ def section(objcopy, elf, name, out):
 
 
 
+def fnv1a(b):
+    h = 0x811C9DC5
+    for c in b:
+        h = ((h ^ c) * 0x01000193) & 0xFFFFFFFF
+    return h
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--mcsim", required=True)
@@ -42,11 +49,14 @@ def main():
             bad.append("the built image's configuration area is not erased")
         if len(area) != len(blank):
             bad.append(f"area size {len(area)} != {len(blank)}")
-        # parameter record at 0: magic "MCPB", version, table hash, n, n pairs, CRC
+        # parameter record at 0: magic "MCPB", version 2, table hash, n, n pairs (key by name and
+        # type, value), CRC (mc/store.h)
         magic, ver, _hash, n = struct.unpack_from("<4I", area, 0)
         plen = 4 * (5 + 2 * n)
-        if magic != 0x4250434D or ver != 1 or not (50 < n < 1000):
+        if magic != 0x4250434D or ver != 2 or not (50 < n < 1000):
             bad.append(f"parameter record header {magic:#x} v{ver} n={n}")
+        elif struct.unpack_from("<I", area, 16)[0] & ~0x8 != (fnv1a(b"motor.pole_pairs") & 0xFFFFFFF0) | 1:
+            bad.append("the first entry's key is not motor.pole_pairs' (FNV-1a of the name, type I32)")
         elif struct.unpack_from("<I", area, plen - 4)[0] != zlib.crc32(area[:plen - 4]):
             bad.append("parameter record CRC")
         # model record at 4096: magic "MCMB", version, rs, ld, lq, psi, has_map, [n_d, n_q, ...], CRC

@@ -128,7 +128,8 @@ MODES = {"pv": 3, "tq": 4, "csv": 9, "cst": 10}
 MODE_NAMES = {v: k for k, v in MODES.items()}
 
 CONFIG_SOURCES = {0: "the stored set", 1: "nothing stored: defaults", 2: "the older stored copy "
-                  "(the newer was corrupt)", 3: "stored set corrupt: defaults", 4: "NVM error: defaults"}
+                  "(the newer was corrupt)", 3: "stored set corrupt: defaults", 4: "NVM error: defaults",
+                  8: "the stored set of another table version: some values at defaults (0x1003)"}
 STORE_STATUS = {0: "ok", 4: "NVM error", 5: "too large for the store", 7: "saved without the flux map"}
 ERROR_REGISTER_BITS = ((0, "generic"), (1, "current"), (2, "voltage"), (3, "temperature"),
                        (4, "communication"), (5, "device profile"), (7, "manufacturer"))

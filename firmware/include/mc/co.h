@@ -60,7 +60,9 @@
 #define MC_SDO_ABORT_NO_DATA       0x08000024u
 
 /* EMCY codes of the device itself (CiA 301 Table 21) */
-#define MC_EMCY_PARAMS_LOST        0x6310u   /* the stored set was corrupt: defaults in force */
+#define MC_EMCY_PARAMS_LOST        0x6310u   /* the stored set was corrupt: defaults in force; or
+                                                a set of another table version kept some values
+                                                at their defaults (mc/store.h)               */
 #define MC_EMCY_NVM                0x5530u   /* data storage (a store failed)                 */
 #define MC_EMCY_PDO_LENGTH         0x8210u   /* RPDO shorter than its mapping                 */
 
@@ -156,7 +158,9 @@ typedef struct {
     mc_co_sdo_t sdo;
     uint32_t tx_dropped;         /* messages hal_can_send refused */
     uint32_t faults_seen;        /* the drive's fault bits already reported by EMCY */
-    uint32_t err_hist[8];        /* 0x1003, newest first: error code | fault bit number << 16 */
+    uint32_t err_hist[8];        /* 0x1003, newest first: error code | fault bit number << 16;
+                                    0x6310 (boot: a stored set migrated with values at their
+                                    defaults) | the first such parameter's id << 16           */
     uint8_t err_count;
     uint32_t cob_sync;           /* 0x1005 */
     mc_co_pdo_t rpdo[MC_CO_PDO_N], tpdo[MC_CO_PDO_N];
@@ -167,6 +171,7 @@ typedef struct {
     mc_scope_cfg_t scope_cfg;    /* 0x2300 / 0x2301, taken at arm                          */
     uint8_t scope_ctrl;          /* 0x2302, last written                                   */
     uint8_t cfg_source;          /* 0x2FF1: mc_pstore_status_t of the boot's load           */
+    mc_store_report_t boot_params; /* what that load kept of the stored parameters          */
     uint32_t store_status;       /* mc_pstore_status_t of the last 0x1010 / 0x1011          */
     const mc_params_t *defaults; /* the integrator's set a reset node falls back to (NULL: a
                                     reset node keeps the parameters in force)                */
@@ -179,7 +184,9 @@ typedef struct {
 
 /* false: node id outside 1..127 or a NULL can/drive (nothing started). nvm and scope may be
  * NULL. cfg_source: the store's status of the configuration the drive was started with
- * (MC_PSTORE_CORRUPT sends an EMCY "parameters lost" once the device is up). */
+ * (MC_PSTORE_CORRUPT sends an EMCY "parameters lost" once the device is up; MC_PSTORE_PARTIAL
+ * the same EMCY with the first value kept at its default, also into 0x1003: give its report
+ * with mc_co_set_boot_report). */
 bool mc_co_init(mc_co_t *co, const mc_co_cfg_t *cfg, hal_can_t *can, mc_drive_t *drive, hal_nvm_t *nvm,
                 mc_scope_t *scope, mc_pstore_status_t cfg_source);
 /* The parameter set the drive started with before any stored one (the scenario's, the image's
@@ -187,16 +194,20 @@ bool mc_co_init(mc_co_t *co, const mc_co_cfg_t *cfg, hal_can_t *can, mc_drive_t 
  * the stored set or, after a restore (0x1011), these (CiA 301 §7.2.8.3.2.1). Without it a reset
  * node keeps the parameters in force. */
 void mc_co_set_defaults(mc_co_t *co, const mc_params_t *defaults);
+/* What the boot's load kept of the stored parameters (mc_co_boot_config's rep), for the
+ * MC_PSTORE_PARTIAL report; before the first mc_co_step. */
+void mc_co_set_boot_report(mc_co_t *co, const mc_store_report_t *rep);
 /* Background: up to MC_CO_RX_PER_STEP received frames, the 402 step and its drive command (if
  * ds_on), the TPDOs, the SDO timeout, EMCY and the heartbeat. */
 void mc_co_step(mc_co_t *co, uint32_t now_ms);
 
-/* Boot: the configuration the drive starts with: the stored set (OK, FELL_BACK) over base, or
- * base (EMPTY, CORRUPT, NVM_ERROR). map_out: storage for a stored map (must outlive the drive), or
- * NULL to leave a stored map in the NVM; a set without its map (saved without, or not loaded)
- * takes base's map. Returns the store's status. */
+/* Boot: the configuration the drive starts with: the stored set (OK, FELL_BACK, PARTIAL: matched
+ * by name, mc/store.h) over base, or base (EMPTY, CORRUPT, NVM_ERROR). map_out: storage for a
+ * stored map (must outlive the drive), or NULL to leave a stored map in the NVM; a set without
+ * its map (saved without, or not loaded) takes base's map. rep (may be NULL): what the load kept
+ * of the stored parameters. Returns the store's status. */
 mc_pstore_status_t mc_co_boot_config(const hal_nvm_t *nvm, const mc_drive_cfg_t *base, mc_drive_cfg_t *out,
-                                     mc_flux_map_t *map_out);
+                                     mc_flux_map_t *map_out, mc_store_report_t *rep);
 
 /* EMCY (CiA 301 §7.2.7) for a drive fault bit: the error code (CiA 301 / CiA 402 tables) and
  * the error register bits 0x1001 it sets. */

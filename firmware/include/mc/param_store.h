@@ -28,8 +28,12 @@
  * makes the new copy count.
  * Load: among the slots with a complete marker, the newest (sequence, compared modulo 2^32; a
  * marked copy whose header does not check counts as possibly newest) whose header checks, whose
- * payload CRC matches and whose two records decode (table hash, ranges, map size); else the
- * other one (MC_PSTORE_FELL_BACK); else MC_PSTORE_CORRUPT; no marked copy: MC_PSTORE_EMPTY.
+ * payload CRC matches and whose two records decode (versions, sizes, record CRCs, map size); else
+ * the other one (MC_PSTORE_FELL_BACK); else MC_PSTORE_CORRUPT; no marked copy: MC_PSTORE_EMPTY.
+ * The parameter record is read by name (mc/store.h, also its version 1 written up to 5265cfe):
+ * a set written by another table version loads with every value this table still takes and the
+ * others at their defaults (MC_PSTORE_PARTIAL if any stored value was refused). A save commits
+ * only a set that reads back whole (every value kept).
  *
  * Too small a device. A copy must hold the parameter record and the model record without its
  * map, else nothing is stored (MC_PSTORE_TOO_LARGE). A map that does not fit in a slot is left
@@ -71,8 +75,12 @@ typedef enum {
     MC_PSTORE_TOO_LARGE,     /* a copy cannot hold the set even without its map: nothing written */
     MC_PSTORE_BAD_ARGS,      /* NULL, work too small, a bad map, a set a load would refuse, a
                                 write unit not a power of two                                   */
-    MC_PSTORE_MAP_DROPPED    /* save: committed WITHOUT the flux map (a slot cannot hold it);
+    MC_PSTORE_MAP_DROPPED,   /* save: committed WITHOUT the flux map (a slot cannot hold it);
                                 geometry: the largest map does not fit                         */
+    MC_PSTORE_PARTIAL        /* load: the stored set (as OK; or the older copy), but written by
+                                another table version and some of its values keep their defaults
+                                (another type, or out of this table's range): info.params says
+                                how many and the first one                                     */
 } mc_pstore_status_t;
 
 /* What a load returned or a save wrote (each pointer argument of this type may be NULL). */
@@ -82,6 +90,7 @@ typedef struct {
     bool defaults;           /* the copy is a restore-to-defaults copy                  */
     bool map_dropped;        /* the set was saved without its map                       */
     bool fell_back;          /* a newer committed copy did not check                    */
+    mc_store_report_t params;/* load: what the parameter record gave (kept, dropped, ...)  */
 } mc_pstore_info_t;
 
 typedef struct {
@@ -99,7 +108,9 @@ mc_pstore_status_t mc_pstore_geometry(const hal_nvm_t *nvm, mc_pstore_geom_t *ge
  * (the older copy may have been overwritten by an uncommitted one, never the one a load takes). */
 mc_pstore_status_t mc_pstore_save(hal_nvm_t *nvm, const mc_drive_cfg_t *cfg, uint8_t *work, size_t work_len,
                                   mc_pstore_info_t *info);
-/* The stored set into cfg (OK, FELL_BACK; cfg is unchanged on any other status): cfg->p, and
+/* The stored set into cfg (OK, FELL_BACK, PARTIAL; cfg is unchanged on any other status): cfg->p
+ * (matched by name and type, mc/store.h: a set from another table version keeps every value this
+ * table still takes), and
  * cfg->est with est.map = map_out if the set has a map, else NULL. map_out (the caller's storage,
  * it must outlive the drive) is scratch unless est.map points to it; NULL: a stored map is
  * checked (CRC, sizes) but not loaded and est.map is NULL (an image whose RAM cannot hold a map

@@ -186,7 +186,7 @@ static void test_round_trip_records_bit_exact(void **state)
     assert_int_equal(pl, MC_STORE_PARAMS_MAX);
     assert_memory_equal(s0 + 40, rec, pl);
     mc_params_t p;
-    assert_int_equal(mc_store_params_decode(s0 + 40, pl, &p), MC_STORE_OK);
+    assert_int_equal(mc_store_params_decode(s0 + 40, pl, &p, NULL), MC_STORE_OK);
     const size_t ml = mc_store_model_encode(&a->est, rec, sizeof rec);
     assert_memory_equal(s0 + 40 + pl, rec, ml);
     mc_est_model_t m;

@@ -36,7 +36,7 @@ static void test_params_round_trip(void **state)
     }
     const size_t n = mc_store_params_encode(&p, buf, MC_CONFIG_MODEL_OFFSET);
     assert_true(n > 0u && n <= MC_STORE_PARAMS_MAX);
-    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_OK);
+    assert_int_equal(mc_store_params_decode(buf, n, &q, NULL), MC_STORE_OK);
     for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
         assert_int_equal(mc_param_is_auto(&p, id), mc_param_is_auto(&q, id));
         if (!mc_param_is_auto(&p, id)) {
@@ -64,36 +64,128 @@ static void test_params_corruption_refused(void **state)
     memset(buf + n, 0xFF, 8u);
     uint8_t save = buf[20];
     buf[20] ^= 0x01u;   /* a value bit */
-    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_BAD_CRC);
+    assert_int_equal(mc_store_params_decode(buf, n, &q, NULL), MC_STORE_BAD_CRC);
     buf[20] = save;
-    buf[8] ^= 0x80u;    /* the table hash */
-    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_OTHER_TABLE);
-    buf[8] ^= 0x80u;
     buf[4] = 7u;        /* version */
-    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_BAD_VERSION);
-    buf[4] = (uint8_t)MC_STORE_VERSION;
-    assert_int_equal(mc_store_params_decode(buf, n - 4u, &q), MC_STORE_BAD_SIZE);
+    assert_int_equal(mc_store_params_decode(buf, n, &q, NULL), MC_STORE_BAD_VERSION);
+    buf[4] = 1u;        /* version 1 (positional): only the NVM store reads it, by its frozen table */
+    assert_int_equal(mc_store_params_decode(buf, n, &q, NULL), MC_STORE_BAD_VERSION);
+    buf[4] = (uint8_t)MC_STORE_PARAMS_VERSION;
+    buf[12] = 0xFFu;    /* a count beyond the record */
+    assert_int_equal(mc_store_params_decode(buf, n, &q, NULL), MC_STORE_BAD_SIZE);
+    buf[12] = (uint8_t)MC_PARAM_COUNT;
+    assert_int_equal(mc_store_params_decode(buf, n - 4u, &q, NULL), MC_STORE_BAD_SIZE);
     memset(buf, 0xFF, 16u);
-    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_EMPTY);
+    assert_int_equal(mc_store_params_decode(buf, n, &q, NULL), MC_STORE_EMPTY);
     assert_memory_equal(&q, &before, sizeof q);   /* nothing applied */
 }
 
-static void test_params_out_of_range_refused(void **state)
+static void put_word(size_t at, uint32_t w)
+{
+    for (int k = 0; k < 4; ++k) {
+        buf[at + (size_t)k] = (uint8_t)(w >> (8 * k));
+    }
+}
+
+/* Seal a hand-made record of n entries (the words after the header are the caller's). */
+static size_t seal(uint32_t hash, uint32_t n)
+{
+    const uint32_t head[4] = {MC_STORE_MAGIC_PARAMS, MC_STORE_PARAMS_VERSION, hash, n};
+    for (int k = 0; k < 4; ++k) {
+        put_word(4u * (size_t)k, head[k]);
+    }
+    const size_t len = 4u * (4u + 2u * (size_t)n);
+    put_word(len, mc_crc32(buf, len));
+    return len + 4u;
+}
+
+/* A record read by name and type: the values in another order, a name this table lacks, a value
+ * out of range, one of another type, and parameters not in it: kept, skipped, default
+ * (reported), default (reported), default. The table hash is another table's. */
+static void test_params_by_name(void **state)
 {
     (void)state;
-    mc_params_t p, q;
-    mc_params_default(&p);
     const int ts = mc_param_find("control.ts_s");
-    size_t n = mc_store_params_encode(&p, buf, MC_CONFIG_MODEL_OFFSET);
-    /* write ts = 1 s (range 5e-5 .. 5e-4) into its slot and re-seal the CRC */
-    const float bad = 1.0f;
-    memcpy(buf + 16u + 8u * (size_t)ts + 4u, &bad, 4u);
-    const uint32_t crc = mc_crc32(buf, n - 4u);
-    for (int k = 0; k < 4; ++k) {
-        buf[n - 4u + (size_t)k] = (uint8_t)(crc >> (8 * k));
+    const int lines = mc_param_find("hw.encoder_lines");
+    const int cc = mc_param_find("control.current_bw_hz");
+    const int dec = mc_param_find("control.decouple");
+    const int act = mc_param_find("protection.lock_action");
+    const int k1 = mc_param_find("estimator.k1");
+    const float v_ts = 2e-4f, v_lines = 4096.0f;
+    size_t at = 16u;
+    const uint32_t unknown = 0x12345670u;   /* no name of this table (checked below) */
+    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
+        assert_int_not_equal(mc_store_param_key(id) & MC_STORE_KEY_NAME, unknown);
     }
-    mc_params_default(&q);
-    assert_int_equal(mc_store_params_decode(buf, n, &q), MC_STORE_BAD_VALUE);
+    const uint32_t words[] = {
+        mc_store_param_key(lines), mc_f32_bits(v_lines),                       /* reordered: kept */
+        mc_store_param_key(ts), mc_f32_bits(v_ts),                             /* kept */
+        unknown | 0u, mc_f32_bits(3.0f),                                       /* removed: skipped */
+        mc_store_param_key(k1), mc_f32_bits(2e9f),                              /* out of range */
+        (mc_store_param_key(dec) & ~MC_STORE_KEY_TYPE) | MC_PT_F32, mc_f32_bits(0.0f), /* type */
+        mc_store_param_key(cc) | MC_STORE_KEY_AUTO, mc_f32_bits(123.0f),       /* derived: kept */
+        mc_store_param_key(act), mc_f32_bits(1.0f),                            /* ENUM: kept */
+    };
+    for (size_t k = 0; k < sizeof words / sizeof words[0]; ++k) {
+        put_word(at, words[k]);
+        at += 4u;
+    }
+    const size_t n = seal(0x01020304u, (uint32_t)(sizeof words / sizeof words[0] / 2u));
+    mc_params_t q, d;
+    mc_params_default(&d);
+    mc_param_set(&d, cc, 99.0f, NULL);   /* the derived mark must come back on it */
+    q = d;
+    mc_store_report_t rep;
+    assert_int_equal(mc_store_params_decode(buf, n, &q, &rep), MC_STORE_OK);
+    assert_true(rep.other_table);
+    assert_int_equal(rep.kept, 4);
+    assert_int_equal(rep.unknown, 1);
+    assert_int_equal(rep.dropped, 2);
+    assert_int_equal(rep.first, k1);
+    assert_int_equal(rep.reason, MC_STORE_DROP_RANGE);
+    assert_true(mc_param_get(&q, ts) == v_ts);
+    assert_true(mc_param_get(&q, lines) == v_lines);
+    assert_true(mc_param_is_auto(&q, cc));
+    assert_true(mc_param_get(&q, act) == 1.0f);
+    mc_params_default(&d);
+    assert_true(mc_param_get(&q, k1) == mc_param_get(&d, k1));     /* defaults */
+    assert_true(mc_param_get(&q, dec) == mc_param_get(&d, dec));
+    assert_int_equal(mc_param_is_auto(&q, k1), mc_param_is_auto(&d, k1));
+    /* the type first: the dropped value of another type alone */
+    at = 16u;
+    put_word(at, (mc_store_param_key(dec) & ~MC_STORE_KEY_TYPE) | MC_PT_ENUM);
+    put_word(at + 4u, mc_f32_bits(0.0f));
+    assert_int_equal(mc_store_params_decode(buf, seal(mc_params_table_hash(), 1u), &q, &rep), MC_STORE_OK);
+    assert_false(rep.other_table);
+    assert_int_equal(rep.dropped, 1);
+    assert_int_equal(rep.first, dec);
+    assert_int_equal(rep.reason, MC_STORE_DROP_TYPE);
+}
+
+/* A key per name: no two of the table's names share the 28 bits a record keeps. */
+static void test_param_keys_distinct(void **state)
+{
+    (void)state;
+    for (int a = 0; a < (int)MC_PARAM_COUNT; ++a) {
+        assert_int_equal(mc_store_param_key(a) & MC_STORE_KEY_TYPE, mc_param_table[a].type);
+        assert_int_equal(mc_store_param_key(a) & MC_STORE_KEY_AUTO, 0u);
+        for (int b = a + 1; b < (int)MC_PARAM_COUNT; ++b) {
+            assert_int_not_equal(mc_store_param_key(a) & MC_STORE_KEY_NAME, mc_store_param_key(b) & MC_STORE_KEY_NAME);
+        }
+    }
+    /* FNV-1a-32 of "motor.pole_pairs" is 0x7F49A10C (a tool computes the same), I32 = 1 */
+    assert_int_equal(mc_store_param_key(mc_param_find("motor.pole_pairs")), 0x7F49A101u);
+    assert_int_equal(mc_store_v1_key(MC_STORE_V1_COUNT), 0u);
+    /* the frozen version 1 table is the table of its hash: while this build's table is still
+     * that one, every position's key is the live one (the list was made from it) */
+    if (mc_params_table_hash() == MC_STORE_V1_TABLE) {
+        assert_int_equal(MC_PARAM_COUNT, MC_STORE_V1_COUNT);
+        for (uint32_t k = 0; k < MC_STORE_V1_COUNT; ++k) {
+            assert_int_equal(mc_store_v1_key(k), mc_store_param_key((int)k));
+        }
+    } else {
+        print_message("table hash %08x: the frozen version 1 table is an older one\n", mc_params_table_hash());
+    }
 }
 
 static void test_model_round_trip_with_map(void **state)
@@ -226,7 +318,8 @@ int main(void)
         cmocka_unit_test(test_crc32_check_value),
         cmocka_unit_test(test_params_round_trip),
         cmocka_unit_test(test_params_corruption_refused),
-        cmocka_unit_test(test_params_out_of_range_refused),
+        cmocka_unit_test(test_params_by_name),
+        cmocka_unit_test(test_param_keys_distinct),
         cmocka_unit_test(test_model_round_trip_with_map),
         cmocka_unit_test(test_model_view_in_place),
         cmocka_unit_test(test_monitor_telemetry_round_trip),

@@ -105,7 +105,7 @@ static void test_store_restore(void **state)
     static mc_flux_map_t map;
     memset(&rig, 0, sizeof rig);
     rig.nvm = nvm;
-    assert_int_equal(mc_co_boot_config(&rig.nvm, &base, &rig.cfg, &map), MC_PSTORE_OK);
+    assert_int_equal(mc_co_boot_config(&rig.nvm, &base, &rig.cfg, &map, NULL), MC_PSTORE_OK);
     rig_start(MC_PSTORE_OK);
     assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == 321.0f);
     assert_int_equal(sdo_read(0x2FF1, 0, &a), 0u);
@@ -113,7 +113,7 @@ static void test_store_restore(void **state)
     assert_int_equal(sdo_write(0x1011, 1, 0x1234u, 4), MC_SDO_ABORT_STORE);
     assert_int_equal(sdo_write(0x1011, 1, MC_CO_LOAD_SIGNATURE, 4), 0u);
     nvm = rig.nvm;
-    assert_int_equal(mc_co_boot_config(&nvm, &base, &rig.cfg, &map), MC_PSTORE_EMPTY);
+    assert_int_equal(mc_co_boot_config(&nvm, &base, &rig.cfg, &map, NULL), MC_PSTORE_EMPTY);
     assert_true(rig.cfg.p.cc_bw_hz == base.p.cc_bw_hz);
     /* a corrupt store: the defaults and EMCY 0x6310 with the boot-up */
     assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), 0u);
@@ -125,7 +125,7 @@ static void test_store_restore(void **state)
     }
     memset(&rig, 0, sizeof rig);
     rig.nvm = nvm;
-    const mc_pstore_status_t st = mc_co_boot_config(&rig.nvm, &base, &rig.cfg, &map);
+    const mc_pstore_status_t st = mc_co_boot_config(&rig.nvm, &base, &rig.cfg, &map, NULL);
     assert_int_equal(st, MC_PSTORE_CORRUPT);
     assert_true(rig.cfg.p.cc_bw_hz == base.p.cc_bw_hz);
     rig_start(st);
@@ -281,12 +281,40 @@ static void test_scope_upload(void **state)
     }
 }
 
+/* A stored set from another table version with values kept at their defaults (mc/store.h):
+ * 0x2FF1 says so, EMCY 0x6310 with the boot-up carries the count, the first such parameter and
+ * why, and the error history 0x1003 keeps it after the EMCY. */
+static void test_boot_partial_reported(void **state)
+{
+    (void)state;
+    rig_init();
+    const int k1 = mc_param_find("estimator.k1");
+    memset(&rig.co, 0, sizeof rig.co);
+    rig_start(MC_PSTORE_PARTIAL);
+    const mc_store_report_t rep = {.kept = 90u, .dropped = 2u, .unknown = 1u, .first = (int16_t)k1,
+                                   .reason = MC_STORE_DROP_RANGE, .other_table = true};
+    mc_co_set_boot_report(&rig.co, &rep);
+    mc_co_step(&rig.co, rig.now);
+    hal_can_frame_t f;
+    assert_true(take_id(0x080u + NODE, &f));
+    assert_int_equal(f.data[0] | (f.data[1] << 8), MC_EMCY_PARAMS_LOST);
+    assert_int_equal(f.data[3], MC_PSTORE_PARTIAL);
+    assert_int_equal(f.data[4], 2);
+    assert_int_equal(f.data[5] | (f.data[6] << 8), k1);
+    assert_int_equal(f.data[7], MC_STORE_DROP_RANGE);
+    uint32_t a;
+    assert_int_equal(sdo_read(0x2FF1, 0, &a), (uint32_t)MC_PSTORE_PARTIAL);
+    assert_int_equal(sdo_read(0x1003, 0, &a), 1u);
+    assert_int_equal(sdo_read(0x1003, 1, &a), MC_EMCY_PARAMS_LOST | ((uint32_t)k1 << 16));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_object),
         cmocka_unit_test(test_write_checks),
         cmocka_unit_test(test_store_restore),
+        cmocka_unit_test(test_boot_partial_reported),
         cmocka_unit_test(test_scope_upload),
         cmocka_unit_test(test_segmented_size_mismatch),
         cmocka_unit_test(test_reset_node_reloads),
