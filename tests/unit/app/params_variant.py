@@ -13,7 +13,7 @@ SWAPPED = ("estimator.iter_max", "protection.lock_action")
 NARROWED = ("estimator.k1", "0.6f")          # was 1e9: a stored 0.75 is now out of range
 ADDED_AFTER = "control.decouple"
 ADDED = ('X(test_added,     "control.test_added",    F32, "1",       0,     10,     2.5f,     NONE, '
-         'CONTROL, STANDSTILL, "", "A parameter only the second table version has.") \\')
+         'CONTROL, STANDSTILL, MC_NO_CHOICES, "A parameter only the second table version has.") \\')
 
 ROW = re.compile(r'^X\((\w+),\s*"([^"]+)",\s*(\w+),\s*"([^"]*)",\s*([^,]+),\s*([^,]+),')
 
