@@ -101,14 +101,14 @@ def build_parser() -> argparse.ArgumentParser:
     from mctools.sweep import add_parser as add_sweep
     add_sweep(sub)
 
-    from mctools.handover import add_parser as add_handover
-    add_handover(sub)
+    from mctools.fly_current import add_parser as add_fly_current
+    add_fly_current(sub)
     return ap
 
 
 def main(argv=None) -> int:
     from mctools.fit_adq import FitInputError
-    from mctools.handover import HandoverInputError
+    from mctools.fly_current import FlyCurrentInputError
     from mctools.preset import PresetError
     from mctools.report import ReportInputError
     from mctools.trace import TraceError
@@ -116,7 +116,7 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (TraceError, PresetError, ReportInputError, FitInputError, HandoverInputError) as exc:
+    except (TraceError, PresetError, ReportInputError, FitInputError, FlyCurrentInputError) as exc:
         print(f"mctools {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except RuntimeError as exc:  # e.g. flux inversion outside the model's valid range
