@@ -31,13 +31,14 @@ import sys
 
 import numpy as np
 
+from mctools.errors import InputError
 from mctools.machine import Machine
 from mctools.preset import load_preset
 
 SQRT3 = math.sqrt(3.0)
 
 
-class FlyCurrentInputError(ValueError):
+class FlyCurrentInputError(InputError, ValueError):
     """A bad option value; the CLI turns it into exit status 2 with the option's name."""
 
 
