@@ -14,7 +14,6 @@ from mctools.sweep.common import (
     write_outputs,
 )
 
-
 # Thesis values quoted in the issue (experiments).
 THESIS_ANGLES = {"step12_err_deg": "exp. mean 11.52°", "init_pos_err_mean_deg": "exp. mean 0.91°",
                  "step12_time_s": "4.1 ms (Step I + II only)"}

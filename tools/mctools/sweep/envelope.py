@@ -16,7 +16,6 @@ from pathlib import Path
 from mctools.report import find_mcsim
 from mctools.sweep.common import SweepInputError, f_toml, number, run_seed_batch
 
-
 ENVELOPE_SCENARIOS = ("scenarios/envelope/standstill_loaded.toml",
                       "scenarios/envelope/speed_reversal.toml",
                       "scenarios/envelope/torque_steps_300rpm.toml",

@@ -11,7 +11,6 @@ from mctools.sweep.common import (
     parse_sets, run_points, sets_text, write_outputs,
 )
 
-
 METHODS = ("generalized", "dvi")
 
 

@@ -16,7 +16,6 @@ from mctools.sweep.common import (
     write_outputs,
 )
 
-
 SEED_PCTS = (5.0, 10.0, 90.0, 95.0)
 DEFAULT_BATCH = 8
 CONNECT_TIMEOUT = "20s"  # to reach the Dask scheduler

@@ -15,7 +15,6 @@ from mctools.sweep.common import (
     sets_text, write_outputs,
 )
 
-
 # Thesis values quoted in the issue (experiments).
 THESIS_TABLE7_1 = {3: (13.14, 12.5, 0.39), 4: (11.92, 10.27, 0.52), 5: (10.77, 7.15, 0.69)}
 COSTS = ("linear", "nonlinear")
