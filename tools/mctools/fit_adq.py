@@ -42,6 +42,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+from mctools.errors import InputError
 from mctools.machine import Machine, SaturationModel, machine_from_dict
 
 DEFAULT_MCSIM = "build/host/sim/app/mcsim"
@@ -55,7 +56,7 @@ A_Q0_DECIMALS = 3
 COMMENT_MARK = "calibrated by `mctools fit-adq`"
 
 
-class FitInputError(Exception):
+class FitInputError(InputError):
     """Bad arguments or inputs; the CLI turns it into exit status 2."""
 
 

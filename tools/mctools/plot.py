@@ -7,12 +7,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import matplotlib
 
-matplotlib.use("Agg")  # the tools run headless (CI, ssh); never pick an interactive backend
-from matplotlib.figure import Figure  # noqa: E402  (after use())
-
-from mctools.trace import Trace, TraceError, break_wraps, wrap_deg  # noqa: E402
+from mctools.trace import Trace, TraceError, break_wraps, load_trace, wrap_deg
 
 ACTUAL = dict(color="tab:blue", lw=1.2, ls="-")
 ESTIMATE = dict(color="tab:red", lw=1.0, ls="--")
@@ -170,9 +166,21 @@ def _draw_panel(ax, panel: Panel, trace: Trace, label: str, *, xlabel: bool) -> 
         ax.set_xlabel("time [s]")
 
 
+def _figure_class():
+    """matplotlib's Figure, imported at the first plot: `mctools` registers every subcommand
+    (this module's add_parser) and `mctools preset` should not pay for importing matplotlib."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # the tools run headless (CI, ssh); never pick an interactive backend
+    from matplotlib.figure import Figure
+
+    return Figure
+
+
 def plot_trace(trace: Trace, out_dir, *, title: str | None = None, metrics: dict | None = None,
                dpi: int = 120, headline: list[str] | None = None) -> list[Path]:
     """Write <stem>_overview.png and one <stem>_<panel>.png per panel; return the paths."""
+    Figure = _figure_class()
     derive_columns(trace)
     panels = available_panels(trace)
     if not panels:
@@ -213,3 +221,27 @@ def plot_trace(trace: Trace, out_dir, *, title: str | None = None, metrics: dict
         fig.savefig(path, dpi=dpi)
         written.append(path)
     return written
+
+
+def cmd_plot(args) -> int:
+    trace = load_trace(args.trace)
+    metrics = load_metrics(args.metrics) if args.metrics else None
+    out_dir = Path(args.out) if args.out else trace.path.parent
+    headline = [k.strip() for k in args.headline.split(",") if k.strip()] if args.headline else None
+    if headline and metrics is None:
+        raise TraceError("--headline needs --metrics")
+    for p in plot_trace(trace, out_dir, title=args.title, metrics=metrics, dpi=args.dpi, headline=headline):
+        print(p)
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("plot", help="render a simulator trace.csv into PNG panels")
+    p.add_argument("trace", help="trace CSV written by the simulator")
+    p.add_argument("--out", metavar="DIR", help="output directory (default: next to the trace)")
+    p.add_argument("--title", help="figure title (default: the trace file name)")
+    p.add_argument("--metrics", metavar="JSON", help="metrics.json to annotate headline figures")
+    p.add_argument("--dpi", type=int, default=120, help="resolution (default 120)")
+    p.add_argument("--headline", metavar="KEYS",
+                   help="comma-separated metric names (dotted for windows) for the title")
+    p.set_defaults(func=cmd_plot)

@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import tomllib
 from pathlib import Path
 
+from mctools.errors import InputError
 from mctools.machine import Machine, machine_from_dict
 
 
-class PresetError(Exception):
+class PresetError(InputError):
     """Preset not found or malformed; the CLI turns it into exit status 2."""
 
 
@@ -132,3 +134,22 @@ def format_report(f: dict, source: Path | None = None) -> str:
                   f"    l_dd                     {mh(f['l_dd_min_h'])} .. {mh(f['l_dd_max_h'])}",
                   f"    l_qq                     {mh(f['l_qq_min_h'])} .. {mh(f['l_qq_max_h'])}"]
     return "\n".join(lines)
+
+
+def cmd_preset(args) -> int:
+    path = find_preset(args.preset, args.preset_dir)
+    figs = derived_figures(load_preset(str(path)))
+    if args.json:
+        print(json.dumps(figs, indent=2))
+    else:
+        print(format_report(figs, path))
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("preset", help="print figures derived from a machine preset")
+    p.add_argument("preset", metavar="NAME|PATH", help="preset name (presets/<name>.toml) or file")
+    p.add_argument("--preset-dir", metavar="DIR",
+                   help="directory to look up preset names in (also: env MC_PRESET_DIR)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.set_defaults(func=cmd_preset)

@@ -21,6 +21,8 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mctools.errors import InputError
+
 MODELS = ("const", "fluxmap")
 MODEL_TITLES = {"const": "ours, constant parameters", "fluxmap": "ours, flux map"}
 CHECK_KEYS = {"scenario", "set", "models", "metric", "what", "thesis", "bound", "seeds",
@@ -45,7 +47,7 @@ BASE_PROFILE = "realistic"
 OUTSIDE_MARK = "⚠ outside bound"
 
 
-class ReportInputError(Exception):
+class ReportInputError(InputError):
     """Bad expected.toml, scenario folder or arguments; the CLI turns it into exit status 2."""
 
 
@@ -895,3 +897,31 @@ def report(args) -> int:
     if sweep_failures:
         print(f"report: sweeps failed: {', '.join(sweep_failures)}")
     return 1 if failed or run_failures or sweep_failures else 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("report", help="run the thesis scenarios with mcsim and write the "
+                                      "comparison table (docs/results.md)")
+    p.add_argument("--mcsim", metavar="PATH",
+                   help="simulator binary (default: build/host/sim/app/mcsim, else mcsim on PATH)")
+    p.add_argument("--scenarios", metavar="DIR", default="scenarios/thesis",
+                   help="folder with expected.toml and the scenarios (default scenarios/thesis)")
+    p.add_argument("--out", metavar="DIR", default="out/thesis",
+                   help="run folders and plots (default out/thesis)")
+    p.add_argument("--doc", metavar="PATH", default="docs/results.md",
+                   help="markdown file to write (default docs/results.md)")
+    p.add_argument("--only", metavar="NAME[,NAME]",
+                   help="only the checks of these scenarios")
+    p.add_argument("--jobs", type=int, default=2, metavar="N",
+                   help="simulations in parallel (default 2)")
+    p.add_argument("--dpi", type=int, default=100, help="plot resolution (default 100)")
+    p.add_argument("--no-plots", action="store_true",
+                   help="skip the PNGs (tests that only need the bounds)")
+    p.add_argument("--no-sweeps", action="store_true",
+                   help="skip the sweeps of <scenarios>/sweeps.toml (they run unless --only)")
+    p.add_argument("--profiles", metavar="NAME[,NAME]", default=None,
+                   help="realism profiles (scenario.profile): realistic (default; the bounds are "
+                        "for it) plus others to report beside it, e.g. realistic,harsh: one "
+                        "run per check on the scenario's own seed, a column per model, never "
+                        "judged")
+    p.set_defaults(func=report)

@@ -9,8 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
+from mctools.errors import InputError
 
-class TraceError(Exception):
+
+class TraceError(InputError):
     """Bad trace input; the CLI turns it into exit status 2."""
 
 

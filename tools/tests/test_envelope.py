@@ -9,8 +9,9 @@ import pytest
 
 from fakes import write_fake_mcsim
 from mctools import cli
-from mctools.sweep import (DOC_BEGIN, DOC_END, SweepInputError, classify_run, envelope_errors,
-                           replace_doc_section, summarize_cell)
+from mctools.sweep.common import SweepInputError
+from mctools.sweep.envelope import (DOC_BEGIN, DOC_END, classify_run, envelope_errors,
+                                    replace_doc_section, summarize_cell)
 
 
 def metrics(faults=(), amax=1.0, steady=0.5, t_fault=None, windows=None):

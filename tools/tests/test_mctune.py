@@ -19,10 +19,10 @@ canopen = pytest.importorskip("canopen")
 pytest.importorskip("can")
 
 from mctools import mctune  # noqa: E402
-from mctools.mctune_drive import (  # noqa: E402
-    Eds, InputError, parse_bus_spec, SWITCH_ON_DISABLED, READY, SWITCHED_ON, ENABLED,
-    FAULT,
-)
+from mctools.mctune.bus import parse_bus_spec  # noqa: E402
+from mctools.mctune.drive import ENABLED, FAULT, READY, SWITCH_ON_DISABLED, SWITCHED_ON  # noqa: E402
+from mctools.mctune.eds import Eds  # noqa: E402
+from mctools.mctune.errors import InputError  # noqa: E402
 
 FIXTURE = Path(__file__).parent / "data" / "fixture.eds"
 FIXTURE_HASH = 0x1F2E3D4C
@@ -466,7 +466,7 @@ def test_nmt_and_list_reads(capsys, bus, drive):
 
 def test_fault_names_from_the_generated_table():
     """mctune names faults from tools/mctools/data/faults.json (generated from mc/faults.h)."""
-    from mctools.mctune_drive import emcy_fault, fault_names, load_faults
+    from mctools.mctune.faults import emcy_fault, fault_names, load_faults
     faults = load_faults()
     assert faults[0]["name"] == "overcurrent" and faults[11]["name"] == "loss_of_lock"
     assert fault_names(0x0801) == ["overcurrent", "loss_of_lock"]

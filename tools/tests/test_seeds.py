@@ -268,7 +268,7 @@ def test_seeds_on_dask_local_cluster(env):
 
 def test_seeds_bad_scheduler(env, monkeypatch):
     pytest.importorskip("distributed")
-    monkeypatch.setattr("mctools.sweep.CONNECT_TIMEOUT", "1s")
+    monkeypatch.setattr("mctools.sweep.seeds.CONNECT_TIMEOUT", "1s")
     rc, o, e, data, out = seeds_sweep(env, "nosched", "--n", "2",
                                       "--scheduler", "tcp://127.0.0.1:9")
     assert rc == 2 and "cannot connect" in e

@@ -10,7 +10,9 @@ import pytest
 
 from fakes import write_fake_mcsim
 from mctools import cli
-from mctools.sweep import angle_list, distribution, step1_peak_a, trial_angles
+from mctools.sweep.common import angle_list, distribution
+from mctools.sweep.noise import trial_angles
+from mctools.sweep.table7_1 import step1_peak_a
 
 FAKE_BODY = r'''
 # Stands in for mcsim: the startup metrics are simple functions of the --set values.

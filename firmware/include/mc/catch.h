@@ -56,7 +56,7 @@
  * (C.6) KNOWN-VECTOR PULSE. Where the diodes conduct and (C.5) has the sign, a V(000) pulse is a
  * period of lag that the field-weakening entry after it must carry (mc/fw_entry.h): on the thesis
  * motor at 1500 rpm the best hand-over a search finds from a V(000) pulse's current is 13.6 A, from
- * a pulse of the hexagon's corner against the back-EMF 12.6 A (`mctools handover`,
+ * a pulse of the hexagon's corner against the back-EMF 12.6 A (`mctools fly-current`,
  * docs/protection.md). So the pulse there is an active vector u (a corner, 2 vdc / 3, the gates
  * held one period): the one nearest to where the entry's first vector will point, from the diode
  * current's direction phi_i (against q: theta ~ phi_i + sigma pi/2, the entry's vector ~ theta +

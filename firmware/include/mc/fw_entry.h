@@ -7,7 +7,7 @@
  * rho = u_max / |omega| while the rotor turns on. A current loop asked for the field-weakening
  * current at its voltage limit does that late and overshoots (16.6 A on the thesis motor at
  * 1500 rpm, the limit 13.29 A); the least peak a search over voltage sequences finds is 12.9 A
- * (`mctools handover`, docs/protection.md), and its sequence is this law.
+ * (`mctools fly-current`, docs/protection.md), and its sequence is this law.
  *
  * PRINCIPLE (stator frame, Rs neglected). The stator flux psi_s moves with its voltage,
  * d psi_s / dt = u_s, at most u_max fast; the magnet's flux turns at |omega| on a circle of radius
@@ -23,7 +23,7 @@
  * thesis motor at 1500 rpm, 300 V). In the rotor frame the voltage then points
  *     angle(u) = angle(psi) + sign(omega) (pi / 2 + beta),   |u| = u_max                     (F.3)
  * from 140 deg (against the flux, ahead of it) at the start down to 90 deg + the lag at rho. The
- * search of `mctools handover` (the preset's saturation model, Rs, one vector per period) found
+ * search of `mctools fly-current` (the preset's saturation model, Rs, one vector per period) found
  * this sequence on its own: 140 deg falling to 75 deg over 1.4 ms, lag 17.8 deg, 12.9 A.
  *
  * With Rs the flux that counts is need / |omega|, need = |Rs i + j omega psi| (2.7), the voltage

@@ -31,13 +31,14 @@ import sys
 
 import numpy as np
 
+from mctools.errors import InputError
 from mctools.machine import Machine
 from mctools.preset import load_preset
 
 SQRT3 = math.sqrt(3.0)
 
 
-class HandoverInputError(ValueError):
+class FlyCurrentInputError(InputError, ValueError):
     """A bad option value; the CLI turns it into exit status 2 with the option's name."""
 
 
@@ -153,8 +154,10 @@ def search_peak(m: Machine, omega_e: float, vdc: float, ts: float, *, limit: str
     return {"peak_a": best[1], "end_short_v": best[2], "cost": best[0]}
 
 
-def handover(m: Machine, rpm: float, *, vdc: float, ts: float, limits, margin: float,
-             horizon_s: float, seeds: int, i0=(0.0, 0.0), theta0: float = 0.0) -> dict:
+def fly_current(m: Machine, rpm: float, *, vdc: float, ts: float, limits, margin: float,
+                horizon_s: float, seeds: int, i0=(0.0, 0.0), theta0: float = 0.0) -> dict:
+    """One speed's row: the floor and, per voltage limit, the best searched peak (module
+    docstring); every search is 0 A where the magnet's flux can be held from i = 0."""
     omega_e = rpm / 60.0 * 2.0 * math.pi * m.pole_pairs
     u_lin = vdc / SQRT3
     row = {"rpm": rpm, "omega_e": omega_e, "vdc_v": vdc,
@@ -180,9 +183,9 @@ def _floats(text: str, key: str) -> list[float]:
     try:
         vals = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise HandoverInputError(f"{key}: {text!r} is not a comma-separated list of numbers") from None
+        raise FlyCurrentInputError(f"{key}: {text!r} is not a comma-separated list of numbers") from None
     if not vals or not all(math.isfinite(v) for v in vals):
-        raise HandoverInputError(f"{key}: {text!r}: give finite numbers")
+        raise FlyCurrentInputError(f"{key}: {text!r}: give finite numbers")
     return vals
 
 
@@ -192,31 +195,31 @@ def _cmd(args) -> int:
     limits = [s.strip() for s in args.limit.split(",") if s.strip()]
     bad = [s for s in limits if s not in ("circle", "hexagon")]
     if bad or not limits:
-        raise HandoverInputError(f"--limit: {args.limit!r}: choose from circle, hexagon")
+        raise FlyCurrentInputError(f"--limit: {args.limit!r}: choose from circle, hexagon")
     vdc = m.vdc_nominal_v if args.vdc is None else args.vdc
     if not (math.isfinite(vdc) and vdc > 0):
-        raise HandoverInputError(f"--vdc: {vdc} V: must be > 0 (or the preset's vdc_nominal_v)")
+        raise FlyCurrentInputError(f"--vdc: {vdc} V: must be > 0 (or the preset's vdc_nominal_v)")
     ts = 1.0 / m.f_sample_hz if args.ts is None else args.ts
     if not (math.isfinite(ts) and 1e-6 <= ts <= 1e-2):
-        raise HandoverInputError(f"--ts: {ts} s: must be in 1e-6 .. 1e-2")
+        raise FlyCurrentInputError(f"--ts: {ts} s: must be in 1e-6 .. 1e-2")
     if not (0.5 <= args.margin <= OM_FUND_MAX):
-        raise HandoverInputError(f"--margin: {args.margin}: must be in 0.5 .. {OM_FUND_MAX:.4f} "
+        raise FlyCurrentInputError(f"--margin: {args.margin}: must be in 0.5 .. {OM_FUND_MAX:.4f} "
                                  "(above 1 the end state needs overmodulation)")
     if not (0.2 <= args.horizon_ms <= 20.0):
-        raise HandoverInputError(f"--horizon-ms: {args.horizon_ms}: must be in 0.2 .. 20")
+        raise FlyCurrentInputError(f"--horizon-ms: {args.horizon_ms}: must be in 0.2 .. 20")
     if not (1 <= args.seeds <= 20):
-        raise HandoverInputError(f"--seeds: {args.seeds}: must be in 1 .. 20")
+        raise FlyCurrentInputError(f"--seeds: {args.seeds}: must be in 1 .. 20")
     i0 = _floats(args.i0, "--i0")
     if len(i0) != 2:
-        raise HandoverInputError(f"--i0: {args.i0!r}: give i_d,i_q in A")
+        raise FlyCurrentInputError(f"--i0: {args.i0!r}: give i_d,i_q in A")
     if not math.isfinite(args.theta0_deg):
-        raise HandoverInputError(f"--theta0-deg: {args.theta0_deg}: give a finite angle")
+        raise FlyCurrentInputError(f"--theta0-deg: {args.theta0_deg}: give a finite angle")
     rows = []
     for r in rpms:
-        print(f"mctools handover: {m.name} at {r:g} rpm ...", file=sys.stderr, flush=True)
-        rows.append(handover(m, r, vdc=vdc, ts=ts, limits=limits, margin=args.margin,
-                             horizon_s=1e-3 * args.horizon_ms, seeds=args.seeds, i0=i0,
-                             theta0=math.radians(args.theta0_deg)))
+        print(f"mctools fly-current: {m.name} at {r:g} rpm ...", file=sys.stderr, flush=True)
+        rows.append(fly_current(m, r, vdc=vdc, ts=ts, limits=limits, margin=args.margin,
+                                horizon_s=1e-3 * args.horizon_ms, seeds=args.seeds, i0=i0,
+                                theta0=math.radians(args.theta0_deg)))
     if args.json:
         print(json.dumps({"preset": m.name, "rows": rows}, indent=1))
         return 0
@@ -236,8 +239,8 @@ def _cmd(args) -> int:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("handover", help="the smallest peak current of taking over a turning rotor "
-                       "(flying start): steady-state floor and a searched voltage sequence",
+    p = sub.add_parser("fly-current", help="the smallest peak current of taking over a turning "
+                       "rotor (flying start): steady-state floor and a searched voltage sequence",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("preset", metavar="NAME|PATH", help="preset name (presets/<name>.toml) or file")
     p.add_argument("--preset-dir", metavar="DIR", help="directory to look up preset names in")

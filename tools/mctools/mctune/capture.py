@@ -12,10 +12,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from mctools.mctune_drive import (
-    EDGES, SCOPE_STATUS, TELEM_BASE, CommError, Drive, InputError, ScopeChannel, ScopeRecord,
-    decode_scope, match_pattern,
-)
+from mctools.mctune.drive import EDGES, SCOPE_STATUS, Drive, ScopeChannel, ScopeRecord, decode_scope
+from mctools.mctune.eds import TELEM_BASE, match_pattern
+from mctools.mctune.errors import CommError, InputError
 
 
 def col_label(name: str, unit: str) -> str:

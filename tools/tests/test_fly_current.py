@@ -1,4 +1,4 @@
-"""mctools handover: the flying-start hand-over's current floor and searched peak."""
+"""mctools fly-current: the flying-start hand-over's current floor and searched peak."""
 import json
 import math
 from pathlib import Path
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mctools import cli
-from mctools.handover import floor_current, search_peak, simulate
+from mctools.fly_current import floor_current, search_peak, simulate
 from mctools.machine import machine_from_dict
 from mctools.preset import load_preset
 
@@ -89,7 +89,7 @@ def test_overmodulated_hold_lowers_the_floor():
 
 
 def test_cli_json_and_below_base_speed(capsys):
-    rc = cli.main(["handover", str(REPO_PRESETS / "sun2016-ipm-5kw.toml"), "--rpm", "300",
+    rc = cli.main(["fly-current", str(REPO_PRESETS / "sun2016-ipm-5kw.toml"), "--rpm", "300",
                    "--json"])
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
@@ -110,6 +110,6 @@ def test_cli_json_and_below_base_speed(capsys):
     (["--seeds", "0"], "--seeds"),
 ])
 def test_cli_rejects_bad_options(argv, key, capsys):
-    rc = cli.main(["handover", str(REPO_PRESETS / "sun2016-ipm-5kw.toml")] + argv)
+    rc = cli.main(["fly-current", str(REPO_PRESETS / "sun2016-ipm-5kw.toml")] + argv)
     assert rc == 2
     assert key in capsys.readouterr().err

@@ -18,12 +18,14 @@ import sys
 import time
 from pathlib import Path
 
-from mctools.mctune_drive import (
-    CONFIG_SOURCES, DEFAULT_BUS, DEFAULT_TIMEOUT_S, ERROR_REGISTER_BITS, INT_RANGES, MODE_NAMES, MODES,
-    NMT_COMMANDS, NMT_STATES, STORE_STATUS, CommError, Drive, Eds, InputError, MctuneError, check_range,
-    default_eds_path, describe_statusword, emcy_fault, fault_names, fmt_num, format_value, match_pattern,
-    scope_channel,
+from mctools.mctune.bus import DEFAULT_BUS, DEFAULT_TIMEOUT_S, NMT_COMMANDS, NMT_STATES
+from mctools.mctune.drive import (
+    CONFIG_SOURCES, ERROR_REGISTER_BITS, MODE_NAMES, MODES, STORE_STATUS, Drive, describe_statusword,
+    format_value, scope_channel,
 )
+from mctools.mctune.eds import INT_RANGES, Eds, check_range, default_eds_path, match_pattern
+from mctools.mctune.errors import InputError, MctuneError
+from mctools.mctune.faults import emcy_fault, fault_names
 
 EXIT_INTERRUPTED = 130
 
@@ -243,7 +245,7 @@ def cmd_nmt(args, drive: Drive) -> int:
 
 
 def cmd_monitor(args, drive: Drive) -> int:
-    from mctools.mctune_capture import LivePlot, TpdoRecorder, has_display, plot_series, write_csv
+    from mctools.mctune.capture import LivePlot, TpdoRecorder, has_display, plot_series, write_csv
 
     what = "monitor: "
     maps = []
@@ -331,7 +333,7 @@ def cmd_monitor(args, drive: Drive) -> int:
 
 
 def cmd_scope(args, drive: Drive) -> int:
-    from mctools.mctune_capture import fmt_period, run_scope, scope_outputs
+    from mctools.mctune.capture import fmt_period, run_scope, scope_outputs
 
     names = [n for c in args.channels for n in c.split(",") if n.strip()]
     channels = [scope_channel(drive.eds, n) for n in names]
@@ -548,9 +550,3 @@ def main(argv=None) -> int:
         _err("mctune: interrupted")
         return EXIT_INTERRUPTED
 
-
-if __name__ == "__main__":
-    sys.exit(main())
-
-
-__all__ = ["main", "build_parser", "Drive", "Eds", "CommError", "InputError", "fmt_num"]

@@ -1,0 +1,5 @@
+import sys
+
+from mctools.mctune.cli import main
+
+sys.exit(main())
