@@ -201,6 +201,76 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
     return slew(d, with_bias(d, mc_tref_fw_feedback(&d->tref, r, d->cc.limited, omega, vdc)));
 }
 
+/* The injection's notches start again from the current that flows (while injecting). */
+static void notch_restart(mc_drive_t *d, const mc_drive_blk_t *c, mc_dq_t i)
+{
+    if (c->inject) {
+        mc_biquad_reset(&d->notch_d, i.d);
+        mc_biquad_reset(&d->notch_q, i.q);
+    }
+}
+
+/* A RUN entry at speed first takes the flux into the voltage limit with the least current
+ * (mc/fw_entry.h): true while it runs, *u_dq its voltage; the loop then idles with its
+ * references on the current that flows (bumpless) and starts from them when the entry ends. */
+static bool fw_entry(mc_drive_t *d, const mc_drive_blk_t *c, const mc_angle_out_t *ang, mc_dq_t i_dq, mc_dq_t i_fb,
+                     mc_dq_t *i_ref, mc_ab_t u_acting, mc_sincos_t sc_u, float vdc, mc_dq_t *u_dq)
+{
+    if (!mc_fwe_active(&d->fwe)) {
+        return false;
+    }
+    /* the raw currents: the injection's notch would delay a current that moves by a tenth of the
+     * limit per period. It lands on the flux the references will hold (control.u_margin), but
+     * not beyond the inscribed circle: the tangential phase (F.4) takes the lag back only where
+     * the hexagon reaches beyond the held flux's voltage, and its sides reach no more than the
+     * circle (at u_margin 1.04 the lag never went and the law ran on, braking at -15 N m). Moved
+     * with what the hexagon gives in each direction (sc_u: where the vector will act) when the
+     * loop may overmodulate. */
+    mc_fwe_in_t in = {.i = i_dq, .omega = ang->omega, .vdc = vdc, .sc = sc_u};
+    mc_flux_eval(&c->src.model, i_dq, &in.psi, 0, 0);
+    in.u_now = mc_park(u_acting, mc_sincos(mc_wrap_pi(ang->theta + 0.5f * ang->omega * c->ts)));
+    in.u_land = mc_drive_u_land(d, vdc);
+    switch (mc_fwe_step(&d->fwe, &c->fwe, &in, u_dq)) {
+    case MC_FWE_RUNNING:
+        *i_ref = i_fb;   /* bumpless, for the loop after it and for the tracking check */
+        d->i_ref_prev = i_fb;
+        notch_restart(d, c, i_dq);
+        d->cc.u = *u_dq;   /* the plausibility checks see the voltage applied */
+        return true;
+    case MC_FWE_ENDED:
+        mc_cc_reset(&d->cc);   /* the loop starts from the references it was left */
+        return false;
+    case MC_FWE_OFF:
+    default:
+        return false;
+    }
+}
+
+/* ISR step 7: the current loop, limited to a circle of u_loop vdc/sqrt3: the inscribed circle of
+ * the voltage hexagon (linear), or beyond it up to the corners, which mc_svpwm scales into the
+ * hexagon keeping the direction (overmodulation, mc/svpwm.h (2.14a)); or, after a RUN entry above
+ * the generation speed, the field-weakening entry's voltage until the loop takes over from the
+ * current that then flows. The HF injection (6.6) rides on the estimated d axis. */
+static mc_dq_t current_loop(mc_drive_t *d, const mc_drive_blk_t *c, const mc_angle_out_t *ang, mc_dq_t i_dq,
+                            mc_dq_t i_fb, mc_dq_t *i_ref, mc_ab_t u_acting, mc_sincos_t sc_u, float vdc)
+{
+    const float u_loop = vdc * MC_1_SQRT3 * c->u_loop;
+    mc_dq_t u_dq;
+    if (fw_entry(d, c, ang, i_dq, i_fb, i_ref, u_acting, sc_u, vdc, &u_dq)) {
+        /* the entry's voltage */
+    } else if (c->cc_map) {
+        /* the decoupling from the flux map's psi(i): the machine's own back-EMF (mc_cc_step_psi) */
+        mc_dq_t psi;
+        mc_flux_eval(&c->src.model, i_fb, &psi, 0, 0);
+        u_dq = mc_cc_step_psi(&d->cc, *i_ref, i_fb, psi, ang->omega, u_loop);
+    } else {
+        u_dq = mc_cc_step(&d->cc, *i_ref, i_fb, ang->omega, u_loop);
+    }
+    d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang->omega) : 0.0f;
+    u_dq.d += d->tm.u_inj;
+    return u_dq;
+}
+
 void mc_drive_isr(mc_drive_t *d)
 {
     const mc_drive_blk_t *c = &d->cfg->blk;
@@ -275,78 +345,25 @@ void mc_drive_isr(mc_drive_t *d)
     if (c->inject && !(fabsf(ang.omega) > 1.2f * d->inj.cfg.omega_n1)) {
         i_fb.d = mc_biquad_step(&d->notch_d, i_dq.d);
         i_fb.q = mc_biquad_step(&d->notch_q, i_dq.q);
-    } else if (c->inject) {
+    } else {
         /* well above N1 nothing is injected, and the notch would only delay the loop's currents
          * (a torque step at 1400 rpm drove i_d 1.3 A past its reference through it): bypassed
          * from 1.2 N1 (the margin lets the injection's last current decay through it first),
          * its state kept at the current so that it starts from it below again */
-        mc_biquad_reset(&d->notch_d, i_dq.d);
-        mc_biquad_reset(&d->notch_q, i_dq.q);
+        notch_restart(d, c, i_dq);
     }
 
     /* 6. References: current, torque (MTPA / field weakening) or speed; zero during Step III. */
     const bool step3 = d->seq.state == MC_STATE_INIT_POS;
     mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : references(d, ang.omega, vdc);
 
-    /* 7. Current control, limited to a circle of u_loop vdc/sqrt3: the inscribed circle of the
-     *    voltage hexagon (linear), or beyond it up to the corners, which mc_svpwm scales into the
-     *    hexagon keeping the direction (overmodulation, mc/svpwm.h (2.14a)); the HF injection
-     *    (6.6) rides on the estimated d axis. A RUN entry above the generation speed first takes
-     *    the flux into the voltage limit with the least current (mc/fw_entry.h); the loop starts
-     *    from the current that then flows. */
-    const float u_loop = vdc * MC_1_SQRT3 * c->u_loop;
+    /* 7. Current control (and the field-weakening entry's voltage while it runs), the HF
+     *    injection (6.6) on the estimated d axis. */
     hal_stage_mark(HAL_STAGE_CURRENT);
     /* the voltage acting until the next sample: the duties latched last period, or the diodes'
      * with the outputs still off (a RUN entry at gate_on_next) */
     const mc_ab_t u_acting = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
-    mc_dq_t u_dq;
-    if (d->fwe_active) {
-        /* the raw currents: the injection's notch would delay a current that moves by a
-         * tenth of the limit per period */
-        mc_dq_t psi;
-        mc_flux_eval(&c->src.model, i_dq, &psi, 0, 0);
-        const mc_dq_t u_now = mc_park(u_acting, mc_sincos(mc_wrap_pi(ang.theta + 0.5f * ang.omega * c->ts)));
-        /* lands on the flux the references will hold (control.u_margin), but not beyond the
-         * inscribed circle: the tangential phase (F.4) takes the lag back only where the hexagon
-         * reaches beyond the held flux's voltage, and its sides reach no more than the circle (at
-         * u_margin 1.04 the lag never went and the law ran on, braking at -15 N m). Moved with
-         * what the hexagon gives in each direction (sc_u: where the vector will act) when the
-         * loop may overmodulate. */
-        d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, mc_drive_u_land(d, vdc),
-                                    c->u_loop > 1.0f ? vdc : 0.0f, sc_u, d->fwe_n > 0u, &u_dq);
-        /* the law has no current feedback: with its model off (psi_pm 10 % high) it takes the
-         * flux too far; at 1.1 x i_max the loop takes over, whatever the law would do. Nor does
-         * it run longer than one electrical turn (every direction of the hexagon has passed):
-         * what it has not done by then it will not do, and meanwhile it ignores the command */
-        if (d->fwe_active && (!(i_dq.d * i_dq.d + i_dq.q * i_dq.q < c->fwe_i_stop * c->fwe_i_stop) ||
-                              (float)d->fwe_n * c->ts * fabsf(ang.omega) > MC_2PI)) {
-            d->fwe_active = false;
-        }
-        if (d->fwe_active) {
-            d->fwe_n++;
-            i_ref = i_fb;   /* bumpless, for the loop after it and for the tracking check */
-            d->i_ref_prev = i_fb;
-            if (c->inject) {
-                /* the notches start again from the current that flows */
-                mc_biquad_reset(&d->notch_d, i_dq.d);
-                mc_biquad_reset(&d->notch_q, i_dq.q);
-            }
-        } else if (d->fwe_n > 0u) {
-            mc_cc_reset(&d->cc);   /* the loop starts from the references it was left */
-        }
-    }
-    if (d->fwe_active) {
-        d->cc.u = u_dq;   /* the plausibility checks see the voltage applied */
-    } else if (c->cc_map) {
-        /* the decoupling from the flux map's psi(i): the machine's own back-EMF (mc_cc_step_psi) */
-        mc_dq_t psi;
-        mc_flux_eval(&c->src.model, i_fb, &psi, 0, 0);
-        u_dq = mc_cc_step_psi(&d->cc, i_ref, i_fb, psi, ang.omega, u_loop);
-    } else {
-        u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, u_loop);
-    }
-    d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
-    u_dq.d += d->tm.u_inj;
+    const mc_dq_t u_dq = current_loop(d, c, &ang, i_dq, i_fb, &i_ref, u_acting, sc_u, vdc);
 
     /* 7a. The polarity re-check (polcheck.c): at a RUN entry not preceded by Step II when so
      *     configured (else protect.c starts it when the loss-of-lock checks are in doubt). */

@@ -259,7 +259,7 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     b->vdc_min = p->vdc_min;
     b->vdc_max = p->vdc_max;
     b->i_ref_max = p->i_max * (1.0f - p->i_headroom);
-    b->fwe_i_stop = 1.1f * p->i_max;
+    b->fwe = (mc_fwe_cfg_t){.ts = p->ts, .rs = m.rs, .i_stop = 1.1f * p->i_max, .overmod = p->u_loop > 1.0f};
     b->u_loop = p->u_loop;
     b->i_slew = p->i_slew;
     b->cal_samples = (uint32_t)p->offset_cal_samples;

@@ -55,8 +55,7 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->offsets_moved = false;
     d->gate_on_next = false;
     d->entry_corner = false;
-    d->fwe_active = false;
-    d->fwe_n = 0u;
+    mc_fwe_reset(&d->fwe);
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
     pipeline_reset(d, d->cmd.theta_init, 0.0f);
@@ -141,8 +140,7 @@ static void refs_from_current(mc_drive_t *d, mc_ab_t i_ab, float theta)
 static void run_at_speed(mc_drive_t *d, bool outputs_off_now)
 {
     d->gate_on_next = outputs_off_now;
-    d->fwe_active = true;
-    d->fwe_n = 0u;
+    mc_fwe_begin(&d->fwe);
 }
 
 /* Offsets within the plausible range of mid-scale, or false (then none changes). */
@@ -192,7 +190,7 @@ static bool latch_entry_corner(mc_drive_t *d)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
     const float vdc = d->tm.vdc, w = d->tm.omega;
-    if (!b->src_measures || !(b->u_loop > 1.0f) || !(vdc > 0.0f) ||
+    if (!b->src_measures || !b->fwe.overmod || !(vdc > 0.0f) ||
         !(fabsf(w) * b->fly.psi_pm > mc_drive_u_land(d, vdc))) {
         return false;
     }

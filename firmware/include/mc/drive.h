@@ -8,6 +8,7 @@
 #include "mc/current_ctrl.h"
 #include "mc/deadtime.h"
 #include "mc/filters.h"
+#include "mc/fw_entry.h"
 #include "mc/handover.h"
 #include "mc/injection.h"
 #include "mc/initpos.h"
@@ -106,7 +107,6 @@ typedef struct {
     int32_t adc_max;             /* the ADC's upper rail [counts]                            */
     float i_trip, vdc_min, vdc_max;
     float i_ref_max, i_slew;     /* [A], [A/s]                                               */
-    float fwe_i_stop;            /* the field-weakening entry law hands over at this |i|: 1.1 i_max [A] */
     float u_loop;                /* the current loop's voltage circle / (vdc/sqrt3): control.u_loop */
     uint32_t cal_samples;
     float step3_speed_tol;       /* [rad/s el]                                               */
@@ -145,6 +145,7 @@ typedef struct {
     mc_polarity_cfg_t ip2;
     mc_dvi_cfg_t dvi;
     mc_catch_cfg_t fly;
+    mc_fwe_cfg_t fwe;            /* the field-weakening entry (mc/fw_entry.h)                    */
 } mc_drive_blk_t;
 
 /* A complete derived configuration: the parameters, the ISR's values and every block's
@@ -189,9 +190,8 @@ typedef struct {
     bool entry_corner;           /* an angle-sensor drive latched the entry's corner (startup.c) */
     bool gate_on_next;           /* RUN's first duties latched with the outputs off: on at the
                                     next period's start (a flying start at a diode pulse's low) */
-    bool fwe_active;             /* a RUN entry at speed: the flux into the voltage limit first
+    mc_fwe_t fwe;                /* a RUN entry at speed: the flux into the voltage limit first
                                     (mc/fw_entry.h) */
-    uint32_t fwe_n;              /* periods it has run since that entry */
     float offset[3];             /* calibrated [counts]                      */
 
     const mc_angle_src_desc_t *src;
