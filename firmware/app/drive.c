@@ -372,7 +372,17 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 7b. Plausibility: over-speed, loss of lock, current tracking, stall (protect.c); a fault
      *     turns the outputs off before this period's duties are written. */
-    const uint32_t implausible = mc_protect_running(d, &ang, d->tm.omega_raw, i_ref, i_fb, d->cc.u);
+    const mc_protect_in_t pin = {.theta = ang.theta, .omega = ang.omega, .theta_raw = d->tm.theta_raw,
+                                 .omega_raw = d->tm.omega_raw, .i_ref = i_ref, .i_fb = i_fb, .u_dq = d->cc.u,
+                                 .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
+                                 .speed_ref = d->cmd.speed_ref,
+                                 .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
+                                 .lock_paused = mc_polcheck_active(d)};
+    bool doubt = false;
+    const uint32_t implausible = mc_protect_running(&d->prot, &d->cfg->blk.prot, &pin, &doubt);
+    if (doubt) {
+        (void)mc_polcheck_start(d, ang.omega);   /* the lock checks in doubt: is the estimate reversed? */
+    }
     if (implausible != 0u) {
         if (!mc_drive_recover(d, implausible, vdc) && !mc_drive_react(d, implausible, ang.omega, vdc)) {
             mc_drive_trip(d, implausible);

@@ -189,9 +189,20 @@ static uint32_t periods_of(float seconds, float ts)
 static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
 {
     const float el = RPM_TO_RAD_S * (float)p->pole_pairs;
-    b->overspeed = p->overspeed_rpm * el;
-    b->recover = p->lock_action == 1 && !mc_angle_src_get(p->angle_src)->measures_angle;
-    b->hold_fw = p->overspeed_action == 1;
+    mc_protect_cfg_t *r = &b->prot;
+    r->ts = p->ts;
+    r->pole_pairs = (int)p->pole_pairs;
+    r->adc_max = (int32_t)(float)((1L << p->adc_bits) - 1L);
+    r->i_trip = p->i_trip;
+    r->vdc_min = p->vdc_min;
+    r->vdc_max = p->vdc_max;
+    r->rs = p->rs;
+    r->ld = p->ld;
+    r->lq = p->lq;
+    r->psi_pm = p->psi_pm;
+    r->overspeed = p->overspeed_rpm * el;
+    r->recover = p->lock_action == 1 && !mc_angle_src_get(p->angle_src)->measures_angle;
+    r->hold_fw = p->overspeed_action == 1;
     b->pol_check = p->pol_check != 0;
     b->pol_at_start = p->pol_check == 2;
     b->pol_bias = p->pol_bias;
@@ -204,30 +215,31 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     b->pol_start_n = periods_up(5.0f / (MC_2PI * p->pll_bw_hz) / p->ts);
     /* the speed estimate may drift by 5 x Step III's tolerance during the check */
     b->pol_w_scale = 0.1745f / (5.0f * p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs);
-    b->ug_coef = 1.7320508f * p->psi_pm;
+    r->ug_coef = 1.7320508f * p->psi_pm;
     b->seq.timeout_reaction = p->reaction_timeout;
-    b->retries = (uint32_t)p->retries;
-    b->retry_reset_n = periods_of(p->retry_reset, p->ts);
+    r->retries = (uint32_t)p->retries;
+    r->retry_reset_n = periods_of(p->retry_reset, p->ts);
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */
     b->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
-    b->i_sum_tol = p->i_sum_tol;
-    b->i_sum_n = periods_of(p->i_sum_time, p->ts);
-    b->track_err = p->track_err;
-    b->track_n = periods_of(p->track_time, p->ts);
-    b->lock_tol = p->lock_tol;
-    b->lock_floor = p->lock_floor_rpm * el;
-    b->lock_n = b->inject ? periods_of(p->lock_time, p->ts) : 0u;   /* estimators only */
-    b->jump_n = b->inject ? periods_of(p->jump_time, p->ts) : 0u;
-    b->jump = p->jump_deg * (MC_PI / 180.0f);
-    b->stall_speed = p->stall_rpm * el;
-    b->stall_torque = 0.9f * p->torque_max;
-    b->stall_n = periods_of(p->stall_time, p->ts);
-    b->accel_n = periods_of(p->accel_time, p->ts);
-    b->accel_torque = 0.5f * p->torque_max;
-    b->accel_per_nm = 0.5f * (float)p->pole_pairs / p->inertia;
-    b->resid_v = p->resid_v;
-    b->resid_w_coef = 0.5f * p->lq * p->i_max;
-    b->resid_n = periods_of(p->resid_time, p->ts);
+    r->avg_k = b->avg_k;
+    r->i_sum_tol = p->i_sum_tol;
+    r->i_sum_n = periods_of(p->i_sum_time, p->ts);
+    r->track_err = p->track_err;
+    r->track_n = periods_of(p->track_time, p->ts);
+    r->lock_tol = p->lock_tol;
+    r->lock_floor = p->lock_floor_rpm * el;
+    r->lock_n = b->inject ? periods_of(p->lock_time, p->ts) : 0u;   /* estimators only */
+    r->jump_n = b->inject ? periods_of(p->jump_time, p->ts) : 0u;
+    r->jump = p->jump_deg * (MC_PI / 180.0f);
+    r->stall_speed = p->stall_rpm * el;
+    r->stall_torque = 0.9f * p->torque_max;
+    r->stall_n = periods_of(p->stall_time, p->ts);
+    r->accel_n = periods_of(p->accel_time, p->ts);
+    r->accel_torque = 0.5f * p->torque_max;
+    r->accel_per_nm = 0.5f * (float)p->pole_pairs / p->inertia;
+    r->resid_v = p->resid_v;
+    r->resid_w_coef = 0.5f * p->lq * p->i_max;
+    r->resid_n = periods_of(p->resid_time, p->ts);
 }
 
 bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err)
@@ -250,14 +262,10 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     b->ts = p->ts;
     b->pole_pairs = (int)p->pole_pairs;
     const float max_count = (float)((1L << p->adc_bits) - 1L);
-    b->adc_max = (int32_t)max_count;
     b->amps_per_count = 2.0f * p->i_span / max_count;
     b->volts_per_count = p->vdc_span / max_count;
     b->offset_nominal = (float)(1L << (p->adc_bits - 1));
     b->offset_tol = p->adc_offset_tol * (float)(1L << p->adc_bits);
-    b->i_trip = p->i_trip;
-    b->vdc_min = p->vdc_min;
-    b->vdc_max = p->vdc_max;
     b->i_ref_max = p->i_max * (1.0f - p->i_headroom);
     b->fwe = (mc_fwe_cfg_t){.ts = p->ts, .rs = m.rs, .i_stop = 1.1f * p->i_max, .overmod = p->u_loop > 1.0f};
     b->u_loop = p->u_loop;

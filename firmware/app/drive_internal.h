@@ -44,12 +44,6 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc);
 bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc);
 /* Outputs off, duties at 50 %, the reason latched (FAULT until disable + enable). */
 void mc_drive_trip(mc_drive_t *d, uint32_t reason);
-/* Plausibility detectors (protect.c): each returns a fault reason or 0. The sensor checks run
- * whenever the outputs are on; the running checks in RUN (and Step III) after current control. */
-void mc_protect_reset(mc_drive_t *d, float omega);   /* averages primed at speed omega [rad/s el] */
-uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i);
-uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb,
-                            mc_dq_t u_dq);
 /* Running polarity re-check (polcheck.c): start (false: not now), the d-reference bias while
  * it runs, one measurement step (true: the estimate was reversed and turned by pi). */
 void mc_polcheck_reset(mc_drive_t *d);

@@ -35,7 +35,7 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
     mc_biquad_reset(&d->notch_q, 0.0f);
     d->step3_speed = d->cfg->blk.step3_lpf;   /* coefficients built in the background, state at rest */
     d->step3_count = 0u;
-    mc_protect_reset(d, omega);
+    mc_protect_reset(&d->prot, &d->cfg->blk.prot, omega);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
     d->tref.fw_did = 0.0f;
     mc_polcheck_reset(d);
@@ -44,7 +44,7 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
 void mc_drive_startup_reset(mc_drive_t *d)
 {
     d->cal_count = 0u;
-    d->retries = 0u;
+    mc_protect_restart(&d->prot);
     d->tm.recoveries = 0u;
     d->tm.recovered_from = 0u;
     d->tm.polarity_checks = d->tm.polarity_flips = 0u;
@@ -79,25 +79,12 @@ static void write_duties(mc_drive_t *d, mc_abc_t duty, float vdc)
     d->tm.duty[2] = duty.c;
 }
 
+/* Protection's hard trips and sensor checks (mc/protect.h), every period the outputs may be on. */
 static void protect(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i, float vdc)
 {
-    const mc_drive_blk_t *c = &d->cfg->blk;
-    /* any phase above the trip level, or a sample at an ADC rail: a clipped channel says only
-     * that the current is beyond the span, which the configuration keeps above the trip level */
-    bool rail = false;
-    for (int k = 0; k < 3; ++k) {
-        rail = rail || raw->i[k] == 0u || (int32_t)raw->i[k] >= c->adc_max;
-    }
-    const bool over = rail || fabsf(i.a) > c->i_trip || fabsf(i.b) > c->i_trip || fabsf(i.c) > c->i_trip;
-    const uint32_t sensors = mc_protect_sensors(d, raw, i);
-    if (over) {
-        mc_drive_trip(d, MC_FAULT_OVERCURRENT);
-    } else if (vdc > c->vdc_max) {
-        mc_drive_trip(d, MC_FAULT_OVERVOLTAGE);
-    } else if (vdc < c->vdc_min) {
-        mc_drive_trip(d, MC_FAULT_UNDERVOLTAGE);
-    } else if (sensors != 0u) {
-        mc_drive_trip(d, sensors);
+    const uint32_t reason = mc_protect_sensors(&d->prot, &d->cfg->blk.prot, raw, i, vdc);
+    if (reason != 0u) {
+        mc_drive_trip(d, reason);
     }
 }
 
@@ -273,12 +260,9 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    const uint32_t recoverable = MC_FAULT_LOSS_OF_LOCK | MC_FAULT_VOLTAGE_MODEL | MC_FAULT_TRACKING;
-    if (!b->recover || (reason & ~recoverable) != 0u || d->retries >= b->retries ||
-        d->seq.state != MC_STATE_RUN) {
+    if (!mc_protect_may_recover(&d->prot, &b->prot, reason, d->seq.state == MC_STATE_RUN)) {
         return false;
     }
-    d->retries++;
     d->tm.recoveries++;
     d->tm.recovered_from |= reason;
     /* outputs off now, V(000) latched for the catch's first pulse */
@@ -296,9 +280,7 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
 
 bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc)
 {
-    const mc_drive_blk_t *b = &d->cfg->blk;
-    if (!b->hold_fw || reason != MC_FAULT_OVERSPEED || d->seq.state != MC_STATE_RUN ||
-        !(b->ug_coef * fabsf(omega) > vdc)) {
+    if (!mc_protect_may_hold(&d->cfg->blk.prot, reason, d->seq.state == MC_STATE_RUN, omega, vdc)) {
         return false;   /* below it, outputs off is current-free: the plain trip */
     }
     mc_seq_fault_reaction(&d->seq, reason);
@@ -432,8 +414,7 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
         }
         break;
     case MC_STATE_FAULT_REACTION:
-        /* the link is safe once the line-to-line back-EMF is below it with a margin */
-        if (d->cfg->blk.ug_coef * fabsf(d->tm.omega) < 0.95f * vdc) {
+        if (mc_protect_reaction_done(&d->cfg->blk.prot, d->tm.omega, vdc)) {
             mc_seq_event(&d->seq, MC_SEQ_REACTION_DONE);
             outputs_off(d);
         }
@@ -443,9 +424,7 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
         break;
     }
     mc_seq_tick(&d->seq);
-    if (d->seq.state == MC_STATE_RUN && d->seq.ticks >= d->cfg->blk.retry_reset_n) {
-        d->retries = 0u;   /* long enough in RUN: the recoveries count from zero again */
-    }
+    mc_protect_tick(&d->prot, &d->cfg->blk.prot, d->seq.state == MC_STATE_RUN, d->seq.ticks);
     if (d->seq.state == MC_STATE_FAULT && hal_pwm_enabled(d->hal.pwm)) {
         outputs_off(d);   /* a timeout raised by the tick */
     }

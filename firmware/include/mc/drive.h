@@ -16,6 +16,7 @@
 #include "mc/params.h"
 #include "mc/offset_cal.h"
 #include "mc/polarity.h"
+#include "mc/protect.h"
 #include "mc/pulse3.h"
 #include "mc/sequencer.h"
 #include "mc/speed_ctrl.h"
@@ -104,8 +105,6 @@ typedef struct {
     float ts;
     int   pole_pairs;
     float amps_per_count, volts_per_count, offset_nominal, offset_tol;   /* [A, V, counts]  */
-    int32_t adc_max;             /* the ADC's upper rail [counts]                            */
-    float i_trip, vdc_min, vdc_max;
     float i_ref_max, i_slew;     /* [A], [A/s]                                               */
     float u_loop;                /* the current loop's voltage circle / (vdc/sqrt3): control.u_loop */
     uint32_t cal_samples;
@@ -117,26 +116,12 @@ typedef struct {
     mc_biquad_t notch;           /* at the injection frequency, state at rest                 */
     mc_lpf1_t step3_lpf;         /* Step III's |omega_hat| low-pass (50 Hz), state at rest     */
     float avg_k;                 /* the detectors' 20 Hz first-order low-pass coefficient      */
-    /* protection (protect.c): limits in SI, persistence in periods (0: detector off) */
-    float overspeed;             /* [rad/s el]                                               */
-    float i_sum_tol, track_err, lock_tol, lock_floor, stall_speed, stall_torque;
-    float resid_v, resid_w_coef;  /* [V], [V s/rad]: threshold resid_v + resid_w_coef |w|   */
-    uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;
-    uint32_t accel_n;            /* torque plausibility persistence [periods] (0: off)        */
-    uint32_t jump_n;             /* loss of lock, fast path: persistence [periods] (0: off)   */
-    float jump;                  /* ... its threshold on |theta_raw - theta| [rad]             */
-    float accel_torque;          /* |T_ref| from which it looks [N m]                         */
-    float accel_per_nm;          /* 0.5 p / J: half the acceleration a torque gives [rad/s^2 el per N m] */
-    bool recover;                /* protection.lock_action = recover (sensorless only)          */
-    bool hold_fw;                /* protection.overspeed_action = hold_fw                       */
     bool pol_check, pol_at_start;  /* protection.polarity_check                                */
     float pol_bias;              /* [A]                                                         */
     float pol_log_ratio;         /* ln (l_dd(-I_b) / l_dd(+I_b))^2 from the map (0: unknown)    */
     uint32_t pol_settle_n, pol_measure_n;   /* [periods]                                      */
     uint32_t pol_start_n;        /* at_start: this long into RUN (the estimate settled first)   */
     float pol_w_scale;           /* 10 deg / speed tolerance: a speed drift in "angle" units    */
-    float ug_coef;               /* sqrt3 psi_pm: the line-to-line back-EMF per rad/s el [V s]  */
-    uint32_t retries, retry_reset_n;
     mc_seq_cfg_t seq;
     mc_angle_src_cfg_t src;
     mc_inj_cfg_t inj;
@@ -146,6 +131,7 @@ typedef struct {
     mc_dvi_cfg_t dvi;
     mc_catch_cfg_t fly;
     mc_fwe_cfg_t fwe;            /* the field-weakening entry (mc/fw_entry.h)                    */
+    mc_protect_cfg_t prot;       /* protection: hard trips, detectors, reactions (mc/protect.h)  */
 } mc_drive_blk_t;
 
 /* A complete derived configuration: the parameters, the ISR's values and every block's
@@ -200,15 +186,8 @@ typedef struct {
     mc_biquad_t notch_d, notch_q;
     mc_phase_t phase;            /* the running phase program (Step I, II) and its workspace */
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
-    struct {                     /* the plausibility detectors' state (protect.c)            */
-        uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n, accel_n, jump_n;   /* periods the condition held */
-        float w_prev, accel;                  /* last speed, its derivative low-passed [rad/s^2 el] */
-        float w_raw, err_d, err_q;            /* averages (blk.avg_k): raw speed, current error */
-        float w_dev2;                         /* mean square of the speed's swing about w    */
-        float u_d, u_q, i_d, i_q, w;          /* voltage, current, speed for the residual    */
-    } prot;
+    mc_protect_t prot;           /* protection's detectors and recoveries (mc/protect.h)      */
     uint32_t step3_count;
-    uint32_t retries;            /* recoveries since the last retry_reset_s of clean RUN      */
     struct {                     /* the running polarity re-check (polcheck.c)                */
         int phase;
         uint32_t n, cnt[2];

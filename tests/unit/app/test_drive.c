@@ -361,7 +361,7 @@ static void test_adc_rail_trips(void **st)
     assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_span, 30.0f, NULL));
     assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_trip, 27.2f, NULL));
     assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
-    assert_int_equal(r.d.cfg->blk.adc_max, 4095);
+    assert_int_equal(r.d.cfg->blk.prot.adc_max, 4095);
     const struct { int phase; int offset; uint16_t near, rail; } cases[] = {
         {0, +200, 4094u, 4095u},
         {1, -200, 1u, 0u},
@@ -382,21 +382,21 @@ static void test_adc_rail_trips(void **st)
         /* one count inside the rail: below the trip level, no trip */
         r.adc.sample.i[ph] = cases[n].near;
         const float i_near = ((float)cases[n].near - r.d.offset[ph]) * r.d.cfg->blk.amps_per_count;
-        assert_true(fabsf(i_near) < r.d.cfg->blk.i_trip);
+        assert_true(fabsf(i_near) < r.d.cfg->blk.prot.i_trip);
         run(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 
         /* at the rail: still below the trip level as a current, but it trips */
         r.adc.sample.i[ph] = cases[n].rail;
         const float i_rail = ((float)cases[n].rail - r.d.offset[ph]) * r.d.cfg->blk.amps_per_count;
-        assert_true(fabsf(i_rail) < r.d.cfg->blk.i_trip);
+        assert_true(fabsf(i_rail) < r.d.cfg->blk.prot.i_trip);
         run(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
         assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERCURRENT);
         assert_false(hal_pwm_enabled(&r.pwm));
         const float i_tm[3] = {r.d.tm.i_abc.a, r.d.tm.i_abc.b, r.d.tm.i_abc.c};
         assert_float_equal(i_tm[ph], i_rail, 1e-4f);
-        assert_true(fabsf(i_tm[ph]) < r.d.cfg->blk.i_trip);
+        assert_true(fabsf(i_tm[ph]) < r.d.cfg->blk.prot.i_trip);
         assert_duties_sane(&r);
     }
 }
@@ -659,7 +659,7 @@ static void test_param_write_rule_follows(void **st)
     assert_true(r.d.cfg->p.i_rated == 12.0f);
     assert_true(mc_param_is_auto(&r.d.cfg->p, MC_PARAM_i_trip));
     assert_float_equal(r.d.cfg->p.i_trip, 18.0f, 1e-5f);
-    assert_float_equal(r.d.cfg->blk.i_trip, 18.0f, 1e-5f);
+    assert_float_equal(r.d.cfg->blk.prot.i_trip, 18.0f, 1e-5f);
     assert_float_equal(r.d.cfg->p.i_max, 12.0f, 1e-6f);   /* control.i_max_a follows too */
     /* a trip level set by the user stays where it was put */
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_trip, 16.0f, &err));
