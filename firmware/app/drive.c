@@ -15,6 +15,9 @@ static void publish(mc_drive_t *d)
     d->tm.state = d->seq.state;
     d->tm.init_step = d->seq.step;
     d->tm.faults = d->seq.faults;
+    d->tm.polarity_checks = d->pol.checks;
+    d->tm.polarity_flips = d->pol.flips;
+    d->tm.polarity_last = d->pol.last;
     mc_drive_telbuf_write(&d->link->telem, &d->tm);
 }
 
@@ -173,10 +176,10 @@ static mc_dq_t slew(mc_drive_t *d, mc_dq_t target)
     return target;
 }
 
-/* The polarity re-check's d bias (polcheck.c), before the slew limit: 0 unless it runs. */
+/* The polarity re-check's d bias (mc/polcheck.h), before the slew limit: 0 unless it runs. */
 static mc_dq_t with_bias(const mc_drive_t *d, mc_dq_t r)
 {
-    r.d += mc_polcheck_bias(d);
+    r.d += mc_polcheck_bias(&d->pol, &d->cfg->blk.pol);
     return r;
 }
 
@@ -365,10 +368,16 @@ void mc_drive_isr(mc_drive_t *d)
     const mc_ab_t u_acting = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
     const mc_dq_t u_dq = current_loop(d, c, &ang, i_dq, i_fb, &i_ref, u_acting, sc_u, vdc);
 
-    /* 7a. The polarity re-check (polcheck.c): at a RUN entry not preceded by Step II when so
+    /* 7a. The polarity re-check (mc/polcheck.h): at a RUN entry not preceded by Step II when so
      *     configured (else protect.c starts it when the loss-of-lock checks are in doubt). */
-    mc_polcheck_schedule(d, ang.omega);
-    (void)mc_polcheck_step(d, i_dq.d, i_fb.d, &ang);
+    mc_polcheck_schedule(&d->pol, &d->cfg->blk.pol, ang.omega, d->seq.state == MC_STATE_RUN, d->seq.ticks);
+    const mc_polcheck_in_t pcin = {.i_d = i_dq.d, .i_d_filtered = i_fb.d, .theta = ang.theta,
+                                   .theta_raw = d->tm.theta_raw, .w_avg = d->prot.w};
+    if (mc_polcheck_step(&d->pol, &d->cfg->blk.pol, &pcin)) {
+        /* reversed: the mirrored solution (theta + pi, -omega) is the machine's */
+        d->src->reset(&d->src_state, mc_wrap_pi(ang.theta + MC_PI), -ang.omega);
+        mc_cc_reset(&d->cc);
+    }
 
     /* 7b. Plausibility: over-speed, loss of lock, current tracking, stall (protect.c); a fault
      *     turns the outputs off before this period's duties are written. */
@@ -377,11 +386,11 @@ void mc_drive_isr(mc_drive_t *d)
                                  .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
                                  .speed_ref = d->cmd.speed_ref,
                                  .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
-                                 .lock_paused = mc_polcheck_active(d)};
+                                 .lock_paused = mc_polcheck_active(&d->pol)};
     bool doubt = false;
     const uint32_t implausible = mc_protect_running(&d->prot, &d->cfg->blk.prot, &pin, &doubt);
     if (doubt) {
-        (void)mc_polcheck_start(d, ang.omega);   /* the lock checks in doubt: is the estimate reversed? */
+        (void)mc_polcheck_start(&d->pol, &d->cfg->blk.pol, ang.omega, d->seq.state == MC_STATE_RUN);   /* the lock checks in doubt: is the estimate reversed? */
     }
     if (implausible != 0u) {
         if (!mc_drive_recover(d, implausible, vdc) && !mc_drive_react(d, implausible, ang.omega, vdc)) {

@@ -90,7 +90,7 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
     b->seq.timeout_catch =
         (float)(2u * b->fly.n_pulse_max + 2u * b->fly.n_gap_max + 10u) * p->ts;
     /* the polarity re-check's expected HF ratio from the map's l_dd at +-I_b (none: 0) */
-    b->pol_log_ratio = 0.0f;
+    b->pol.log_ratio = 0.0f;
     if (m->map != 0) {
         const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
         mc_dq_t psi;
@@ -98,7 +98,7 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
         mc_flux_eval(&fm, (mc_dq_t){p->pol_bias, 0.0f}, &psi, lp, 0);
         mc_flux_eval(&fm, (mc_dq_t){-p->pol_bias, 0.0f}, &psi, ln, 0);
         if (lp[0] > 0.0f && ln[0] > 0.0f) {
-            b->pol_log_ratio = 2.0f * logf(ln[0] / lp[0]);
+            b->pol.log_ratio = 2.0f * logf(ln[0] / lp[0]);
         }
     }
 }
@@ -203,25 +203,29 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     r->overspeed = p->overspeed_rpm * el;
     r->recover = p->lock_action == 1 && !mc_angle_src_get(p->angle_src)->measures_angle;
     r->hold_fw = p->overspeed_action == 1;
-    b->pol_check = p->pol_check != 0;
-    b->pol_at_start = p->pol_check == 2;
-    b->pol_bias = p->pol_bias;
+    mc_polcheck_cfg_t *pc = &b->pol;   /* its log_ratio from the map: build_catch */
+    pc->enable = p->pol_check != 0;
+    pc->at_start = p->pol_check == 2;
+    pc->inject = b->inject;
+    pc->three_step = b->three_step;
+    pc->omega_n1 = b->inj.omega_n1;
+    pc->bias = p->pol_bias;
     /* 2 injection cycles to settle, 4 to measure */
     const float cyc = 1.0f / (p->inj_f_hz * p->ts);
-    b->pol_settle_n = periods_up(2.0f * cyc);
-    b->pol_measure_n = periods_up(4.0f * cyc);
+    pc->settle_n = periods_up(2.0f * cyc);
+    pc->measure_n = periods_up(4.0f * cyc);
     /* at_start: after five time constants of the PLL, when a wrong start angle has settled on
      * one of the HF saliency's two solutions */
-    b->pol_start_n = periods_up(5.0f / (MC_2PI * p->pll_bw_hz) / p->ts);
+    pc->start_n = periods_up(5.0f / (MC_2PI * p->pll_bw_hz) / p->ts);
     /* the speed estimate may drift by 5 x Step III's tolerance during the check */
-    b->pol_w_scale = 0.1745f / (5.0f * p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs);
+    pc->w_scale = 0.1745f / (5.0f * p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs);
     r->ug_coef = 1.7320508f * p->psi_pm;
     b->seq.timeout_reaction = p->reaction_timeout;
     r->retries = (uint32_t)p->retries;
     r->retry_reset_n = periods_of(p->retry_reset, p->ts);
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */
-    b->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
-    r->avg_k = b->avg_k;
+    r->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
+    pc->avg_k = r->avg_k;
     r->i_sum_tol = p->i_sum_tol;
     r->i_sum_n = periods_of(p->i_sum_time, p->ts);
     r->track_err = p->track_err;

@@ -44,14 +44,6 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc);
 bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc);
 /* Outputs off, duties at 50 %, the reason latched (FAULT until disable + enable). */
 void mc_drive_trip(mc_drive_t *d, uint32_t reason);
-/* Running polarity re-check (polcheck.c): start (false: not now), the d-reference bias while
- * it runs, one measurement step (true: the estimate was reversed and turned by pi). */
-void mc_polcheck_reset(mc_drive_t *d);
-bool mc_polcheck_active(const mc_drive_t *d);
-bool mc_polcheck_start(mc_drive_t *d, float omega);
-void mc_polcheck_schedule(mc_drive_t *d, float omega);   /* the at_start trigger, every period */
-float mc_polcheck_bias(const mc_drive_t *d);
-bool mc_polcheck_step(mc_drive_t *d, float i_d, float i_d_filtered, const mc_angle_out_t *ang);
 /* Step III convergence test, after the pipeline ran; hands over to RUN. */
 void mc_drive_step3_check(mc_drive_t *d, float omega_hat);
 

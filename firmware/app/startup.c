@@ -38,7 +38,7 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
     mc_protect_reset(&d->prot, &d->cfg->blk.prot, omega);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
     d->tref.fw_did = 0.0f;
-    mc_polcheck_reset(d);
+    mc_polcheck_reset(&d->pol);
 }
 
 void mc_drive_startup_reset(mc_drive_t *d)
@@ -47,10 +47,7 @@ void mc_drive_startup_reset(mc_drive_t *d)
     mc_protect_restart(&d->prot);
     d->tm.recoveries = 0u;
     d->tm.recovered_from = 0u;
-    d->tm.polarity_checks = d->tm.polarity_flips = 0u;
-    d->pol.starts = 0u;
-    d->pol.unsure = false;
-    d->tm.polarity_last = 0;
+    mc_polcheck_restart(&d->pol);
     mc_ocal_reset(&d->ocal);
     d->offsets_moved = false;
     d->gate_on_next = false;

@@ -16,6 +16,7 @@
 #include "mc/params.h"
 #include "mc/offset_cal.h"
 #include "mc/polarity.h"
+#include "mc/polcheck.h"
 #include "mc/protect.h"
 #include "mc/pulse3.h"
 #include "mc/sequencer.h"
@@ -115,13 +116,6 @@ typedef struct {
     bool  cc_map;               /* the current loop's decoupling from the flux map (src.model) */
     mc_biquad_t notch;           /* at the injection frequency, state at rest                 */
     mc_lpf1_t step3_lpf;         /* Step III's |omega_hat| low-pass (50 Hz), state at rest     */
-    float avg_k;                 /* the detectors' 20 Hz first-order low-pass coefficient      */
-    bool pol_check, pol_at_start;  /* protection.polarity_check                                */
-    float pol_bias;              /* [A]                                                         */
-    float pol_log_ratio;         /* ln (l_dd(-I_b) / l_dd(+I_b))^2 from the map (0: unknown)    */
-    uint32_t pol_settle_n, pol_measure_n;   /* [periods]                                      */
-    uint32_t pol_start_n;        /* at_start: this long into RUN (the estimate settled first)   */
-    float pol_w_scale;           /* 10 deg / speed tolerance: a speed drift in "angle" units    */
     mc_seq_cfg_t seq;
     mc_angle_src_cfg_t src;
     mc_inj_cfg_t inj;
@@ -132,6 +126,7 @@ typedef struct {
     mc_catch_cfg_t fly;
     mc_fwe_cfg_t fwe;            /* the field-weakening entry (mc/fw_entry.h)                    */
     mc_protect_cfg_t prot;       /* protection: hard trips, detectors, reactions (mc/protect.h)  */
+    mc_polcheck_cfg_t pol;       /* the running polarity re-check (mc/polcheck.h)                */
 } mc_drive_blk_t;
 
 /* A complete derived configuration: the parameters, the ISR's values and every block's
@@ -188,17 +183,7 @@ typedef struct {
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
     mc_protect_t prot;           /* protection's detectors and recoveries (mc/protect.h)      */
     uint32_t step3_count;
-    struct {                     /* the running polarity re-check (polcheck.c)                */
-        int phase;
-        uint32_t n, cnt[2];
-        float acc[2];            /* sums of the squared HF d current, +I_b and -I_b           */
-        float moved;             /* largest unsettledness during the check (see polcheck.c)  */
-        float w0;                /* speed estimate (20 Hz average) at its start [rad/s el]    */
-        float innov;             /* |raw angle - PLL angle|, 20 Hz average [rad]              */
-        uint32_t starts;         /* at_start: checks begun since the enable (at most 3)       */
-        bool unsure;             /* this RUN entry follows a 'standing' verdict of the catch's
-                                    probe that the device drop makes unsure: checked as at_start */
-    } pol;
+    mc_polcheck_t pol;           /* the running polarity re-check (mc/polcheck.h)             */
     mc_cc_t cc;
     mc_sc_t sc;
     mc_tref_t tref;
