@@ -64,9 +64,7 @@ bool mc_drive_init(mc_drive_t *d, mc_drive_link_t *link, const mc_drive_cfg_t *c
     mc_drive_cfgbuf_init(&link->cfg, 0);
     mc_seq_init(&d->seq, &b->blk.seq);
     mc_drive_apply(d, b);
-    for (int k = 0; k < 3; ++k) {
-        d->offset[k] = b->blk.offset_nominal;
-    }
+    mc_offsets_init(&d->offs, &b->blk.offs);
     publish(d);
     return true;
 }
@@ -319,15 +317,15 @@ void mc_drive_isr(mc_drive_t *d)
             d->tm.theta = ang.theta;
             d->tm.omega = ang.omega;
         }
-        d->i_ab_prev = d->offsets_moved ? mc_clarke(mc_drive_currents(d, &raw)) : i_ab;
-        d->offsets_moved = false;
+        d->i_ab_prev = d->offs.moved ? mc_clarke(mc_drive_currents(d, &raw)) : i_ab;
+        d->offs.moved = false;
         publish(d);
         return;
     }
-    if (d->offsets_moved) {
+    if (d->offs.moved) {
         /* the catch moved the offsets in this very period ((O.1), startup.c): the pipeline
          * starts with the currents, this one and the last, as the new offsets give them */
-        d->offsets_moved = false;
+        d->offs.moved = false;
         i_abc = mc_drive_currents(d, &raw);
         i_ab = mc_clarke(i_abc);
         ain.i_ab = i_ab;

@@ -6,8 +6,6 @@
 #define MC_DRIVE_INTERNAL_H
 #include "mc/drive.h"
 
-/* The phase currents of a raw sample with the calibrated offsets [A] (ISR step 2, and the
- * offset calibration once it has its offsets). */
 /* The voltage the field-weakening entry lands the flux on (mc/fw_entry.h): the references' share
  * (control.u_margin), but not beyond the inscribed circle, Vdc/sqrt3 (drive.c step 7). */
 static inline float mc_drive_u_land(const mc_drive_t *d, float vdc)
@@ -16,11 +14,11 @@ static inline float mc_drive_u_land(const mc_drive_t *d, float vdc)
     return vdc * MC_1_SQRT3 * (m < 1.0f ? m : 1.0f);
 }
 
+/* The phase currents of a raw sample with the calibrated offsets [A] (ISR step 2, and the
+ * offset calibration once it has its offsets). */
 static inline mc_abc_t mc_drive_currents(const mc_drive_t *d, const hal_adc_sample_t *raw)
 {
-    const float k = d->cfg->blk.amps_per_count;
-    return (mc_abc_t){((float)raw->i[0] - d->offset[0]) * k, ((float)raw->i[1] - d->offset[1]) * k,
-                      ((float)raw->i[2] - d->offset[2]) * k};
+    return mc_offsets_currents(&d->offs, &d->cfg->blk.offs, raw->i);
 }
 
 /* Every block configured from a built configuration (copies only). */

@@ -43,13 +43,11 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
 
 void mc_drive_startup_reset(mc_drive_t *d)
 {
-    d->cal_count = 0u;
     mc_protect_restart(&d->prot);
     d->tm.recoveries = 0u;
     d->tm.recovered_from = 0u;
     mc_polcheck_restart(&d->pol);
-    mc_ocal_reset(&d->ocal);
-    d->offsets_moved = false;
+    mc_offsets_restart(&d->offs);
     d->gate_on_next = false;
     d->entry_corner = false;
     mc_fwe_reset(&d->fwe);
@@ -127,41 +125,17 @@ static void run_at_speed(mc_drive_t *d, bool outputs_off_now)
     mc_fwe_begin(&d->fwe);
 }
 
-/* Offsets within the plausible range of mid-scale, or false (then none changes). */
-static bool offsets_plausible(const mc_drive_t *d, const float off[3])
-{
-    const mc_drive_blk_t *b = &d->cfg->blk;
-    for (int k = 0; k < 3; ++k) {
-        if (!(fabsf(off[k] - b->offset_nominal) <= b->offset_tol)) {
-            return false;
-        }
-    }
-    return true;
-}
-
 /* Once the speed is known (the catch, an angle sensor): the offsets over whole electrical half-
  * periods of the calibration's samples (O.1), which the diodes' current of a rotor turning above
- * the generation speed does not bias. Returns the change of the stator-frame current this makes
- * (new minus old) [A]; none where (O.1) does not apply. */
+ * the generation speed does not bias (mc_offsets_at_speed). Returns the change of the stator-
+ * frame current this makes (new minus old) [A]; none where (O.1) does not apply. */
 static mc_ab_t offsets_at_speed(mc_drive_t *d, float omega)
 {
-    float off[3];
-    const bool ok = mc_ocal_periodic(&d->ocal, omega, d->cfg->p.ts, off) && offsets_plausible(d, off);
-    /* once: the samples belong to this enable's calibration, not to a later catch (a recovery
-     * at another speed would pair them at the wrong lag) */
-    mc_ocal_reset(&d->ocal);
-    if (!ok) {
-        return (mc_ab_t){0.0f, 0.0f};
+    mc_ab_t dab;
+    if (mc_offsets_at_speed(&d->offs, &d->cfg->blk.offs, omega, &dab)) {
+        d->i_ab_prev.alpha += dab.alpha;   /* the last sample as the new offsets give it */
+        d->i_ab_prev.beta += dab.beta;
     }
-    const float k = d->cfg->blk.amps_per_count;
-    const mc_abc_t di = {(d->offset[0] - off[0]) * k, (d->offset[1] - off[1]) * k, (d->offset[2] - off[2]) * k};
-    for (int j = 0; j < 3; ++j) {
-        d->offset[j] = off[j];
-    }
-    const mc_ab_t dab = mc_clarke(di);
-    d->i_ab_prev.alpha += dab.alpha;   /* the last sample as the new offsets give it */
-    d->i_ab_prev.beta += dab.beta;
-    d->offsets_moved = true;
     return dab;
 }
 
@@ -191,29 +165,25 @@ static bool latch_entry_corner(mc_drive_t *d)
 static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    if (d->cal_count < b->cal_samples) {
-        mc_ocal_add(&d->ocal, raw->i);
-        if (++d->cal_count < b->cal_samples) {
-            d->entry_corner = latch_entry_corner(d);
-            return;
-        }
-        float off[3];
-        if (!mc_ocal_mean(&d->ocal, off) || !offsets_plausible(d, off)) {
-            mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
-            return;
-        }
-        for (int k = 0; k < 3; ++k) {
-            d->offset[k] = off[k];
-        }
+    switch (mc_offsets_add(&d->offs, &b->offs, raw->i)) {
+    case MC_OFFSETS_COLLECTING:
+        d->entry_corner = latch_entry_corner(d);
+        return;
+    case MC_OFFSETS_FAILED:
+        mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
+        return;
+    case MC_OFFSETS_DONE:
         if (b->src_measures) {
             (void)offsets_at_speed(d, d->tm.omega);   /* the sensor's speed, tracked meanwhile */
         }
-    } else {
-        d->cal_count++;
+        break;
+    case MC_OFFSETS_COUNTING:
+    default:
+        break;
     }
     /* with this period's offsets: the ISR scaled the sample with the previous ones */
     const mc_ab_t i_now = b->src_measures ? mc_clarke(mc_drive_currents(d, raw)) : (mc_ab_t){0.0f, 0.0f};
-    if (b->src_measures && d->cal_count < b->cal_samples + b->fly.n_wait_max && !mc_catch_at_low(&b->fly, i_now)) {
+    if (b->src_measures && d->offs.count < b->offs.samples + b->fly.n_wait_max && !mc_catch_at_low(&b->fly, i_now)) {
         /* a sensor drive needs no catch, but above the uncontrolled-generation speed the diodes
          * conduct: it waits (outputs off, at most the catch's longest wait) for a diode pulse's
          * low, as the catch does (C.5), and starts from there */

@@ -105,10 +105,9 @@ typedef struct {
 typedef struct {
     float ts;
     int   pole_pairs;
-    float amps_per_count, volts_per_count, offset_nominal, offset_tol;   /* [A, V, counts]  */
+    float volts_per_count;       /* [V / count]                                              */
     float i_ref_max, i_slew;     /* [A], [A/s]                                               */
     float u_loop;                /* the current loop's voltage circle / (vdc/sqrt3): control.u_loop */
-    uint32_t cal_samples;
     float step3_speed_tol;       /* [rad/s el]                                               */
     uint32_t step3_hold;         /* [periods]                                                */
     bool  inject, three_step, ip1_pulse3, ip2_dvi;
@@ -127,6 +126,7 @@ typedef struct {
     mc_fwe_cfg_t fwe;            /* the field-weakening entry (mc/fw_entry.h)                    */
     mc_protect_cfg_t prot;       /* protection: hard trips, detectors, reactions (mc/protect.h)  */
     mc_polcheck_cfg_t pol;       /* the running polarity re-check (mc/polcheck.h)                */
+    mc_offsets_cfg_t offs;       /* the current offsets' calibration and scaling (mc/offset_cal.h) */
 } mc_drive_blk_t;
 
 /* A complete derived configuration: the parameters, the ISR's values and every block's
@@ -165,15 +165,12 @@ typedef struct {
     mc_drive_cmd_t cmd;          /* the ISR's copy of the command in force   */
 
     mc_seq_t seq;                /* state, init step, faults          */
-    uint32_t cal_count;
-    mc_ocal_t ocal;              /* the calibration's samples (mc/offset_cal.h)  */
-    bool offsets_moved;          /* (O.1) changed the offsets in this period      */
+    mc_offsets_t offs;           /* the current offsets and their calibration (mc/offset_cal.h) */
     bool entry_corner;           /* an angle-sensor drive latched the entry's corner (startup.c) */
     bool gate_on_next;           /* RUN's first duties latched with the outputs off: on at the
                                     next period's start (a flying start at a diode pulse's low) */
     mc_fwe_t fwe;                /* a RUN entry at speed: the flux into the voltage limit first
                                     (mc/fw_entry.h) */
-    float offset[3];             /* calibrated [counts]                      */
 
     const mc_angle_src_desc_t *src;
     mc_angle_src_state_t src_state;

@@ -148,7 +148,7 @@ static void check_outputs(const rig_t *r)
 
 static uint16_t to_counts(const rig_t *r, double amps)
 {
-    const double c = (double)r->d.cfg->blk.offset_nominal + amps / (double)r->d.cfg->blk.amps_per_count;
+    const double c = (double)r->d.cfg->blk.offs.nominal + amps / (double)r->d.cfg->blk.offs.amps_per_count;
     const double hi = (double)r->d.cfg->blk.prot.adc_max;
     if (!(c >= 0.0)) {
         return 0u;   /* also NaN */
