@@ -44,7 +44,7 @@ bool mc_drive_init(mc_drive_t *d, mc_drive_link_t *link, const mc_drive_cfg_t *c
     d->cfg_err = (mc_param_err_t){.kind = MC_PERR_NONE, .param = -1, .param2 = -1};
     d->est = cfg->est;
     hal_pwm_enable(pwm, false);
-    hal_pwm_set_duties(pwm, 0.5f, 0.5f, 0.5f);
+    mc_drive_duties(d, (mc_abc_t){0.5f, 0.5f, 0.5f});
     const mc_drive_cmd_t idle = {.enable = false, .mode = MC_MODE_CURRENT};
     mc_drive_cmdbuf_init(&link->cmd, &idle, check_command, 0);
     mc_drive_telbuf_init(&link->telem, 0);
@@ -418,11 +418,11 @@ void mc_drive_isr(mc_drive_t *d)
         publish(d);
         return;
     }
-    hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
+    /* the one path to the PWM; the history keeps the voltage realised and, for (k, k+1), the one
+     * acting until now (the diodes' with the outputs still off) */
+    mc_drive_duties_kept(d, (mc_abc_t){duty.a, duty.b, duty.c}, duty.u_real, u_acting);
 
     /* 10. Keep what the estimators need next period, and the telemetry. */
-    d->u_hist[1] = u_acting;   /* (k, k+1): the diodes' voltage with the outputs still off */
-    d->u_hist[0] = duty.u_real;
     d->i_ab_prev = i_ab;
     d->tm.theta = ang.theta;
     d->tm.omega = ang.omega;
@@ -430,9 +430,6 @@ void mc_drive_isr(mc_drive_t *d)
     d->tm.i_ref = i_ref;
     d->tm.u_dq = u_dq;
     d->tm.u_ab = duty.u_real;
-    d->tm.duty[0] = duty.a;
-    d->tm.duty[1] = duty.b;
-    d->tm.duty[2] = duty.c;
     d->tm.u_limited = d->cc.limited;
     d->tm.fw_active = d->tref.fw_active;
 

@@ -21,6 +21,12 @@ static inline mc_abc_t mc_drive_currents(const mc_drive_t *d, const hal_adc_samp
     return mc_offsets_currents(&d->offs, &d->cfg->blk.offs, raw->i);
 }
 
+/* The one path duties take to the PWM (drive_blocks.c). mc_drive_duties alone: the outputs'
+ * rest at 50 % (zero voltage), no history. mc_drive_duties_kept: duties that act, with the
+ * stator voltage they realise (u_real) and the one acting until they do (u_acting) kept for
+ * the estimators (u_hist) and the duties in the telemetry. */
+void mc_drive_duties(mc_drive_t *d, mc_abc_t duty);
+void mc_drive_duties_kept(mc_drive_t *d, mc_abc_t duty, mc_ab_t u_real, mc_ab_t u_acting);
 /* Every block configured from a built configuration (copies only). */
 void mc_drive_apply(mc_drive_t *d, const mc_drive_built_t *b);
 /* A new configuration while running: gains and limits, no state reset. */

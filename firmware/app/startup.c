@@ -15,7 +15,7 @@
 static void outputs_off(mc_drive_t *d)
 {
     hal_pwm_enable(d->hal.pwm, false);
-    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
+    mc_drive_duties(d, (mc_abc_t){0.5f, 0.5f, 0.5f});
 }
 
 void mc_drive_trip(mc_drive_t *d, uint32_t reason)
@@ -61,17 +61,13 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->tm.pol_flip = false;
 }
 
-/* Write duties decided outside the control pipeline and keep the voltage history true, so the
+/* Duties decided outside the control pipeline, with the voltage history kept true, so the
  * estimator's first Step III sample pairs the currents with the pulse that really acted. */
 static void write_duties(mc_drive_t *d, mc_abc_t duty, float vdc)
 {
-    hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
     const mc_abc_t v = {(duty.a - 0.5f) * vdc, (duty.b - 0.5f) * vdc, (duty.c - 0.5f) * vdc};
-    d->u_hist[1] = d->u_hist[0];
-    d->u_hist[0] = mc_clarke(v);   /* (2.4) drops the common mode: line-to-neutral vector */
-    d->tm.duty[0] = duty.a;
-    d->tm.duty[1] = duty.b;
-    d->tm.duty[2] = duty.c;
+    /* (2.4) drops the common mode: line-to-neutral vector */
+    mc_drive_duties_kept(d, duty, mc_clarke(v), d->u_hist[0]);
 }
 
 /* Protection's hard trips and sensor checks (mc/protect.h), every period the outputs may be on. */
@@ -205,7 +201,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         mc_drive_trip(d, MC_FAULT_CONFIG);
         return;
     }
-    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
+    mc_drive_duties(d, (mc_abc_t){0.5f, 0.5f, 0.5f});
     if (d->seq.state == MC_STATE_RUN && b->src_measures) {
         /* the sensor's angle (tracked through the calibration, a period old) one period on */
         refs_from_current(d, i_now, d->tm.theta + d->tm.omega * b->ts);
