@@ -278,8 +278,8 @@ void mc_drive_isr(mc_drive_t *d)
     hal_stage_mark(HAL_STAGE_SAMPLE);
     /* 0. A RUN entry at a diode pulse's low latched its first duties last period with the
      *    outputs off: they act from now on, with the outputs (a gate enable acts at once). */
-    if (d->gate_on_next) {
-        d->gate_on_next = false;
+    if (d->entry.gate_on_next) {
+        d->entry.gate_on_next = false;
         if (d->seq.state == MC_STATE_RUN) {
             hal_pwm_enable(d->hal.pwm, true);
         }
@@ -363,7 +363,7 @@ void mc_drive_isr(mc_drive_t *d)
     hal_stage_mark(HAL_STAGE_CURRENT);
     /* the voltage acting until the next sample: the duties latched last period, or the diodes'
      * with the outputs still off (a RUN entry at gate_on_next) */
-    const mc_ab_t u_acting = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
+    const mc_ab_t u_acting = d->entry.gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
     const mc_dq_t u_dq = current_loop(d, c, &ang, i_dq, i_fb, &i_ref, u_acting, sc_u, vdc);
 
     /* 7a. The polarity re-check (mc/polcheck.h): at a RUN entry not preceded by Step II when so

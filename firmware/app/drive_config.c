@@ -89,18 +89,6 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
     }
     b->seq.timeout_catch =
         (float)(2u * b->fly.n_pulse_max + 2u * b->fly.n_gap_max + 10u) * p->ts;
-    /* the polarity re-check's expected HF ratio from the map's l_dd at +-I_b (none: 0) */
-    b->pol.log_ratio = 0.0f;
-    if (m->map != 0) {
-        const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
-        mc_dq_t psi;
-        float lp[4], ln[4];
-        mc_flux_eval(&fm, (mc_dq_t){p->pol_bias, 0.0f}, &psi, lp, 0);
-        mc_flux_eval(&fm, (mc_dq_t){-p->pol_bias, 0.0f}, &psi, ln, 0);
-        if (lp[0] > 0.0f && ln[0] > 0.0f) {
-            b->pol.log_ratio = 2.0f * logf(ln[0] / lp[0]);
-        }
-    }
 }
 
 static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
@@ -203,29 +191,12 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     r->overspeed = p->overspeed_rpm * el;
     r->recover = p->lock_action == 1 && !mc_angle_src_get(p->angle_src)->measures_angle;
     r->hold_fw = p->overspeed_action == 1;
-    mc_polcheck_cfg_t *pc = &b->pol;   /* its log_ratio from the map: build_catch */
-    pc->enable = p->pol_check != 0;
-    pc->at_start = p->pol_check == 2;
-    pc->inject = b->inject;
-    pc->three_step = b->three_step;
-    pc->omega_n1 = b->inj.omega_n1;
-    pc->bias = p->pol_bias;
-    /* 2 injection cycles to settle, 4 to measure */
-    const float cyc = 1.0f / (p->inj_f_hz * p->ts);
-    pc->settle_n = periods_up(2.0f * cyc);
-    pc->measure_n = periods_up(4.0f * cyc);
-    /* at_start: after five time constants of the PLL, when a wrong start angle has settled on
-     * one of the HF saliency's two solutions */
-    pc->start_n = periods_up(5.0f / (MC_2PI * p->pll_bw_hz) / p->ts);
-    /* the speed estimate may drift by 5 x Step III's tolerance during the check */
-    pc->w_scale = 0.1745f / (5.0f * p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs);
     r->ug_coef = 1.7320508f * p->psi_pm;
     b->seq.timeout_reaction = p->reaction_timeout;
     r->retries = (uint32_t)p->retries;
     r->retry_reset_n = periods_of(p->retry_reset, p->ts);
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */
     r->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
-    pc->avg_k = r->avg_k;
     r->i_sum_tol = p->i_sum_tol;
     r->i_sum_n = periods_of(p->i_sum_time, p->ts);
     r->track_err = p->track_err;
@@ -244,6 +215,40 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     r->resid_v = p->resid_v;
     r->resid_w_coef = 0.5f * p->lq * p->i_max;
     r->resid_n = periods_of(p->resid_time, p->ts);
+}
+
+/* The running polarity re-check (mc/polcheck.h); after build_protection (its 20 Hz average). */
+static void build_polcheck(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
+{
+    mc_polcheck_cfg_t *pc = &b->pol;
+    pc->enable = p->pol_check != 0;
+    pc->at_start = p->pol_check == 2;
+    pc->inject = b->inject;
+    pc->three_step = b->three_step;
+    pc->omega_n1 = b->inj.omega_n1;
+    pc->bias = p->pol_bias;
+    /* the polarity re-check's expected HF ratio from the map's l_dd at +-I_b (none: 0) */
+    pc->log_ratio = 0.0f;
+    if (m->map != 0) {
+        const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+        mc_dq_t psi;
+        float lp[4], ln[4];
+        mc_flux_eval(&fm, (mc_dq_t){p->pol_bias, 0.0f}, &psi, lp, 0);
+        mc_flux_eval(&fm, (mc_dq_t){-p->pol_bias, 0.0f}, &psi, ln, 0);
+        if (lp[0] > 0.0f && ln[0] > 0.0f) {
+            pc->log_ratio = 2.0f * logf(ln[0] / lp[0]);
+        }
+    }
+    /* 2 injection cycles to settle, 4 to measure */
+    const float cyc = 1.0f / (p->inj_f_hz * p->ts);
+    pc->settle_n = periods_up(2.0f * cyc);
+    pc->measure_n = periods_up(4.0f * cyc);
+    /* at_start: after five time constants of the PLL, when a wrong start angle has settled on
+     * one of the HF saliency's two solutions */
+    pc->start_n = periods_up(5.0f / (MC_2PI * p->pll_bw_hz) / p->ts);
+    /* the speed estimate may drift by 5 x Step III's tolerance during the check */
+    pc->w_scale = 0.1745f / (5.0f * p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs);
+    pc->avg_k = b->prot.avg_k;
 }
 
 bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err)
@@ -279,6 +284,7 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     build_startup(p, &m, b);
     build_source(p, &m, b);
     build_protection(p, b);
+    build_polcheck(p, &m, b);
 
     mc_cc_cfg_from_bandwidth(&out->cc, p->cc_bw_hz, p->rs, p->ld, p->lq, p->psi_pm, p->ts);
     out->cc.decouple = p->cc_decouple != 0;

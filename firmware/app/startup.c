@@ -48,8 +48,7 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->tm.recovered_from = 0u;
     mc_polcheck_restart(&d->pol);
     mc_offsets_restart(&d->offs);
-    d->gate_on_next = false;
-    d->entry_corner = false;
+    d->entry = (mc_catch_entry_t){.corner = false, .gate_on_next = false};
     mc_fwe_reset(&d->fwe);
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
@@ -117,7 +116,7 @@ static void refs_from_current(mc_drive_t *d, mc_ab_t i_ab, float theta)
  * with the outputs off at this sample, RUN's first duties come on with them next period. */
 static void run_at_speed(mc_drive_t *d, bool outputs_off_now)
 {
-    d->gate_on_next = outputs_off_now;
+    d->entry.gate_on_next = outputs_off_now;
     mc_fwe_begin(&d->fwe);
 }
 
@@ -143,14 +142,14 @@ static mc_ab_t offsets_at_speed(mc_drive_t *d, float omega)
 static bool latch_entry_corner(mc_drive_t *d)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    const float vdc = d->tm.vdc, w = d->tm.omega;
-    if (!b->src_measures || !b->fwe.overmod || !(vdc > 0.0f) ||
-        !(fabsf(w) * b->fly.psi_pm > mc_drive_u_land(d, vdc))) {
+    const float vdc = d->tm.vdc;
+    if (!b->src_measures || !b->fwe.overmod) {
         return false;
     }
-    /* the sensor's angle is a period old: the middle of the period after the next sample */
-    const float s = w < 0.0f ? -1.0f : 1.0f;
-    const int k = mc_svpwm_corner_near(d->tm.theta + 2.0f * w * b->ts + s * 2.3561945f);
+    const int k = mc_catch_entry_corner(&b->fly, d->tm.theta, d->tm.omega, vdc, mc_drive_u_land(d, vdc));
+    if (k < 0) {
+        return false;
+    }
     write_duties(d, mc_svpwm_corner(k, NULL), vdc);
     return true;
 }
@@ -163,7 +162,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     const mc_drive_blk_t *b = &d->cfg->blk;
     switch (mc_offsets_add(&d->offs, &b->offs, raw->i)) {
     case MC_OFFSETS_COLLECTING:
-        d->entry_corner = latch_entry_corner(d);
+        d->entry.corner = latch_entry_corner(d);
         return;
     case MC_OFFSETS_FAILED:
         mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
@@ -179,11 +178,11 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     }
     /* with this period's offsets: the ISR scaled the sample with the previous ones */
     const mc_ab_t i_now = b->src_measures ? mc_clarke(mc_drive_currents(d, raw)) : (mc_ab_t){0.0f, 0.0f};
-    if (b->src_measures && d->offs.count < b->offs.samples + b->fly.n_wait_max && !mc_catch_at_low(&b->fly, i_now)) {
+    if (b->src_measures && mc_catch_sensor_waits(&b->fly, d->offs.count - b->offs.samples, i_now)) {
         /* a sensor drive needs no catch, but above the uncontrolled-generation speed the diodes
          * conduct: it waits (outputs off, at most the catch's longest wait) for a diode pulse's
          * low, as the catch does (C.5), and starts from there */
-        d->entry_corner = latch_entry_corner(d);
+        d->entry.corner = latch_entry_corner(d);
         return;
     }
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
@@ -205,7 +204,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     if (d->seq.state == MC_STATE_RUN && b->src_measures) {
         /* the sensor's angle (tracked through the calibration, a period old) one period on */
         refs_from_current(d, i_now, d->tm.theta + d->tm.omega * b->ts);
-        if (d->entry_corner) {
+        if (d->entry.corner) {
             /* the corner latched last period acts from now (latch_entry_corner) */
             hal_pwm_enable(d->hal.pwm, true);
             run_at_speed(d, false);
@@ -278,17 +277,14 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     d->tm.theta1 = res.theta;
     d->tm.c1 = res.c1;
     d->tm.c2 = res.omega;
-    if (st == MC_IP_FAILED) {
+    switch (mc_catch_outcome(st, res.moving, d->tm.recoveries > 0u, d->seq.cfg.init_pos)) {
+    case MC_CATCH_NO_FIT:
         mc_drive_trip(d, MC_FAULT_INIT_POS);   /* no sign for the speed, or (C.1) does not fit */
         return;
-    }
-    if (!res.moving && d->tm.recoveries > 0u && !d->seq.cfg.init_pos) {
-        /* a recovery that finds the rotor standing has no angle to go on with (the one given
-         * with the enable is stale): the reason that started it stands */
+    case MC_CATCH_STALE:
         mc_drive_trip(d, d->tm.recovered_from);
         return;
-    }
-    if (res.moving) {
+    case MC_CATCH_TURNING: {
         /* the offsets over whole half-periods at the caught speed (the catch itself works on
          * current differences, which no offset biases) */
         const mc_ab_t di = offsets_at_speed(d, res.omega);
@@ -302,6 +298,10 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
         run_at_speed(d, !hal_pwm_enabled(d->hal.pwm));
         mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
         return;
+    }
+    case MC_CATCH_STANDING:
+    default:
+        break;
     }
     mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
     if (d->seq.state == MC_STATE_INIT_POS && !begin_step1(d)) {

@@ -166,9 +166,8 @@ typedef struct {
 
     mc_seq_t seq;                /* state, init step, faults          */
     mc_offsets_t offs;           /* the current offsets and their calibration (mc/offset_cal.h) */
-    bool entry_corner;           /* an angle-sensor drive latched the entry's corner (startup.c) */
-    bool gate_on_next;           /* RUN's first duties latched with the outputs off: on at the
-                                    next period's start (a flying start at a diode pulse's low) */
+    mc_catch_entry_t entry;      /* a RUN entry at speed: the corner latched, the gates' enable
+                                    next period (mc/catch.h) */
     mc_fwe_t fwe;                /* a RUN entry at speed: the flux into the voltage limit first
                                     (mc/fw_entry.h) */
 
