@@ -211,6 +211,24 @@ static void notch_restart(mc_drive_t *d, const mc_drive_blk_t *c, mc_dq_t i)
     }
 }
 
+/* ISR step 5: the current loop's feedback. While injecting, the loop sees the currents with the
+ * injection frequency notched out, so it does not cancel it. */
+static mc_dq_t feedback(mc_drive_t *d, const mc_drive_blk_t *c, float omega, mc_dq_t i_dq)
+{
+    mc_dq_t i_fb = i_dq;
+    if (c->inject && !(fabsf(omega) > 1.2f * d->inj.cfg.omega_n1)) {
+        i_fb.d = mc_biquad_step(&d->notch_d, i_dq.d);
+        i_fb.q = mc_biquad_step(&d->notch_q, i_dq.q);
+    } else {
+        /* well above N1 nothing is injected, and the notch would only delay the loop's currents
+         * (a torque step at 1400 rpm drove i_d 1.3 A past its reference through it): bypassed
+         * from 1.2 N1 (the margin lets the injection's last current decay through it first),
+         * its state kept at the current so that it starts from it below again */
+        notch_restart(d, c, i_dq);
+    }
+    return i_fb;
+}
+
 /* A RUN entry at speed first takes the flux into the voltage limit with the least current
  * (mc/fw_entry.h): true while it runs, *u_dq its voltage; the loop then idles with its
  * references on the current that flows (bumpless) and starts from them when the entry ends. */
@@ -272,8 +290,64 @@ static mc_dq_t current_loop(mc_drive_t *d, const mc_drive_blk_t *c, const mc_ang
     return u_dq;
 }
 
+/* ISR step 7a: the running polarity re-check (mc/polcheck.h), at a RUN entry not preceded by
+ * Step II when so configured (else step 7b starts it when the loss-of-lock checks are in doubt).
+ * A reversed estimate turns to the mirrored solution (theta + pi, -omega). */
+static void polarity_recheck(mc_drive_t *d, const mc_angle_out_t *ang, mc_dq_t i_dq, mc_dq_t i_fb)
+{
+    const mc_polcheck_cfg_t *pc = &d->cfg->blk.pol;
+    mc_polcheck_schedule(&d->pol, pc, ang->omega, d->seq.state == MC_STATE_RUN, d->seq.ticks);
+    const mc_polcheck_in_t in = {.i_d = i_dq.d, .i_d_filtered = i_fb.d, .theta = ang->theta,
+                                 .theta_raw = d->tm.theta_raw, .w_avg = d->prot.w};
+    if (mc_polcheck_step(&d->pol, pc, &in)) {
+        d->src->reset(&d->src_state, mc_wrap_pi(ang->theta + MC_PI), -ang->omega);
+        mc_cc_reset(&d->cc);
+    }
+}
+
+/* ISR step 7b: plausibility (mc/protect.h): over-speed, loss of lock, current tracking, the
+ * voltage model, stall, torque. A fault recovers (a new catch), holds the field weakening or
+ * trips, before this period's duties are written: true then. */
+static bool running_fault(mc_drive_t *d, const mc_angle_out_t *ang, mc_dq_t i_ref, mc_dq_t i_fb, float vdc)
+{
+    const mc_protect_in_t in = {.theta = ang->theta, .omega = ang->omega, .theta_raw = d->tm.theta_raw,
+                                .omega_raw = d->tm.omega_raw, .i_ref = i_ref, .i_fb = i_fb, .u_dq = d->cc.u,
+                                .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
+                                .speed_ref = d->cmd.speed_ref, .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
+                                .lock_paused = mc_polcheck_active(&d->pol)};
+    bool doubt = false;
+    const uint32_t reason = mc_protect_running(&d->prot, &d->cfg->blk.prot, &in, &doubt);
+    if (doubt) {
+        /* the lock checks in doubt: is the estimate reversed? */
+        (void)mc_polcheck_start(&d->pol, &d->cfg->blk.pol, ang->omega, d->seq.state == MC_STATE_RUN);
+    }
+    if (reason == 0u) {
+        return false;
+    }
+    if (!mc_drive_recover(d, reason, vdc) && !mc_drive_react(d, reason, ang->omega, vdc)) {
+        mc_drive_trip(d, reason);
+    }
+    return true;
+}
+
+/* ISR step 9: SVPWM (min-max injection), then dead-time compensation with the current of the
+ * period the duties act in, extrapolated from the last two samples (it carries the injection
+ * ripple, which decides the sign near zero crossings). false: a non-finite duty. */
+static bool modulate(mc_drive_t *d, mc_ab_t u_ab, mc_ab_t i_ab, float vdc, mc_duty_t *duty)
+{
+    mc_svpwm(u_ab, vdc, duty);
+    const mc_ab_t i_next = {i_ab.alpha + 1.5f * (i_ab.alpha - d->i_ab_prev.alpha),
+                            i_ab.beta + 1.5f * (i_ab.beta - d->i_ab_prev.beta)};
+    mc_dtc_apply(&d->dtc, duty, mc_clarke_inv(i_next));
+    return isfinite(duty->a) && isfinite(duty->b) && isfinite(duty->c);
+}
+
 void mc_drive_isr(mc_drive_t *d)
 {
+    /* the configuration this period's pipeline blocks run on (the current loop, the entry, the
+     * notches, the scaling): the one in force at the period's start. A configuration swapped in
+     * by take_config reaches them from the next period; protection, the polarity re-check, the
+     * references and the startup read it (d->cfg) at once. */
     const mc_drive_blk_t *c = &d->cfg->blk;
     hal_stage_mark(HAL_STAGE_SAMPLE);
     /* 0. A RUN entry at a diode pulse's low latched its first duties last period with the
@@ -335,65 +409,31 @@ void mc_drive_isr(mc_drive_t *d)
     hal_stage_mark(HAL_STAGE_ANGLE);
     angle_source(d, &ain, &ang);
 
-    /* 5. Park (2.5) into the controller's frame. While injecting, the current loop sees the
-     *    currents with the injection frequency notched out, so it does not cancel it. */
+    /* 5. Park (2.5) into the controller's frame, and the loop's feedback (notched while
+     *    injecting). */
     hal_stage_mark(HAL_STAGE_REFERENCES);
     const mc_dq_t i_dq = mc_park(i_ab, mc_sincos(ang.theta));
     /* The angle of step 8 is known already: its sin/cos is taken here, where it does not wait
      * for the references and the current loop (an out-of-order core overlaps the two). */
     const mc_sincos_t sc_u = mc_sincos(mc_wrap_pi(ang.theta + 1.5f * ang.omega * c->ts));
-    mc_dq_t i_fb = i_dq;
-    if (c->inject && !(fabsf(ang.omega) > 1.2f * d->inj.cfg.omega_n1)) {
-        i_fb.d = mc_biquad_step(&d->notch_d, i_dq.d);
-        i_fb.q = mc_biquad_step(&d->notch_q, i_dq.q);
-    } else {
-        /* well above N1 nothing is injected, and the notch would only delay the loop's currents
-         * (a torque step at 1400 rpm drove i_d 1.3 A past its reference through it): bypassed
-         * from 1.2 N1 (the margin lets the injection's last current decay through it first),
-         * its state kept at the current so that it starts from it below again */
-        notch_restart(d, c, i_dq);
-    }
+    const mc_dq_t i_fb = feedback(d, c, ang.omega, i_dq);
 
     /* 6. References: current, torque (MTPA / field weakening) or speed; zero during Step III. */
     const bool step3 = d->seq.state == MC_STATE_INIT_POS;
     mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : references(d, ang.omega, vdc);
 
-    /* 7. Current control (and the field-weakening entry's voltage while it runs), the HF
-     *    injection (6.6) on the estimated d axis. */
+    /* 7. Current loop (or the field-weakening entry's voltage while it runs) and the HF
+     *    injection. The voltage acting until the next sample: the duties latched last period,
+     *    or the diodes' with the outputs still off (a RUN entry at gate_on_next). */
     hal_stage_mark(HAL_STAGE_CURRENT);
-    /* the voltage acting until the next sample: the duties latched last period, or the diodes'
-     * with the outputs still off (a RUN entry at gate_on_next) */
     const mc_ab_t u_acting = d->entry.gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
     const mc_dq_t u_dq = current_loop(d, c, &ang, i_dq, i_fb, &i_ref, u_acting, sc_u, vdc);
 
-    /* 7a. The polarity re-check (mc/polcheck.h): at a RUN entry not preceded by Step II when so
-     *     configured (else protect.c starts it when the loss-of-lock checks are in doubt). */
-    mc_polcheck_schedule(&d->pol, &d->cfg->blk.pol, ang.omega, d->seq.state == MC_STATE_RUN, d->seq.ticks);
-    const mc_polcheck_in_t pcin = {.i_d = i_dq.d, .i_d_filtered = i_fb.d, .theta = ang.theta,
-                                   .theta_raw = d->tm.theta_raw, .w_avg = d->prot.w};
-    if (mc_polcheck_step(&d->pol, &d->cfg->blk.pol, &pcin)) {
-        /* reversed: the mirrored solution (theta + pi, -omega) is the machine's */
-        d->src->reset(&d->src_state, mc_wrap_pi(ang.theta + MC_PI), -ang.omega);
-        mc_cc_reset(&d->cc);
-    }
+    /* 7a. The running polarity re-check. */
+    polarity_recheck(d, &ang, i_dq, i_fb);
 
-    /* 7b. Plausibility: over-speed, loss of lock, current tracking, stall (protect.c); a fault
-     *     turns the outputs off before this period's duties are written. */
-    const mc_protect_in_t pin = {.theta = ang.theta, .omega = ang.omega, .theta_raw = d->tm.theta_raw,
-                                 .omega_raw = d->tm.omega_raw, .i_ref = i_ref, .i_fb = i_fb, .u_dq = d->cc.u,
-                                 .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
-                                 .speed_ref = d->cmd.speed_ref,
-                                 .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
-                                 .lock_paused = mc_polcheck_active(&d->pol)};
-    bool doubt = false;
-    const uint32_t implausible = mc_protect_running(&d->prot, &d->cfg->blk.prot, &pin, &doubt);
-    if (doubt) {
-        (void)mc_polcheck_start(&d->pol, &d->cfg->blk.pol, ang.omega, d->seq.state == MC_STATE_RUN);   /* the lock checks in doubt: is the estimate reversed? */
-    }
-    if (implausible != 0u) {
-        if (!mc_drive_recover(d, implausible, vdc) && !mc_drive_react(d, implausible, ang.omega, vdc)) {
-            mc_drive_trip(d, implausible);
-        }
+    /* 7b. Plausibility: a fault turns the outputs off (or reacts) before the duties. */
+    if (running_fault(d, &ang, i_ref, i_fb, vdc)) {
         d->i_ab_prev = i_ab;
         publish(d);
         return;
@@ -404,25 +444,20 @@ void mc_drive_isr(mc_drive_t *d)
     hal_stage_mark(HAL_STAGE_MODULATION);
     const mc_ab_t u_ab = mc_park_inv(u_dq, sc_u);
 
-    /* 9. SVPWM (min-max injection), then dead-time compensation with the current of that
-     *    period, extrapolated from the last two samples (it carries the injection ripple, which
-     *    decides the sign near zero crossings). */
+    /* 9. Modulator: SVPWM and dead-time compensation. Never a NaN to the PWM: whatever
+     *    produced it, the outputs go off with the reason. */
     mc_duty_t duty;
-    mc_svpwm(u_ab, vdc, &duty);
-    const mc_ab_t i_next = {i_ab.alpha + 1.5f * (i_ab.alpha - d->i_ab_prev.alpha),
-                            i_ab.beta + 1.5f * (i_ab.beta - d->i_ab_prev.beta)};
-    mc_dtc_apply(&d->dtc, &duty, mc_clarke_inv(i_next));
-    if (!(isfinite(duty.a) && isfinite(duty.b) && isfinite(duty.c))) {
-        /* never a NaN to the PWM: whatever produced it, the outputs go off with the reason */
+    if (!modulate(d, u_ab, i_ab, vdc, &duty)) {
         mc_drive_trip(d, MC_FAULT_NUMERIC);
         publish(d);
         return;
     }
-    /* the one path to the PWM; the history keeps the voltage realised and, for (k, k+1), the one
-     * acting until now (the diodes' with the outputs still off) */
+
+    /* 10. Duties, by the one path to the PWM; the history keeps the voltage they realise and,
+     *     for (k, k+1), the one acting until now (the diodes' with the outputs still off). */
     mc_drive_duties_kept(d, (mc_abc_t){duty.a, duty.b, duty.c}, duty.u_real, u_acting);
 
-    /* 10. Keep what the estimators need next period, and the telemetry. */
+    /* 11. What the estimators need next period, and the telemetry. */
     d->i_ab_prev = i_ab;
     d->tm.theta = ang.theta;
     d->tm.omega = ang.omega;
@@ -433,12 +468,12 @@ void mc_drive_isr(mc_drive_t *d)
     d->tm.u_limited = d->cc.limited;
     d->tm.fw_active = d->tref.fw_active;
 
-    /* 11. Step III hands over to RUN when its convergence test holds (same estimator). */
+    /* 12. Step III hands over to RUN when its convergence test holds (same estimator). */
     if (step3) {
         mc_drive_step3_check(d, ang.omega);
     }
 
-    /* 12. The telemetry, published as one consistent record. */
+    /* 13. The telemetry, published as one consistent record. */
     publish(d);
 }
 
