@@ -1,7 +1,9 @@
 /* Private interface between the drive's files (drive.c: API and ISR pipeline; drive_config.c: the
- * configuration, background side; drive_blocks.c: applying it to the blocks; startup.c:
- * sequencing, protection, offset calibration and the initial-position steps). Calls go
- * drive.c -> startup.c -> drive_blocks.c, never back. Not part of the public API. */
+ * configuration, background side; drive_blocks.c: applying it to the blocks, the one path duties
+ * take to the PWM; startup.c: sequencing, the initial-position steps, the reactions). Calls go
+ * drive.c -> startup.c -> drive_blocks.c, never back. The blocks with their own state and
+ * configuration (mc/protect.h, mc/polcheck.h, mc/offset_cal.h, mc/fw_entry.h, mc/catch.h) do not
+ * see the drive. Not part of the public API. */
 #ifndef MC_DRIVE_INTERNAL_H
 #define MC_DRIVE_INTERNAL_H
 #include "mc/drive.h"

@@ -1,8 +1,9 @@
-/* The drive's startup: protection, offset calibration, the flying-start catch (mc/catch.h: a
- * turning rotor goes straight to RUN with its angle and speed) and the initial position (thesis
- * ch. 5): Step I pulse injection, Step II polarity detection, then Step III, which is the normal
- * control pipeline with zero current references and the injection on, until its convergence
- * test holds.
+/* The drive's startup: it sequences the blocks that own their state (protection's hard trips,
+ * mc/protect.h; the offset calibration, mc/offset_cal.h; the flying-start catch, mc/catch.h: a
+ * turning rotor goes straight to RUN with its angle and speed, the field-weakening entry first)
+ * and the initial position (thesis ch. 5): Step I pulse injection, Step II polarity detection,
+ * then Step III, which is the normal control pipeline with zero current references and the
+ * injection on, until its convergence test holds; and the reactions to a running fault.
  * The sequencer (mc/sequencer.h) owns the states, timeouts and fault reasons. */
 #include <math.h>
 #include <stddef.h>
