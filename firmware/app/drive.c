@@ -15,6 +15,9 @@ static void publish(mc_drive_t *d)
     d->tm.state = d->seq.state;
     d->tm.init_step = d->seq.step;
     d->tm.faults = d->seq.faults;
+    d->tm.polarity_checks = d->pol.checks;
+    d->tm.polarity_flips = d->pol.flips;
+    d->tm.polarity_last = d->pol.last;
     mc_drive_telbuf_write(&d->link->telem, &d->tm);
 }
 
@@ -41,7 +44,7 @@ bool mc_drive_init(mc_drive_t *d, mc_drive_link_t *link, const mc_drive_cfg_t *c
     d->cfg_err = (mc_param_err_t){.kind = MC_PERR_NONE, .param = -1, .param2 = -1};
     d->est = cfg->est;
     hal_pwm_enable(pwm, false);
-    hal_pwm_set_duties(pwm, 0.5f, 0.5f, 0.5f);
+    mc_drive_duties(d, (mc_abc_t){0.5f, 0.5f, 0.5f});
     const mc_drive_cmd_t idle = {.enable = false, .mode = MC_MODE_CURRENT};
     mc_drive_cmdbuf_init(&link->cmd, &idle, check_command, 0);
     mc_drive_telbuf_init(&link->telem, 0);
@@ -61,9 +64,7 @@ bool mc_drive_init(mc_drive_t *d, mc_drive_link_t *link, const mc_drive_cfg_t *c
     mc_drive_cfgbuf_init(&link->cfg, 0);
     mc_seq_init(&d->seq, &b->blk.seq);
     mc_drive_apply(d, b);
-    for (int k = 0; k < 3; ++k) {
-        d->offset[k] = b->blk.offset_nominal;
-    }
+    mc_offsets_init(&d->offs, &b->blk.offs);
     publish(d);
     return true;
 }
@@ -173,10 +174,10 @@ static mc_dq_t slew(mc_drive_t *d, mc_dq_t target)
     return target;
 }
 
-/* The polarity re-check's d bias (polcheck.c), before the slew limit: 0 unless it runs. */
+/* The polarity re-check's d bias (mc/polcheck.h), before the slew limit: 0 unless it runs. */
 static mc_dq_t with_bias(const mc_drive_t *d, mc_dq_t r)
 {
-    r.d += mc_polcheck_bias(d);
+    r.d += mc_polcheck_bias(&d->pol, &d->cfg->blk.pol);
     return r;
 }
 
@@ -201,14 +202,158 @@ static mc_dq_t references(mc_drive_t *d, float omega, float vdc)
     return slew(d, with_bias(d, mc_tref_fw_feedback(&d->tref, r, d->cc.limited, omega, vdc)));
 }
 
+/* The injection's notches start again from the current that flows (while injecting). */
+static void notch_restart(mc_drive_t *d, const mc_drive_blk_t *c, mc_dq_t i)
+{
+    if (c->inject) {
+        mc_biquad_reset(&d->notch_d, i.d);
+        mc_biquad_reset(&d->notch_q, i.q);
+    }
+}
+
+/* ISR step 5: the current loop's feedback. While injecting, the loop sees the currents with the
+ * injection frequency notched out, so it does not cancel it. */
+static mc_dq_t feedback(mc_drive_t *d, const mc_drive_blk_t *c, float omega, mc_dq_t i_dq)
+{
+    mc_dq_t i_fb = i_dq;
+    if (c->inject && !(fabsf(omega) > 1.2f * d->inj.cfg.omega_n1)) {
+        i_fb.d = mc_biquad_step(&d->notch_d, i_dq.d);
+        i_fb.q = mc_biquad_step(&d->notch_q, i_dq.q);
+    } else {
+        /* well above N1 nothing is injected, and the notch would only delay the loop's currents
+         * (a torque step at 1400 rpm drove i_d 1.3 A past its reference through it): bypassed
+         * from 1.2 N1 (the margin lets the injection's last current decay through it first),
+         * its state kept at the current so that it starts from it below again */
+        notch_restart(d, c, i_dq);
+    }
+    return i_fb;
+}
+
+/* A RUN entry at speed first takes the flux into the voltage limit with the least current
+ * (mc/fw_entry.h): true while it runs, *u_dq its voltage; the loop then idles with its
+ * references on the current that flows (bumpless) and starts from them when the entry ends. */
+static bool fw_entry(mc_drive_t *d, const mc_drive_blk_t *c, const mc_angle_out_t *ang, mc_dq_t i_dq, mc_dq_t i_fb,
+                     mc_dq_t *i_ref, mc_ab_t u_acting, mc_sincos_t sc_u, float vdc, mc_dq_t *u_dq)
+{
+    if (!mc_fwe_active(&d->fwe)) {
+        return false;
+    }
+    /* the raw currents: the injection's notch would delay a current that moves by a tenth of the
+     * limit per period. It lands on the flux the references will hold (control.u_margin), but
+     * not beyond the inscribed circle: the tangential phase (F.4) takes the lag back only where
+     * the hexagon reaches beyond the held flux's voltage, and its sides reach no more than the
+     * circle (at u_margin 1.04 the lag never went and the law ran on, braking at -15 N m). Moved
+     * with what the hexagon gives in each direction (sc_u: where the vector will act) when the
+     * loop may overmodulate. */
+    mc_fwe_in_t in = {.i = i_dq, .omega = ang->omega, .vdc = vdc, .sc = sc_u};
+    mc_flux_eval(&c->src.model, i_dq, &in.psi, 0, 0);
+    in.u_now = mc_park(u_acting, mc_sincos(mc_wrap_pi(ang->theta + 0.5f * ang->omega * c->ts)));
+    in.u_land = mc_drive_u_land(d, vdc);
+    switch (mc_fwe_step(&d->fwe, &c->fwe, &in, u_dq)) {
+    case MC_FWE_RUNNING:
+        *i_ref = i_fb;   /* bumpless, for the loop after it and for the tracking check */
+        d->i_ref_prev = i_fb;
+        notch_restart(d, c, i_dq);
+        d->cc.u = *u_dq;   /* the plausibility checks see the voltage applied */
+        return true;
+    case MC_FWE_ENDED:
+        mc_cc_reset(&d->cc);   /* the loop starts from the references it was left */
+        return false;
+    case MC_FWE_OFF:
+    default:
+        return false;
+    }
+}
+
+/* ISR step 7: the current loop, limited to a circle of u_loop vdc/sqrt3: the inscribed circle of
+ * the voltage hexagon (linear), or beyond it up to the corners, which mc_svpwm scales into the
+ * hexagon keeping the direction (overmodulation, mc/svpwm.h (2.14a)); or, after a RUN entry above
+ * the generation speed, the field-weakening entry's voltage until the loop takes over from the
+ * current that then flows. The HF injection (6.6) rides on the estimated d axis. */
+static mc_dq_t current_loop(mc_drive_t *d, const mc_drive_blk_t *c, const mc_angle_out_t *ang, mc_dq_t i_dq,
+                            mc_dq_t i_fb, mc_dq_t *i_ref, mc_ab_t u_acting, mc_sincos_t sc_u, float vdc)
+{
+    const float u_loop = vdc * MC_1_SQRT3 * c->u_loop;
+    mc_dq_t u_dq;
+    if (fw_entry(d, c, ang, i_dq, i_fb, i_ref, u_acting, sc_u, vdc, &u_dq)) {
+        /* the entry's voltage */
+    } else if (c->cc_map) {
+        /* the decoupling from the flux map's psi(i): the machine's own back-EMF (mc_cc_step_psi) */
+        mc_dq_t psi;
+        mc_flux_eval(&c->src.model, i_fb, &psi, 0, 0);
+        u_dq = mc_cc_step_psi(&d->cc, *i_ref, i_fb, psi, ang->omega, u_loop);
+    } else {
+        u_dq = mc_cc_step(&d->cc, *i_ref, i_fb, ang->omega, u_loop);
+    }
+    d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang->omega) : 0.0f;
+    u_dq.d += d->tm.u_inj;
+    return u_dq;
+}
+
+/* ISR step 7a: the running polarity re-check (mc/polcheck.h), at a RUN entry not preceded by
+ * Step II when so configured (else step 7b starts it when the loss-of-lock checks are in doubt).
+ * A reversed estimate turns to the mirrored solution (theta + pi, -omega). */
+static void polarity_recheck(mc_drive_t *d, const mc_angle_out_t *ang, mc_dq_t i_dq, mc_dq_t i_fb)
+{
+    const mc_polcheck_cfg_t *pc = &d->cfg->blk.pol;
+    mc_polcheck_schedule(&d->pol, pc, ang->omega, d->seq.state == MC_STATE_RUN, d->seq.ticks);
+    const mc_polcheck_in_t in = {.i_d = i_dq.d, .i_d_filtered = i_fb.d, .theta = ang->theta,
+                                 .theta_raw = d->tm.theta_raw, .w_avg = d->prot.w};
+    if (mc_polcheck_step(&d->pol, pc, &in)) {
+        d->src->reset(&d->src_state, mc_wrap_pi(ang->theta + MC_PI), -ang->omega);
+        mc_cc_reset(&d->cc);
+    }
+}
+
+/* ISR step 7b: plausibility (mc/protect.h): over-speed, loss of lock, current tracking, the
+ * voltage model, stall, torque. A fault recovers (a new catch), holds the field weakening or
+ * trips, before this period's duties are written: true then. */
+static bool running_fault(mc_drive_t *d, const mc_angle_out_t *ang, mc_dq_t i_ref, mc_dq_t i_fb, float vdc)
+{
+    const mc_protect_in_t in = {.theta = ang->theta, .omega = ang->omega, .theta_raw = d->tm.theta_raw,
+                                .omega_raw = d->tm.omega_raw, .i_ref = i_ref, .i_fb = i_fb, .u_dq = d->cc.u,
+                                .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
+                                .speed_ref = d->cmd.speed_ref, .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
+                                .lock_paused = mc_polcheck_active(&d->pol)};
+    bool doubt = false;
+    const uint32_t reason = mc_protect_running(&d->prot, &d->cfg->blk.prot, &in, &doubt);
+    if (doubt) {
+        /* the lock checks in doubt: is the estimate reversed? */
+        (void)mc_polcheck_start(&d->pol, &d->cfg->blk.pol, ang->omega, d->seq.state == MC_STATE_RUN);
+    }
+    if (reason == 0u) {
+        return false;
+    }
+    if (!mc_drive_recover(d, reason, vdc) && !mc_drive_react(d, reason, ang->omega, vdc)) {
+        mc_drive_trip(d, reason);
+    }
+    return true;
+}
+
+/* ISR step 9: SVPWM (min-max injection), then dead-time compensation with the current of the
+ * period the duties act in, extrapolated from the last two samples (it carries the injection
+ * ripple, which decides the sign near zero crossings). false: a non-finite duty. */
+static bool modulate(mc_drive_t *d, mc_ab_t u_ab, mc_ab_t i_ab, float vdc, mc_duty_t *duty)
+{
+    mc_svpwm(u_ab, vdc, duty);
+    const mc_ab_t i_next = {i_ab.alpha + 1.5f * (i_ab.alpha - d->i_ab_prev.alpha),
+                            i_ab.beta + 1.5f * (i_ab.beta - d->i_ab_prev.beta)};
+    mc_dtc_apply(&d->dtc, duty, mc_clarke_inv(i_next));
+    return isfinite(duty->a) && isfinite(duty->b) && isfinite(duty->c);
+}
+
 void mc_drive_isr(mc_drive_t *d)
 {
+    /* the configuration this period's pipeline blocks run on (the current loop, the entry, the
+     * notches, the scaling): the one in force at the period's start. A configuration swapped in
+     * by take_config reaches them from the next period; protection, the polarity re-check, the
+     * references and the startup read it (d->cfg) at once. */
     const mc_drive_blk_t *c = &d->cfg->blk;
     hal_stage_mark(HAL_STAGE_SAMPLE);
     /* 0. A RUN entry at a diode pulse's low latched its first duties last period with the
      *    outputs off: they act from now on, with the outputs (a gate enable acts at once). */
-    if (d->gate_on_next) {
-        d->gate_on_next = false;
+    if (d->entry.gate_on_next) {
+        d->entry.gate_on_next = false;
         if (d->seq.state == MC_STATE_RUN) {
             hal_pwm_enable(d->hal.pwm, true);
         }
@@ -246,15 +391,15 @@ void mc_drive_isr(mc_drive_t *d)
             d->tm.theta = ang.theta;
             d->tm.omega = ang.omega;
         }
-        d->i_ab_prev = d->offsets_moved ? mc_clarke(mc_drive_currents(d, &raw)) : i_ab;
-        d->offsets_moved = false;
+        d->i_ab_prev = d->offs.moved ? mc_clarke(mc_drive_currents(d, &raw)) : i_ab;
+        d->offs.moved = false;
         publish(d);
         return;
     }
-    if (d->offsets_moved) {
+    if (d->offs.moved) {
         /* the catch moved the offsets in this very period ((O.1), startup.c): the pipeline
          * starts with the currents, this one and the last, as the new offsets give them */
-        d->offsets_moved = false;
+        d->offs.moved = false;
         i_abc = mc_drive_currents(d, &raw);
         i_ab = mc_clarke(i_abc);
         ain.i_ab = i_ab;
@@ -264,102 +409,31 @@ void mc_drive_isr(mc_drive_t *d)
     hal_stage_mark(HAL_STAGE_ANGLE);
     angle_source(d, &ain, &ang);
 
-    /* 5. Park (2.5) into the controller's frame. While injecting, the current loop sees the
-     *    currents with the injection frequency notched out, so it does not cancel it. */
+    /* 5. Park (2.5) into the controller's frame, and the loop's feedback (notched while
+     *    injecting). */
     hal_stage_mark(HAL_STAGE_REFERENCES);
     const mc_dq_t i_dq = mc_park(i_ab, mc_sincos(ang.theta));
     /* The angle of step 8 is known already: its sin/cos is taken here, where it does not wait
      * for the references and the current loop (an out-of-order core overlaps the two). */
     const mc_sincos_t sc_u = mc_sincos(mc_wrap_pi(ang.theta + 1.5f * ang.omega * c->ts));
-    mc_dq_t i_fb = i_dq;
-    if (c->inject && !(fabsf(ang.omega) > 1.2f * d->inj.cfg.omega_n1)) {
-        i_fb.d = mc_biquad_step(&d->notch_d, i_dq.d);
-        i_fb.q = mc_biquad_step(&d->notch_q, i_dq.q);
-    } else if (c->inject) {
-        /* well above N1 nothing is injected, and the notch would only delay the loop's currents
-         * (a torque step at 1400 rpm drove i_d 1.3 A past its reference through it): bypassed
-         * from 1.2 N1 (the margin lets the injection's last current decay through it first),
-         * its state kept at the current so that it starts from it below again */
-        mc_biquad_reset(&d->notch_d, i_dq.d);
-        mc_biquad_reset(&d->notch_q, i_dq.q);
-    }
+    const mc_dq_t i_fb = feedback(d, c, ang.omega, i_dq);
 
     /* 6. References: current, torque (MTPA / field weakening) or speed; zero during Step III. */
     const bool step3 = d->seq.state == MC_STATE_INIT_POS;
     mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : references(d, ang.omega, vdc);
 
-    /* 7. Current control, limited to a circle of u_loop vdc/sqrt3: the inscribed circle of the
-     *    voltage hexagon (linear), or beyond it up to the corners, which mc_svpwm scales into the
-     *    hexagon keeping the direction (overmodulation, mc/svpwm.h (2.14a)); the HF injection
-     *    (6.6) rides on the estimated d axis. A RUN entry above the generation speed first takes
-     *    the flux into the voltage limit with the least current (mc/fw_entry.h); the loop starts
-     *    from the current that then flows. */
-    const float u_loop = vdc * MC_1_SQRT3 * c->u_loop;
+    /* 7. Current loop (or the field-weakening entry's voltage while it runs) and the HF
+     *    injection. The voltage acting until the next sample: the duties latched last period,
+     *    or the diodes' with the outputs still off (a RUN entry at gate_on_next). */
     hal_stage_mark(HAL_STAGE_CURRENT);
-    /* the voltage acting until the next sample: the duties latched last period, or the diodes'
-     * with the outputs still off (a RUN entry at gate_on_next) */
-    const mc_ab_t u_acting = d->gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
-    mc_dq_t u_dq;
-    if (d->fwe_active) {
-        /* the raw currents: the injection's notch would delay a current that moves by a
-         * tenth of the limit per period */
-        mc_dq_t psi;
-        mc_flux_eval(&c->src.model, i_dq, &psi, 0, 0);
-        const mc_dq_t u_now = mc_park(u_acting, mc_sincos(mc_wrap_pi(ang.theta + 0.5f * ang.omega * c->ts)));
-        /* lands on the flux the references will hold (control.u_margin), but not beyond the
-         * inscribed circle: the tangential phase (F.4) takes the lag back only where the hexagon
-         * reaches beyond the held flux's voltage, and its sides reach no more than the circle (at
-         * u_margin 1.04 the lag never went and the law ran on, braking at -15 N m). Moved with
-         * what the hexagon gives in each direction (sc_u: where the vector will act) when the
-         * loop may overmodulate. */
-        d->fwe_active = mc_fwe_step(psi, i_dq, u_now, c->src.rs, ang.omega, c->ts, mc_drive_u_land(d, vdc),
-                                    c->u_loop > 1.0f ? vdc : 0.0f, sc_u, d->fwe_n > 0u, &u_dq);
-        /* the law has no current feedback: with its model off (psi_pm 10 % high) it takes the
-         * flux too far; at 1.1 x i_max the loop takes over, whatever the law would do. Nor does
-         * it run longer than one electrical turn (every direction of the hexagon has passed):
-         * what it has not done by then it will not do, and meanwhile it ignores the command */
-        if (d->fwe_active && (!(i_dq.d * i_dq.d + i_dq.q * i_dq.q < c->fwe_i_stop * c->fwe_i_stop) ||
-                              (float)d->fwe_n * c->ts * fabsf(ang.omega) > MC_2PI)) {
-            d->fwe_active = false;
-        }
-        if (d->fwe_active) {
-            d->fwe_n++;
-            i_ref = i_fb;   /* bumpless, for the loop after it and for the tracking check */
-            d->i_ref_prev = i_fb;
-            if (c->inject) {
-                /* the notches start again from the current that flows */
-                mc_biquad_reset(&d->notch_d, i_dq.d);
-                mc_biquad_reset(&d->notch_q, i_dq.q);
-            }
-        } else if (d->fwe_n > 0u) {
-            mc_cc_reset(&d->cc);   /* the loop starts from the references it was left */
-        }
-    }
-    if (d->fwe_active) {
-        d->cc.u = u_dq;   /* the plausibility checks see the voltage applied */
-    } else if (c->cc_map) {
-        /* the decoupling from the flux map's psi(i): the machine's own back-EMF (mc_cc_step_psi) */
-        mc_dq_t psi;
-        mc_flux_eval(&c->src.model, i_fb, &psi, 0, 0);
-        u_dq = mc_cc_step_psi(&d->cc, i_ref, i_fb, psi, ang.omega, u_loop);
-    } else {
-        u_dq = mc_cc_step(&d->cc, i_ref, i_fb, ang.omega, u_loop);
-    }
-    d->tm.u_inj = c->inject ? mc_inj_step(&d->inj, ang.omega) : 0.0f;
-    u_dq.d += d->tm.u_inj;
+    const mc_ab_t u_acting = d->entry.gate_on_next ? diode_voltage(i_abc, vdc, d->cfg->dtc.i_band) : d->u_hist[0];
+    const mc_dq_t u_dq = current_loop(d, c, &ang, i_dq, i_fb, &i_ref, u_acting, sc_u, vdc);
 
-    /* 7a. The polarity re-check (polcheck.c): at a RUN entry not preceded by Step II when so
-     *     configured (else protect.c starts it when the loss-of-lock checks are in doubt). */
-    mc_polcheck_schedule(d, ang.omega);
-    (void)mc_polcheck_step(d, i_dq.d, i_fb.d, &ang);
+    /* 7a. The running polarity re-check. */
+    polarity_recheck(d, &ang, i_dq, i_fb);
 
-    /* 7b. Plausibility: over-speed, loss of lock, current tracking, stall (protect.c); a fault
-     *     turns the outputs off before this period's duties are written. */
-    const uint32_t implausible = mc_protect_running(d, &ang, d->tm.omega_raw, i_ref, i_fb, d->cc.u);
-    if (implausible != 0u) {
-        if (!mc_drive_recover(d, implausible, vdc) && !mc_drive_react(d, implausible, ang.omega, vdc)) {
-            mc_drive_trip(d, implausible);
-        }
+    /* 7b. Plausibility: a fault turns the outputs off (or reacts) before the duties. */
+    if (running_fault(d, &ang, i_ref, i_fb, vdc)) {
         d->i_ab_prev = i_ab;
         publish(d);
         return;
@@ -370,25 +444,20 @@ void mc_drive_isr(mc_drive_t *d)
     hal_stage_mark(HAL_STAGE_MODULATION);
     const mc_ab_t u_ab = mc_park_inv(u_dq, sc_u);
 
-    /* 9. SVPWM (min-max injection), then dead-time compensation with the current of that
-     *    period, extrapolated from the last two samples (it carries the injection ripple, which
-     *    decides the sign near zero crossings). */
+    /* 9. Modulator: SVPWM and dead-time compensation. Never a NaN to the PWM: whatever
+     *    produced it, the outputs go off with the reason. */
     mc_duty_t duty;
-    mc_svpwm(u_ab, vdc, &duty);
-    const mc_ab_t i_next = {i_ab.alpha + 1.5f * (i_ab.alpha - d->i_ab_prev.alpha),
-                            i_ab.beta + 1.5f * (i_ab.beta - d->i_ab_prev.beta)};
-    mc_dtc_apply(&d->dtc, &duty, mc_clarke_inv(i_next));
-    if (!(isfinite(duty.a) && isfinite(duty.b) && isfinite(duty.c))) {
-        /* never a NaN to the PWM: whatever produced it, the outputs go off with the reason */
+    if (!modulate(d, u_ab, i_ab, vdc, &duty)) {
         mc_drive_trip(d, MC_FAULT_NUMERIC);
         publish(d);
         return;
     }
-    hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
 
-    /* 10. Keep what the estimators need next period, and the telemetry. */
-    d->u_hist[1] = u_acting;   /* (k, k+1): the diodes' voltage with the outputs still off */
-    d->u_hist[0] = duty.u_real;
+    /* 10. Duties, by the one path to the PWM; the history keeps the voltage they realise and,
+     *     for (k, k+1), the one acting until now (the diodes' with the outputs still off). */
+    mc_drive_duties_kept(d, (mc_abc_t){duty.a, duty.b, duty.c}, duty.u_real, u_acting);
+
+    /* 11. What the estimators need next period, and the telemetry. */
     d->i_ab_prev = i_ab;
     d->tm.theta = ang.theta;
     d->tm.omega = ang.omega;
@@ -396,18 +465,15 @@ void mc_drive_isr(mc_drive_t *d)
     d->tm.i_ref = i_ref;
     d->tm.u_dq = u_dq;
     d->tm.u_ab = duty.u_real;
-    d->tm.duty[0] = duty.a;
-    d->tm.duty[1] = duty.b;
-    d->tm.duty[2] = duty.c;
     d->tm.u_limited = d->cc.limited;
     d->tm.fw_active = d->tref.fw_active;
 
-    /* 11. Step III hands over to RUN when its convergence test holds (same estimator). */
+    /* 12. Step III hands over to RUN when its convergence test holds (same estimator). */
     if (step3) {
         mc_drive_step3_check(d, ang.omega);
     }
 
-    /* 12. The telemetry, published as one consistent record. */
+    /* 13. The telemetry, published as one consistent record. */
     publish(d);
 }
 

@@ -1,6 +1,6 @@
 /* Applying a built configuration to the drive's blocks: copies only, the derivation happened in
  * the background (drive_config.c). Used by the ISR side: at init, at a configuration swap
- * (drive.c) and at every enable edge (startup.c). */
+ * (drive.c) and at every enable edge (startup.c). And the one path duties take to the PWM. */
 #include "drive_internal.h"
 
 /* Every block configured from a built configuration (init, or a new configuration while the
@@ -64,4 +64,19 @@ void mc_drive_retune(mc_drive_t *d, const mc_drive_built_t *b)
     mc_tref_init(&d->tref, &b->tref);
     d->tref.fw_did = fw_did;
     mc_dtc_init(&d->dtc, &b->dtc);
+}
+
+void mc_drive_duties(mc_drive_t *d, mc_abc_t duty)
+{
+    hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
+}
+
+void mc_drive_duties_kept(mc_drive_t *d, mc_abc_t duty, mc_ab_t u_real, mc_ab_t u_acting)
+{
+    mc_drive_duties(d, duty);
+    d->u_hist[1] = u_acting;
+    d->u_hist[0] = u_real;
+    d->tm.duty[0] = duty.a;
+    d->tm.duty[1] = duty.b;
+    d->tm.duty[2] = duty.c;
 }

@@ -89,18 +89,6 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
     }
     b->seq.timeout_catch =
         (float)(2u * b->fly.n_pulse_max + 2u * b->fly.n_gap_max + 10u) * p->ts;
-    /* the polarity re-check's expected HF ratio from the map's l_dd at +-I_b (none: 0) */
-    b->pol_log_ratio = 0.0f;
-    if (m->map != 0) {
-        const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
-        mc_dq_t psi;
-        float lp[4], ln[4];
-        mc_flux_eval(&fm, (mc_dq_t){p->pol_bias, 0.0f}, &psi, lp, 0);
-        mc_flux_eval(&fm, (mc_dq_t){-p->pol_bias, 0.0f}, &psi, ln, 0);
-        if (lp[0] > 0.0f && ln[0] > 0.0f) {
-            b->pol_log_ratio = 2.0f * logf(ln[0] / lp[0]);
-        }
-    }
 }
 
 static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
@@ -178,46 +166,79 @@ static uint32_t periods_of(float seconds, float ts)
 static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
 {
     const float el = RPM_TO_RAD_S * (float)p->pole_pairs;
-    b->overspeed = p->overspeed_rpm * el;
+    mc_protect_cfg_t *r = &b->prot;
     const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
-    b->recover = p->lock_action == 1 && src->cls == MC_ANGLE_ESTIMATOR;
-    b->hold_fw = p->overspeed_action == 1;
-    b->pol_check = p->pol_check != 0;
-    b->pol_at_start = p->pol_check == 2;
-    b->pol_bias = p->pol_bias;
+    r->ts = p->ts;
+    r->pole_pairs = (int)p->pole_pairs;
+    r->adc_max = (int32_t)(float)((1L << p->adc_bits) - 1L);
+    r->i_trip = p->i_trip;
+    r->vdc_min = p->vdc_min;
+    r->vdc_max = p->vdc_max;
+    r->rs = p->rs;
+    r->ld = p->ld;
+    r->lq = p->lq;
+    r->psi_pm = p->psi_pm;
+    r->overspeed = p->overspeed_rpm * el;
+    r->recover = p->lock_action == 1 && src->cls == MC_ANGLE_ESTIMATOR;
+    r->hold_fw = p->overspeed_action == 1;
+    r->ug_coef = 1.7320508f * p->psi_pm;
+    b->seq.timeout_reaction = p->reaction_timeout;
+    r->retries = (uint32_t)p->retries;
+    r->retry_reset_n = periods_of(p->retry_reset, p->ts);
+    /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */
+    r->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
+    r->i_sum_tol = p->i_sum_tol;
+    r->i_sum_n = periods_of(p->i_sum_time, p->ts);
+    r->track_err = p->track_err;
+    r->track_n = periods_of(p->track_time, p->ts);
+    r->lock_tol = p->lock_tol;
+    r->lock_floor = p->lock_floor_rpm * el;
+    r->lock_n = src->lock_checks ? periods_of(p->lock_time, p->ts) : 0u;
+    r->jump_n = src->lock_checks ? periods_of(p->jump_time, p->ts) : 0u;
+    r->jump = p->jump_deg * (MC_PI / 180.0f);
+    r->stall_speed = p->stall_rpm * el;
+    r->stall_torque = 0.9f * p->torque_max;
+    r->stall_n = periods_of(p->stall_time, p->ts);
+    r->accel_n = periods_of(p->accel_time, p->ts);
+    r->accel_torque = 0.5f * p->torque_max;
+    r->accel_per_nm = 0.5f * (float)p->pole_pairs / p->inertia;
+    r->resid_v = p->resid_v;
+    r->resid_w_coef = 0.5f * p->lq * p->i_max;
+    r->resid_n = periods_of(p->resid_time, p->ts);
+}
+
+/* The running polarity re-check (mc/polcheck.h); after build_protection (its 20 Hz average). */
+static void build_polcheck(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
+{
+    mc_polcheck_cfg_t *pc = &b->pol;
+    pc->enable = p->pol_check != 0;
+    pc->at_start = p->pol_check == 2;
+    pc->inject = b->inject;
+    pc->three_step = b->three_step;
+    pc->omega_n1 = b->inj.omega_n1;
+    pc->bias = p->pol_bias;
+    /* the polarity re-check's expected HF ratio from the map's l_dd at +-I_b (none: 0) */
+    pc->log_ratio = 0.0f;
+    if (m->map != 0) {
+        const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+        mc_dq_t psi;
+        float lp[4], ln[4];
+        mc_flux_eval(&fm, (mc_dq_t){p->pol_bias, 0.0f}, &psi, lp, 0);
+        mc_flux_eval(&fm, (mc_dq_t){-p->pol_bias, 0.0f}, &psi, ln, 0);
+        if (lp[0] > 0.0f && ln[0] > 0.0f) {
+            pc->log_ratio = 2.0f * logf(ln[0] / lp[0]);
+        }
+    }
     /* 2 injection cycles to settle, 4 to measure */
     const float cyc = 1.0f / (p->inj_f_hz * p->ts);
-    b->pol_settle_n = periods_up(2.0f * cyc);
-    b->pol_measure_n = periods_up(4.0f * cyc);
+    pc->settle_n = periods_up(2.0f * cyc);
+    pc->measure_n = periods_up(4.0f * cyc);
     /* at_start: after five time constants of the PLL, when a wrong start angle has settled on
      * one of the HF saliency's two solutions */
-    b->pol_start_n = periods_up(5.0f / (MC_2PI * p->pll_bw_hz) / p->ts);
+    pc->start_n = periods_up(5.0f / (MC_2PI * p->pll_bw_hz) / p->ts);
     /* the speed estimate may drift by 5 x Step III's tolerance during the check */
-    b->pol_w_scale = 0.1745f / (5.0f * p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs);
-    b->ug_coef = 1.7320508f * p->psi_pm;
-    b->seq.timeout_reaction = p->reaction_timeout;
-    b->retries = (uint32_t)p->retries;
-    b->retry_reset_n = periods_of(p->retry_reset, p->ts);
-    /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */
-    b->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
-    b->i_sum_tol = p->i_sum_tol;
-    b->i_sum_n = periods_of(p->i_sum_time, p->ts);
-    b->track_err = p->track_err;
-    b->track_n = periods_of(p->track_time, p->ts);
-    b->lock_tol = p->lock_tol;
-    b->lock_floor = p->lock_floor_rpm * el;
-    b->lock_n = src->lock_checks ? periods_of(p->lock_time, p->ts) : 0u;
-    b->jump_n = src->lock_checks ? periods_of(p->jump_time, p->ts) : 0u;
-    b->jump = p->jump_deg * (MC_PI / 180.0f);
-    b->stall_speed = p->stall_rpm * el;
-    b->stall_torque = 0.9f * p->torque_max;
-    b->stall_n = periods_of(p->stall_time, p->ts);
-    b->accel_n = periods_of(p->accel_time, p->ts);
-    b->accel_torque = 0.5f * p->torque_max;
-    b->accel_per_nm = 0.5f * (float)p->pole_pairs / p->inertia;
-    b->resid_v = p->resid_v;
-    b->resid_w_coef = 0.5f * p->lq * p->i_max;
-    b->resid_n = periods_of(p->resid_time, p->ts);
+    pc->w_scale = 0.1745f / (5.0f * p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs);
+    pc->avg_k = b->prot.avg_k;
 }
 
 bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err)
@@ -241,24 +262,22 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     b->ts = p->ts;
     b->pole_pairs = (int)p->pole_pairs;
     const float max_count = (float)((1L << p->adc_bits) - 1L);
-    b->adc_max = (int32_t)max_count;
-    b->amps_per_count = 2.0f * p->i_span / max_count;
+    b->offs.amps_per_count = 2.0f * p->i_span / max_count;
     b->volts_per_count = p->vdc_span / max_count;
-    b->offset_nominal = (float)(1L << (p->adc_bits - 1));
-    b->offset_tol = p->adc_offset_tol * (float)(1L << p->adc_bits);
-    b->i_trip = p->i_trip;
-    b->vdc_min = p->vdc_min;
-    b->vdc_max = p->vdc_max;
+    b->offs.nominal = (float)(1L << (p->adc_bits - 1));
+    b->offs.tol = p->adc_offset_tol * (float)(1L << p->adc_bits);
+    b->offs.ts = p->ts;
     b->i_ref_max = p->i_max * (1.0f - p->i_headroom);
-    b->fwe_i_stop = 1.1f * p->i_max;
+    b->fwe = (mc_fwe_cfg_t){.ts = p->ts, .rs = m.rs, .i_stop = 1.1f * p->i_max, .overmod = p->u_loop > 1.0f};
     b->u_loop = p->u_loop;
     b->i_slew = p->i_slew;
-    b->cal_samples = (uint32_t)p->offset_cal_samples;
+    b->offs.samples = (uint32_t)p->offset_cal_samples;
     build_startup(p, &m, b);
     if (!build_source(p, &m, b, err)) {
         return false;
     }
     build_protection(p, b);
+    build_polcheck(p, &m, b);
 
     mc_cc_cfg_from_bandwidth(&out->cc, p->cc_bw_hz, p->rs, p->ld, p->lq, p->psi_pm, p->ts);
     out->cc.decouple = p->cc_decouple != 0;

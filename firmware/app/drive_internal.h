@@ -1,13 +1,13 @@
 /* Private interface between the drive's files (drive.c: API and ISR pipeline; drive_config.c: the
- * configuration, background side; drive_blocks.c: applying it to the blocks; startup.c:
- * sequencing, protection, offset calibration and the initial-position steps). Calls go
- * drive.c -> startup.c -> drive_blocks.c, never back. Not part of the public API. */
+ * configuration, background side; drive_blocks.c: applying it to the blocks, the one path duties
+ * take to the PWM; startup.c: sequencing, the initial-position steps, the reactions). Calls go
+ * drive.c -> startup.c -> drive_blocks.c, never back. The blocks with their own state and
+ * configuration (mc/protect.h, mc/polcheck.h, mc/offset_cal.h, mc/fw_entry.h, mc/catch.h) do not
+ * see the drive. Not part of the public API. */
 #ifndef MC_DRIVE_INTERNAL_H
 #define MC_DRIVE_INTERNAL_H
 #include "mc/drive.h"
 
-/* The phase currents of a raw sample with the calibrated offsets [A] (ISR step 2, and the
- * offset calibration once it has its offsets). */
 /* The voltage the field-weakening entry lands the flux on (mc/fw_entry.h): the references' share
  * (control.u_margin), but not beyond the inscribed circle, Vdc/sqrt3 (drive.c step 7). */
 static inline float mc_drive_u_land(const mc_drive_t *d, float vdc)
@@ -16,13 +16,19 @@ static inline float mc_drive_u_land(const mc_drive_t *d, float vdc)
     return vdc * MC_1_SQRT3 * (m < 1.0f ? m : 1.0f);
 }
 
+/* The phase currents of a raw sample with the calibrated offsets [A] (ISR step 2, and the
+ * offset calibration once it has its offsets). */
 static inline mc_abc_t mc_drive_currents(const mc_drive_t *d, const hal_adc_sample_t *raw)
 {
-    const float k = d->cfg->blk.amps_per_count;
-    return (mc_abc_t){((float)raw->i[0] - d->offset[0]) * k, ((float)raw->i[1] - d->offset[1]) * k,
-                      ((float)raw->i[2] - d->offset[2]) * k};
+    return mc_offsets_currents(&d->offs, &d->cfg->blk.offs, raw->i);
 }
 
+/* The one path duties take to the PWM (drive_blocks.c). mc_drive_duties alone: the outputs'
+ * rest at 50 % (zero voltage), no history. mc_drive_duties_kept: duties that act, with the
+ * stator voltage they realise (u_real) and the one acting until they do (u_acting) kept for
+ * the estimators (u_hist) and the duties in the telemetry. */
+void mc_drive_duties(mc_drive_t *d, mc_abc_t duty);
+void mc_drive_duties_kept(mc_drive_t *d, mc_abc_t duty, mc_ab_t u_real, mc_ab_t u_acting);
 /* Every block configured from a built configuration (copies only). */
 void mc_drive_apply(mc_drive_t *d, const mc_drive_built_t *b);
 /* A new configuration while running: gains and limits, no state reset. */
@@ -44,20 +50,6 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc);
 bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc);
 /* Outputs off, duties at 50 %, the reason latched (FAULT until disable + enable). */
 void mc_drive_trip(mc_drive_t *d, uint32_t reason);
-/* Plausibility detectors (protect.c): each returns a fault reason or 0. The sensor checks run
- * whenever the outputs are on; the running checks in RUN (and Step III) after current control. */
-void mc_protect_reset(mc_drive_t *d, float omega);   /* averages primed at speed omega [rad/s el] */
-uint32_t mc_protect_sensors(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i);
-uint32_t mc_protect_running(mc_drive_t *d, const mc_angle_out_t *ang, float omega_raw, mc_dq_t i_ref, mc_dq_t i_fb,
-                            mc_dq_t u_dq);
-/* Running polarity re-check (polcheck.c): start (false: not now), the d-reference bias while
- * it runs, one measurement step (true: the estimate was reversed and turned by pi). */
-void mc_polcheck_reset(mc_drive_t *d);
-bool mc_polcheck_active(const mc_drive_t *d);
-bool mc_polcheck_start(mc_drive_t *d, float omega);
-void mc_polcheck_schedule(mc_drive_t *d, float omega);   /* the at_start trigger, every period */
-float mc_polcheck_bias(const mc_drive_t *d);
-bool mc_polcheck_step(mc_drive_t *d, float i_d, float i_d_filtered, const mc_angle_out_t *ang);
 /* Step III convergence test, after the pipeline ran; hands over to RUN. */
 void mc_drive_step3_check(mc_drive_t *d, float omega_hat);
 

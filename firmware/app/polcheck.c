@@ -18,136 +18,138 @@
  * still settling, an estimate running away) ends the check at once without a verdict. While it
  * runs, the averaged loss-of-lock checks wait (the bias moves the estimate a little); the fast
  * path does not. */
+#include "mc/polcheck.h"
+
 #include <math.h>
-#include "drive_internal.h"
+
 #include "mc/angle.h"
 
 enum { POL_IDLE = 0, POL_PLUS_SETTLE, POL_PLUS, POL_MINUS_SETTLE, POL_MINUS };
 
-void mc_polcheck_reset(mc_drive_t *d)
+void mc_polcheck_reset(mc_polcheck_t *s)
 {
-    d->pol.phase = POL_IDLE;
-    d->pol.n = 0u;
-    d->pol.acc[0] = d->pol.acc[1] = 0.0f;
-    d->pol.cnt[0] = d->pol.cnt[1] = 0u;
-    d->pol.moved = 0.0f;
+    s->phase = POL_IDLE;
+    s->n = 0u;
+    s->acc[0] = s->acc[1] = 0.0f;
+    s->cnt[0] = s->cnt[1] = 0u;
+    s->moved = 0.0f;
 }
 
-bool mc_polcheck_active(const mc_drive_t *d)
+void mc_polcheck_restart(mc_polcheck_t *s)
 {
-    return d->pol.phase != POL_IDLE;
+    s->checks = s->flips = 0u;
+    s->starts = 0u;
+    s->unsure = false;
+    s->last = 0;
+    mc_polcheck_reset(s);
 }
 
-bool mc_polcheck_start(mc_drive_t *d, float omega)
+bool mc_polcheck_active(const mc_polcheck_t *s)
 {
-    const mc_drive_blk_t *b = &d->cfg->blk;
+    return s->phase != POL_IDLE;
+}
+
+bool mc_polcheck_start(mc_polcheck_t *s, const mc_polcheck_cfg_t *b, float omega, bool running)
+{
     /* only where the injection is on and strong (below half of N1) */
-    if (!b->pol_check || !b->inject || d->pol.phase != POL_IDLE || !(fabsf(omega) < 0.5f * b->inj.omega_n1) ||
-        d->seq.state != MC_STATE_RUN) {
+    if (!b->enable || !b->inject || s->phase != POL_IDLE || !(fabsf(omega) < 0.5f * b->omega_n1) || !running) {
         return false;
     }
-    mc_polcheck_reset(d);
-    d->pol.phase = POL_PLUS_SETTLE;
-    d->tm.polarity_checks++;
+    mc_polcheck_reset(s);
+    s->phase = POL_PLUS_SETTLE;
+    s->checks++;
     return true;
 }
 
-void mc_polcheck_schedule(mc_drive_t *d, float omega)
+void mc_polcheck_schedule(mc_polcheck_t *s, const mc_polcheck_cfg_t *b, float omega, bool running, uint32_t ticks)
 {
     /* at_start: a settling time into RUN; an inconclusive verdict (the estimate still moving)
      * tries again a settling time later, three times at most */
-    const mc_drive_blk_t *b = &d->cfg->blk;
-    const uint32_t k = d->pol.starts;
-    if ((b->pol_at_start || d->pol.unsure) && d->seq.state == MC_STATE_RUN && !b->three_step && k < 3u &&
-        (k == 0u || d->tm.polarity_last == 0) && d->seq.ticks == (k + 1u) * b->pol_start_n &&
-        mc_polcheck_start(d, omega)) {
-        d->pol.starts = k + 1u;
+    const uint32_t k = s->starts;
+    if ((b->at_start || s->unsure) && running && !b->three_step && k < 3u && (k == 0u || s->last == 0) &&
+        ticks == (k + 1u) * b->start_n && mc_polcheck_start(s, b, omega, running)) {
+        s->starts = k + 1u;
     }
 }
 
-float mc_polcheck_bias(const mc_drive_t *d)
+float mc_polcheck_bias(const mc_polcheck_t *s, const mc_polcheck_cfg_t *c)
 {
-    const float ib = d->cfg->blk.pol_bias;
-    return (d->pol.phase == POL_PLUS_SETTLE || d->pol.phase == POL_PLUS) ? ib
-           : (d->pol.phase == POL_MINUS_SETTLE || d->pol.phase == POL_MINUS) ? -ib
-                                                                              : 0.0f;
+    const float ib = c->bias;
+    return (s->phase == POL_PLUS_SETTLE || s->phase == POL_PLUS) ? ib
+           : (s->phase == POL_MINUS_SETTLE || s->phase == POL_MINUS) ? -ib
+                                                                      : 0.0f;
 }
 
 /* The verdict: +1 reversed, -1 right, 0 inconclusive. */
-static int verdict(const mc_drive_t *d)
+static int verdict(const mc_polcheck_t *s, const mc_polcheck_cfg_t *b)
 {
-    const mc_drive_blk_t *b = &d->cfg->blk;
-    const float plus = d->pol.acc[0] / (float)d->pol.cnt[0], minus = d->pol.acc[1] / (float)d->pol.cnt[1];
+    const float plus = s->acc[0] / (float)s->cnt[0], minus = s->acc[1] / (float)s->cnt[1];
     if (!(plus > 0.0f) || !(minus > 0.0f)) {
         return 0;
     }
     const float lr = logf(plus / minus);   /* > 0 expected when right */
-    const float margin = b->pol_log_ratio > 0.0f ? 0.25f * b->pol_log_ratio : 0.02f;
+    const float margin = b->log_ratio > 0.0f ? 0.25f * b->log_ratio : 0.02f;
     return lr > margin ? -1 : (lr < -margin ? 1 : 0);
 }
 
-bool mc_polcheck_step(mc_drive_t *d, float i_d, float i_d_filtered, const mc_angle_out_t *ang)
+bool mc_polcheck_step(mc_polcheck_t *s, const mc_polcheck_cfg_t *b, const mc_polcheck_in_t *in)
 {
-    if (d->pol.phase == POL_IDLE) {
+    if (s->phase == POL_IDLE) {
         return false;
     }
-    const mc_drive_blk_t *b = &d->cfg->blk;
-    const float hf = i_d - i_d_filtered;
+    const float hf = in->i_d - in->i_d_filtered;
     /* settled: the raw angle on the PLL's, and the speed estimate steady (a start angle that
      * still settles turns the estimate at tens of rad/s while the rotor stands) */
     /* both low-passed at the detectors' 20 Hz: the noise of a single sample does not count */
-    const float innov = fabsf(mc_wrap_pi(d->tm.theta_raw - ang->theta));
-    if (d->pol.n == 0u && d->pol.phase == POL_PLUS_SETTLE) {
-        d->pol.w0 = d->prot.w;
-        d->pol.innov = innov;
+    const float innov = fabsf(mc_wrap_pi(in->theta_raw - in->theta));
+    if (s->n == 0u && s->phase == POL_PLUS_SETTLE) {
+        s->w0 = in->w_avg;
+        s->innov = innov;
     }
-    d->pol.innov += b->avg_k * (innov - d->pol.innov);
-    const float dep = d->pol.innov;
-    const float dw = fabsf(d->prot.w - d->pol.w0) * b->pol_w_scale;
+    s->innov += b->avg_k * (innov - s->innov);
+    const float dep = s->innov;
+    const float dw = fabsf(in->w_avg - s->w0) * b->w_scale;
     const float worst = dep > dw ? dep : dw;
-    d->pol.moved = worst > d->pol.moved ? worst : d->pol.moved;
-    if (!(d->pol.moved <= 0.1745f)) {
+    s->moved = worst > s->moved ? worst : s->moved;
+    if (!(s->moved <= 0.1745f)) {
         /* unsettled: no verdict, and the lock checks it paused take over again at once */
-        d->tm.polarity_last = 0;
-        mc_polcheck_reset(d);
+        s->last = 0;
+        mc_polcheck_reset(s);
         return false;
     }
-    d->pol.n++;
-    switch (d->pol.phase) {
+    s->n++;
+    switch (s->phase) {
     case POL_PLUS_SETTLE:
     case POL_MINUS_SETTLE:
-        if (d->pol.n >= b->pol_settle_n) {
-            d->pol.phase++;
-            d->pol.n = 0u;
+        if (s->n >= b->settle_n) {
+            s->phase++;
+            s->n = 0u;
         }
         return false;
     case POL_PLUS:
     case POL_MINUS: {
-        const int k = d->pol.phase == POL_PLUS ? 0 : 1;
-        d->pol.acc[k] += hf * hf;
-        d->pol.cnt[k]++;
-        if (d->pol.n < b->pol_measure_n) {
+        const int k = s->phase == POL_PLUS ? 0 : 1;
+        s->acc[k] += hf * hf;
+        s->cnt[k]++;
+        if (s->n < b->measure_n) {
             return false;
         }
         if (k == 0) {
-            d->pol.phase = POL_MINUS_SETTLE;
-            d->pol.n = 0u;
+            s->phase = POL_MINUS_SETTLE;
+            s->n = 0u;
             return false;
         }
-        const int v = verdict(d);
-        d->tm.polarity_last = v;
-        mc_polcheck_reset(d);
+        const int v = verdict(s, b);
+        s->last = v;
+        mc_polcheck_reset(s);
         if (v > 0) {
-            /* the mirrored solution: (theta + pi, -omega) is the machine's */
-            d->src->reset(&d->src_state, mc_wrap_pi(ang->theta + MC_PI), -ang->omega);
-            mc_cc_reset(&d->cc);
-            d->tm.polarity_flips++;
+            s->flips++;   /* the caller turns the estimate: (theta + pi, -omega) is the machine's */
             return true;
         }
         return false;
     }
     default:
-        mc_polcheck_reset(d);
+        mc_polcheck_reset(s);
         return false;
     }
 }

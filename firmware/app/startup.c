@@ -1,8 +1,9 @@
-/* The drive's startup: protection, offset calibration, the flying-start catch (mc/catch.h: a
- * turning rotor goes straight to RUN with its angle and speed) and the initial position (thesis
- * ch. 5): Step I pulse injection, Step II polarity detection, then Step III, which is the normal
- * control pipeline with zero current references and the injection on, until its convergence
- * test holds.
+/* The drive's startup: it sequences the blocks that own their state (protection's hard trips,
+ * mc/protect.h; the offset calibration, mc/offset_cal.h; the flying-start catch, mc/catch.h: a
+ * turning rotor goes straight to RUN with its angle and speed, the field-weakening entry first)
+ * and the initial position (thesis ch. 5): Step I pulse injection, Step II polarity detection,
+ * then Step III, which is the normal control pipeline with zero current references and the
+ * injection on, until its convergence test holds; and the reactions to a running fault.
  * The sequencer (mc/sequencer.h) owns the states, timeouts and fault reasons. */
 #include <math.h>
 #include <stddef.h>
@@ -15,7 +16,7 @@
 static void outputs_off(mc_drive_t *d)
 {
     hal_pwm_enable(d->hal.pwm, false);
-    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
+    mc_drive_duties(d, (mc_abc_t){0.5f, 0.5f, 0.5f});
 }
 
 void mc_drive_trip(mc_drive_t *d, uint32_t reason)
@@ -35,28 +36,21 @@ static void pipeline_reset(mc_drive_t *d, float theta, float omega)
     mc_biquad_reset(&d->notch_q, 0.0f);
     d->step3_speed = d->cfg->blk.step3_lpf;   /* coefficients built in the background, state at rest */
     d->step3_count = 0u;
-    mc_protect_reset(d, omega);
+    mc_protect_reset(&d->prot, &d->cfg->blk.prot, omega);
     d->i_ref_prev = (mc_dq_t){0.0f, 0.0f};
     d->tref.fw_did = 0.0f;
-    mc_polcheck_reset(d);
+    mc_polcheck_reset(&d->pol);
 }
 
 void mc_drive_startup_reset(mc_drive_t *d)
 {
-    d->cal_count = 0u;
-    d->retries = 0u;
+    mc_protect_restart(&d->prot);
     d->tm.recoveries = 0u;
     d->tm.recovered_from = 0u;
-    d->tm.polarity_checks = d->tm.polarity_flips = 0u;
-    d->pol.starts = 0u;
-    d->pol.unsure = false;
-    d->tm.polarity_last = 0;
-    mc_ocal_reset(&d->ocal);
-    d->offsets_moved = false;
-    d->gate_on_next = false;
-    d->entry_corner = false;
-    d->fwe_active = false;
-    d->fwe_n = 0u;
+    mc_polcheck_restart(&d->pol);
+    mc_offsets_restart(&d->offs);
+    d->entry = (mc_catch_entry_t){.corner = false, .gate_on_next = false};
+    mc_fwe_reset(&d->fwe);
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
     pipeline_reset(d, d->cmd.theta_init, 0.0f);
@@ -67,38 +61,21 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->tm.pol_flip = false;
 }
 
-/* Write duties decided outside the control pipeline and keep the voltage history true, so the
+/* Duties decided outside the control pipeline, with the voltage history kept true, so the
  * estimator's first Step III sample pairs the currents with the pulse that really acted. */
 static void write_duties(mc_drive_t *d, mc_abc_t duty, float vdc)
 {
-    hal_pwm_set_duties(d->hal.pwm, duty.a, duty.b, duty.c);
     const mc_abc_t v = {(duty.a - 0.5f) * vdc, (duty.b - 0.5f) * vdc, (duty.c - 0.5f) * vdc};
-    d->u_hist[1] = d->u_hist[0];
-    d->u_hist[0] = mc_clarke(v);   /* (2.4) drops the common mode: line-to-neutral vector */
-    d->tm.duty[0] = duty.a;
-    d->tm.duty[1] = duty.b;
-    d->tm.duty[2] = duty.c;
+    /* (2.4) drops the common mode: line-to-neutral vector */
+    mc_drive_duties_kept(d, duty, mc_clarke(v), d->u_hist[0]);
 }
 
+/* Protection's hard trips and sensor checks (mc/protect.h), every period the outputs may be on. */
 static void protect(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i, float vdc)
 {
-    const mc_drive_blk_t *c = &d->cfg->blk;
-    /* any phase above the trip level, or a sample at an ADC rail: a clipped channel says only
-     * that the current is beyond the span, which the configuration keeps above the trip level */
-    bool rail = false;
-    for (int k = 0; k < 3; ++k) {
-        rail = rail || raw->i[k] == 0u || (int32_t)raw->i[k] >= c->adc_max;
-    }
-    const bool over = rail || fabsf(i.a) > c->i_trip || fabsf(i.b) > c->i_trip || fabsf(i.c) > c->i_trip;
-    const uint32_t sensors = mc_protect_sensors(d, raw, i);
-    if (over) {
-        mc_drive_trip(d, MC_FAULT_OVERCURRENT);
-    } else if (vdc > c->vdc_max) {
-        mc_drive_trip(d, MC_FAULT_OVERVOLTAGE);
-    } else if (vdc < c->vdc_min) {
-        mc_drive_trip(d, MC_FAULT_UNDERVOLTAGE);
-    } else if (sensors != 0u) {
-        mc_drive_trip(d, sensors);
+    const uint32_t reason = mc_protect_sensors(&d->prot, &d->cfg->blk.prot, raw, i, vdc);
+    if (reason != 0u) {
+        mc_drive_trip(d, reason);
     }
 }
 
@@ -140,46 +117,21 @@ static void refs_from_current(mc_drive_t *d, mc_ab_t i_ab, float theta)
  * with the outputs off at this sample, RUN's first duties come on with them next period. */
 static void run_at_speed(mc_drive_t *d, bool outputs_off_now)
 {
-    d->gate_on_next = outputs_off_now;
-    d->fwe_active = true;
-    d->fwe_n = 0u;
-}
-
-/* Offsets within the plausible range of mid-scale, or false (then none changes). */
-static bool offsets_plausible(const mc_drive_t *d, const float off[3])
-{
-    const mc_drive_blk_t *b = &d->cfg->blk;
-    for (int k = 0; k < 3; ++k) {
-        if (!(fabsf(off[k] - b->offset_nominal) <= b->offset_tol)) {
-            return false;
-        }
-    }
-    return true;
+    d->entry.gate_on_next = outputs_off_now;
+    mc_fwe_begin(&d->fwe);
 }
 
 /* Once the speed is known (the catch, an angle sensor): the offsets over whole electrical half-
  * periods of the calibration's samples (O.1), which the diodes' current of a rotor turning above
- * the generation speed does not bias. Returns the change of the stator-frame current this makes
- * (new minus old) [A]; none where (O.1) does not apply. */
+ * the generation speed does not bias (mc_offsets_at_speed). Returns the change of the stator-
+ * frame current this makes (new minus old) [A]; none where (O.1) does not apply. */
 static mc_ab_t offsets_at_speed(mc_drive_t *d, float omega)
 {
-    float off[3];
-    const bool ok = mc_ocal_periodic(&d->ocal, omega, d->cfg->p.ts, off) && offsets_plausible(d, off);
-    /* once: the samples belong to this enable's calibration, not to a later catch (a recovery
-     * at another speed would pair them at the wrong lag) */
-    mc_ocal_reset(&d->ocal);
-    if (!ok) {
-        return (mc_ab_t){0.0f, 0.0f};
+    mc_ab_t dab;
+    if (mc_offsets_at_speed(&d->offs, &d->cfg->blk.offs, omega, &dab)) {
+        d->i_ab_prev.alpha += dab.alpha;   /* the last sample as the new offsets give it */
+        d->i_ab_prev.beta += dab.beta;
     }
-    const float k = d->cfg->blk.amps_per_count;
-    const mc_abc_t di = {(d->offset[0] - off[0]) * k, (d->offset[1] - off[1]) * k, (d->offset[2] - off[2]) * k};
-    for (int j = 0; j < 3; ++j) {
-        d->offset[j] = off[j];
-    }
-    const mc_ab_t dab = mc_clarke(di);
-    d->i_ab_prev.alpha += dab.alpha;   /* the last sample as the new offsets give it */
-    d->i_ab_prev.beta += dab.beta;
-    d->offsets_moved = true;
     return dab;
 }
 
@@ -191,14 +143,14 @@ static mc_ab_t offsets_at_speed(mc_drive_t *d, float omega)
 static bool latch_entry_corner(mc_drive_t *d)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    const float vdc = d->tm.vdc, w = d->tm.omega;
-    if (!b->src_measures || !(b->u_loop > 1.0f) || !(vdc > 0.0f) ||
-        !(fabsf(w) * b->fly.psi_pm > mc_drive_u_land(d, vdc))) {
+    const float vdc = d->tm.vdc;
+    if (!b->src_measures || !b->fwe.overmod) {
         return false;
     }
-    /* the sensor's angle is a period old: the middle of the period after the next sample */
-    const float s = w < 0.0f ? -1.0f : 1.0f;
-    const int k = mc_svpwm_corner_near(d->tm.theta + 2.0f * w * b->ts + s * 2.3561945f);
+    const int k = mc_catch_entry_corner(&b->fly, d->tm.theta, d->tm.omega, vdc, mc_drive_u_land(d, vdc));
+    if (k < 0) {
+        return false;
+    }
     write_duties(d, mc_svpwm_corner(k, NULL), vdc);
     return true;
 }
@@ -209,33 +161,29 @@ static bool latch_entry_corner(mc_drive_t *d)
 static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    if (d->cal_count < b->cal_samples) {
-        mc_ocal_add(&d->ocal, raw->i);
-        if (++d->cal_count < b->cal_samples) {
-            d->entry_corner = latch_entry_corner(d);
-            return;
-        }
-        float off[3];
-        if (!mc_ocal_mean(&d->ocal, off) || !offsets_plausible(d, off)) {
-            mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
-            return;
-        }
-        for (int k = 0; k < 3; ++k) {
-            d->offset[k] = off[k];
-        }
+    switch (mc_offsets_add(&d->offs, &b->offs, raw->i)) {
+    case MC_OFFSETS_COLLECTING:
+        d->entry.corner = latch_entry_corner(d);
+        return;
+    case MC_OFFSETS_FAILED:
+        mc_drive_trip(d, MC_FAULT_OFFSET_CAL);
+        return;
+    case MC_OFFSETS_DONE:
         if (b->src_measures) {
             (void)offsets_at_speed(d, d->tm.omega);   /* the sensor's speed, tracked meanwhile */
         }
-    } else {
-        d->cal_count++;
+        break;
+    case MC_OFFSETS_COUNTING:
+    default:
+        break;
     }
     /* with this period's offsets: the ISR scaled the sample with the previous ones */
     const mc_ab_t i_now = b->src_measures ? mc_clarke(mc_drive_currents(d, raw)) : (mc_ab_t){0.0f, 0.0f};
-    if (b->src_measures && d->cal_count < b->cal_samples + b->fly.n_wait_max && !mc_catch_at_low(&b->fly, i_now)) {
+    if (b->src_measures && mc_catch_sensor_waits(&b->fly, d->offs.count - b->offs.samples, i_now)) {
         /* a sensor drive needs no catch, but above the uncontrolled-generation speed the diodes
          * conduct: it waits (outputs off, at most the catch's longest wait) for a diode pulse's
          * low, as the catch does (C.5), and starts from there */
-        d->entry_corner = latch_entry_corner(d);
+        d->entry.corner = latch_entry_corner(d);
         return;
     }
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
@@ -253,11 +201,11 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
         mc_drive_trip(d, MC_FAULT_CONFIG);
         return;
     }
-    hal_pwm_set_duties(d->hal.pwm, 0.5f, 0.5f, 0.5f);
+    mc_drive_duties(d, (mc_abc_t){0.5f, 0.5f, 0.5f});
     if (d->seq.state == MC_STATE_RUN && b->src_measures) {
         /* the sensor's angle (tracked through the calibration, a period old) one period on */
         refs_from_current(d, i_now, d->tm.theta + d->tm.omega * b->ts);
-        if (d->entry_corner) {
+        if (d->entry.corner) {
             /* the corner latched last period acts from now (latch_entry_corner) */
             hal_pwm_enable(d->hal.pwm, true);
             run_at_speed(d, false);
@@ -275,12 +223,9 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
 bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
-    const uint32_t recoverable = MC_FAULTS_RECOVERABLE;
-    if (!b->recover || (reason & ~recoverable) != 0u || d->retries >= b->retries ||
-        d->seq.state != MC_STATE_RUN) {
+    if (!mc_protect_may_recover(&d->prot, &b->prot, reason, d->seq.state == MC_STATE_RUN)) {
         return false;
     }
-    d->retries++;
     d->tm.recoveries++;
     d->tm.recovered_from |= reason;
     /* outputs off now, V(000) latched for the catch's first pulse */
@@ -298,9 +243,7 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
 
 bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc)
 {
-    const mc_drive_blk_t *b = &d->cfg->blk;
-    if (!b->hold_fw || (reason & ~MC_FAULTS_HOLD_FW) != 0u || d->seq.state != MC_STATE_RUN ||
-        !(b->ug_coef * fabsf(omega) > vdc)) {
+    if (!mc_protect_may_hold(&d->cfg->blk.prot, reason, d->seq.state == MC_STATE_RUN, omega, vdc)) {
         return false;   /* below it, outputs off is current-free: the plain trip */
     }
     mc_seq_fault_reaction(&d->seq, reason);
@@ -335,17 +278,14 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     d->tm.theta1 = res.theta;
     d->tm.c1 = res.c1;
     d->tm.c2 = res.omega;
-    if (st == MC_IP_FAILED) {
+    switch (mc_catch_outcome(st, res.moving, d->tm.recoveries > 0u, d->seq.cfg.init_pos)) {
+    case MC_CATCH_NO_FIT:
         mc_drive_trip(d, MC_FAULT_INIT_POS);   /* no sign for the speed, or (C.1) does not fit */
         return;
-    }
-    if (!res.moving && d->tm.recoveries > 0u && !d->seq.cfg.init_pos) {
-        /* a recovery that finds the rotor standing has no angle to go on with (the one given
-         * with the enable is stale): the reason that started it stands */
+    case MC_CATCH_STALE:
         mc_drive_trip(d, d->tm.recovered_from);
         return;
-    }
-    if (res.moving) {
+    case MC_CATCH_TURNING: {
         /* the offsets over whole half-periods at the caught speed (the catch itself works on
          * current differences, which no offset biases) */
         const mc_ab_t di = offsets_at_speed(d, res.omega);
@@ -359,6 +299,10 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
         run_at_speed(d, !hal_pwm_enabled(d->hal.pwm));
         mc_seq_event(&d->seq, MC_SEQ_CAUGHT);
         return;
+    }
+    case MC_CATCH_STANDING:
+    default:
+        break;
     }
     mc_seq_event(&d->seq, MC_SEQ_STEP_DONE);
     if (d->seq.state == MC_STATE_INIT_POS && !begin_step1(d)) {
@@ -434,8 +378,7 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
         }
         break;
     case MC_STATE_FAULT_REACTION:
-        /* the link is safe once the line-to-line back-EMF is below it with a margin */
-        if (d->cfg->blk.ug_coef * fabsf(d->tm.omega) < 0.95f * vdc) {
+        if (mc_protect_reaction_done(&d->cfg->blk.prot, d->tm.omega, vdc)) {
             mc_seq_event(&d->seq, MC_SEQ_REACTION_DONE);
             outputs_off(d);
         }
@@ -445,9 +388,7 @@ bool mc_drive_startup(mc_drive_t *d, const hal_adc_sample_t *raw, mc_abc_t i_abc
         break;
     }
     mc_seq_tick(&d->seq);
-    if (d->seq.state == MC_STATE_RUN && d->seq.ticks >= d->cfg->blk.retry_reset_n) {
-        d->retries = 0u;   /* long enough in RUN: the recoveries count from zero again */
-    }
+    mc_protect_tick(&d->prot, &d->cfg->blk.prot, d->seq.state == MC_STATE_RUN, d->seq.ticks);
     if (d->seq.state == MC_STATE_FAULT && hal_pwm_enabled(d->hal.pwm)) {
         outputs_off(d);   /* a timeout raised by the tick */
     }

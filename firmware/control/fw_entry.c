@@ -22,9 +22,42 @@ static mc_dq_t ahead(float ed, float eq, float s, float cb, float sb)
     return (mc_dq_t){-sb * ed - s * cb * eq, s * cb * ed - sb * eq};
 }
 
-bool mc_fwe_step(mc_dq_t psi, mc_dq_t i, mc_dq_t u_now, float rs, float omega, float ts, float u_max,
-                 float vdc, mc_sincos_t sc, bool started, mc_dq_t *u_out)
+void mc_fwe_reset(mc_fwe_t *s)
 {
+    s->active = false;
+    s->n = 0u;
+}
+
+void mc_fwe_begin(mc_fwe_t *s)
+{
+    s->active = true;
+    s->n = 0u;
+}
+
+mc_fwe_status_t mc_fwe_step(mc_fwe_t *s, const mc_fwe_cfg_t *c, const mc_fwe_in_t *in, mc_dq_t *u)
+{
+    if (!s->active) {
+        return MC_FWE_OFF;
+    }
+    bool on = mc_fwe_law(c, in, s->n > 0u, u);
+    if (on && (!(in->i.d * in->i.d + in->i.q * in->i.q < c->i_stop * c->i_stop) ||
+               (float)s->n * c->ts * fabsf(in->omega) > MC_2PI)) {
+        on = false;
+    }
+    s->active = on;
+    if (on) {
+        s->n++;
+        return MC_FWE_RUNNING;
+    }
+    return s->n > 0u ? MC_FWE_ENDED : MC_FWE_OFF;
+}
+
+bool mc_fwe_law(const mc_fwe_cfg_t *c, const mc_fwe_in_t *in, bool started, mc_dq_t *u_out)
+{
+    const mc_dq_t psi = in->psi, i = in->i, u_now = in->u_now;
+    const float rs = c->rs, omega = in->omega, ts = c->ts, u_max = in->u_land;
+    const float vdc = c->overmod ? in->vdc : 0.0f;
+    const mc_sincos_t sc = in->sc;
     *u_out = u_now;
     /* the flux in the middle of the period the result acts in, 1.5 periods on, under the
      * voltage already latched (Euler: omega ts is ~0.08 rad at the thesis motor's 1500 rpm and

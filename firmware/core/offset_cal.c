@@ -3,6 +3,8 @@
 
 #include <math.h>
 
+#include "mc/transforms.h"
+
 void mc_ocal_reset(mc_ocal_t *s)
 {
     s->n = 0u;
@@ -60,5 +62,72 @@ bool mc_ocal_periodic(const mc_ocal_t *s, float omega_e, float ts, float off[3])
     for (int k = 0; k < 3; ++k) {
         off[k] = acc[k] / (2.0f * (float)pairs);
     }
+    return true;
+}
+
+/* Offsets within the plausible range of mid-scale, or false (then none changes). */
+static bool plausible(const mc_offsets_cfg_t *c, const float off[3])
+{
+    for (int k = 0; k < 3; ++k) {
+        if (!(fabsf(off[k] - c->nominal) <= c->tol)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+void mc_offsets_init(mc_offsets_t *s, const mc_offsets_cfg_t *c)
+{
+    mc_offsets_restart(s);
+    for (int k = 0; k < 3; ++k) {
+        s->offset[k] = c->nominal;
+    }
+}
+
+void mc_offsets_restart(mc_offsets_t *s)
+{
+    s->count = 0u;
+    mc_ocal_reset(&s->ocal);
+    s->moved = false;
+}
+
+mc_offsets_status_t mc_offsets_add(mc_offsets_t *s, const mc_offsets_cfg_t *c, const uint16_t raw[3])
+{
+    if (s->count >= c->samples) {
+        s->count++;
+        return MC_OFFSETS_COUNTING;
+    }
+    mc_ocal_add(&s->ocal, raw);
+    if (++s->count < c->samples) {
+        return MC_OFFSETS_COLLECTING;
+    }
+    float off[3];
+    if (!mc_ocal_mean(&s->ocal, off) || !plausible(c, off)) {
+        return MC_OFFSETS_FAILED;
+    }
+    for (int k = 0; k < 3; ++k) {
+        s->offset[k] = off[k];
+    }
+    return MC_OFFSETS_DONE;
+}
+
+bool mc_offsets_at_speed(mc_offsets_t *s, const mc_offsets_cfg_t *c, float omega, mc_ab_t *di)
+{
+    float off[3];
+    const bool ok = mc_ocal_periodic(&s->ocal, omega, c->ts, off) && plausible(c, off);
+    /* once: the samples belong to this enable's calibration, not to a later catch (a recovery
+     * at another speed would pair them at the wrong lag) */
+    mc_ocal_reset(&s->ocal);
+    if (!ok) {
+        *di = (mc_ab_t){0.0f, 0.0f};
+        return false;
+    }
+    const float k = c->amps_per_count;
+    const mc_abc_t d = {(s->offset[0] - off[0]) * k, (s->offset[1] - off[1]) * k, (s->offset[2] - off[2]) * k};
+    for (int j = 0; j < 3; ++j) {
+        s->offset[j] = off[j];
+    }
+    *di = mc_clarke(d);
+    s->moved = true;
     return true;
 }

@@ -423,3 +423,24 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         return s->status;
     }
 }
+
+mc_catch_outcome_t mc_catch_outcome(mc_ip_status_t st, bool moving, bool recovering, bool finds_angle)
+{
+    if (st == MC_IP_FAILED) {
+        return MC_CATCH_NO_FIT;
+    }
+    if (!moving && recovering && !finds_angle) {
+        return MC_CATCH_STALE;
+    }
+    return moving ? MC_CATCH_TURNING : MC_CATCH_STANDING;
+}
+
+int mc_catch_entry_corner(const mc_catch_cfg_t *c, float theta, float omega, float vdc, float u_land)
+{
+    if (!(vdc > 0.0f) || !(fabsf(omega) * c->psi_pm > u_land)) {
+        return -1;
+    }
+    /* the sensor's angle is a period old: the middle of the period after the next sample */
+    const float s = omega < 0.0f ? -1.0f : 1.0f;
+    return mc_svpwm_corner_near(theta + 2.0f * omega * c->ts + s * 2.3561945f);
+}

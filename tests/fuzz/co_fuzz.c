@@ -110,7 +110,7 @@ static void set_inputs(uint8_t sel)
     const mc_drive_blk_t *b = &R.d.cfg->blk;
     static const float vdc[4] = {300.0f, 0.0f, 480.0f, 200.0f};
     for (int k = 0; k < 3; ++k) {
-        R.adc.sample.i[k] = (uint16_t)(b->offset_nominal + 0.5f) + (uint16_t)((sel >> 2) & 1u) * (uint16_t)(k * 40);
+        R.adc.sample.i[k] = (uint16_t)(b->offs.nominal + 0.5f) + (uint16_t)((sel >> 2) & 1u) * (uint16_t)(k * 40);
     }
     R.adc.sample.vdc = (uint16_t)(vdc[sel & 3u] / b->volts_per_count + 0.5f);
 }

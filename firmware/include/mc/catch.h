@@ -156,4 +156,46 @@ bool mc_catch_start(mc_catch_t *s, const mc_catch_cfg_t *cfg);
  * takes over with that vector acting until its own first duties. */
 mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty, bool *off);
 
+/* The drive's side of the catch (startup.c). */
+
+/* What a finished catch means for the drive. */
+typedef enum {
+    MC_CATCH_TURNING = 0,   /* RUN from the caught angle and speed (the field-weakening entry
+                               first, mc/fw_entry.h)                                            */
+    MC_CATCH_STANDING,      /* below omega_min: the standstill start (Step I, or RUN from the
+                               angle given with the enable)                                     */
+    MC_CATCH_NO_FIT,        /* FAILED (no sign, or (C.1) does not fit): MC_FAULT_INIT_POS      */
+    MC_CATCH_STALE          /* a recovery that finds the rotor standing has no angle to go on
+                               with (the one given with the enable is stale) and no start that
+                               finds one: the reason that started it stands                     */
+} mc_catch_outcome_t;
+
+/* st: the program's last status (DONE or FAILED); moving: its verdict; recovering: the catch
+ * restarted after a running fault (protection.lock_action = recover); finds_angle: the standstill
+ * start is the three-step one (it finds the angle itself). */
+mc_catch_outcome_t mc_catch_outcome(mc_ip_status_t st, bool moving, bool recovering, bool finds_angle);
+
+/* A RUN entry at speed, the drive's state: the catch's, or an angle-sensor drive's above the
+ * uncontrolled-generation speed (which needs no catch, but waits as it does (C.5) for a diode
+ * pulse's low and latches the entry's first corner as (C.6) does). */
+typedef struct {
+    bool corner;            /* the corner is latched (mc_catch_entry_corner) with the outputs off:
+                               it acts with them from the entry on                              */
+    bool gate_on_next;      /* RUN's first duties were latched with the outputs off: they come on
+                               with them at the next period's start                             */
+} mc_catch_entry_t;
+
+/* An angle-sensor drive waits (outputs off), at most the catch's longest wait (waited periods so
+ * far), for a diode pulse's low (mc_catch_at_low) before it enters RUN. */
+static inline bool mc_catch_sensor_waits(const mc_catch_cfg_t *c, uint32_t waited, mc_ab_t i_ab)
+{
+    return waited < c->n_wait_max && !mc_catch_at_low(c, i_ab);
+}
+
+/* The corner of the hexagon the field-weakening entry would start with, for a rotor at theta
+ * [rad, a period old] turning at omega [rad/s el]: the angle + sign(omega) 135 deg in the middle
+ * of the period after the next sample, as (C.6). -1 (none) where the entry will not run: the flux
+ * psi_pm can be held with u_land [V] (mc/fw_entry.h), or no link voltage. */
+int mc_catch_entry_corner(const mc_catch_cfg_t *c, float theta, float omega, float vdc, float u_land);
+
 #endif

@@ -8,6 +8,7 @@
 #include "mc/current_ctrl.h"
 #include "mc/deadtime.h"
 #include "mc/filters.h"
+#include "mc/fw_entry.h"
 #include "mc/handover.h"
 #include "mc/injection.h"
 #include "mc/initpos.h"
@@ -15,6 +16,8 @@
 #include "mc/params.h"
 #include "mc/offset_cal.h"
 #include "mc/polarity.h"
+#include "mc/polcheck.h"
+#include "mc/protect.h"
 #include "mc/pulse3.h"
 #include "mc/sequencer.h"
 #include "mc/speed_ctrl.h"
@@ -102,13 +105,9 @@ typedef struct {
 typedef struct {
     float ts;
     int   pole_pairs;
-    float amps_per_count, volts_per_count, offset_nominal, offset_tol;   /* [A, V, counts]  */
-    int32_t adc_max;             /* the ADC's upper rail [counts]                            */
-    float i_trip, vdc_min, vdc_max;
+    float volts_per_count;       /* [V / count]                                              */
     float i_ref_max, i_slew;     /* [A], [A/s]                                               */
-    float fwe_i_stop;            /* the field-weakening entry law hands over at this |i|: 1.1 i_max [A] */
     float u_loop;                /* the current loop's voltage circle / (vdc/sqrt3): control.u_loop */
-    uint32_t cal_samples;
     float step3_speed_tol;       /* [rad/s el]                                               */
     uint32_t step3_hold;         /* [periods]                                                */
     bool  inject, three_step, ip1_pulse3, ip2_dvi;
@@ -116,27 +115,6 @@ typedef struct {
     bool  cc_map;               /* the current loop's decoupling from the flux map (src.model) */
     mc_biquad_t notch;           /* at the injection frequency, state at rest                 */
     mc_lpf1_t step3_lpf;         /* Step III's |omega_hat| low-pass (50 Hz), state at rest     */
-    float avg_k;                 /* the detectors' 20 Hz first-order low-pass coefficient      */
-    /* protection (protect.c): limits in SI, persistence in periods (0: detector off) */
-    float overspeed;             /* [rad/s el]                                               */
-    float i_sum_tol, track_err, lock_tol, lock_floor, stall_speed, stall_torque;
-    float resid_v, resid_w_coef;  /* [V], [V s/rad]: threshold resid_v + resid_w_coef |w|   */
-    uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n;
-    uint32_t accel_n;            /* torque plausibility persistence [periods] (0: off)        */
-    uint32_t jump_n;             /* loss of lock, fast path: persistence [periods] (0: off)   */
-    float jump;                  /* ... its threshold on |theta_raw - theta| [rad]             */
-    float accel_torque;          /* |T_ref| from which it looks [N m]                         */
-    float accel_per_nm;          /* 0.5 p / J: half the acceleration a torque gives [rad/s^2 el per N m] */
-    bool recover;                /* protection.lock_action = recover (sensorless only)          */
-    bool hold_fw;                /* protection.overspeed_action = hold_fw                       */
-    bool pol_check, pol_at_start;  /* protection.polarity_check                                */
-    float pol_bias;              /* [A]                                                         */
-    float pol_log_ratio;         /* ln (l_dd(-I_b) / l_dd(+I_b))^2 from the map (0: unknown)    */
-    uint32_t pol_settle_n, pol_measure_n;   /* [periods]                                      */
-    uint32_t pol_start_n;        /* at_start: this long into RUN (the estimate settled first)   */
-    float pol_w_scale;           /* 10 deg / speed tolerance: a speed drift in "angle" units    */
-    float ug_coef;               /* sqrt3 psi_pm: the line-to-line back-EMF per rad/s el [V s]  */
-    uint32_t retries, retry_reset_n;
     mc_seq_cfg_t seq;
     mc_angle_src_built_t src;    /* the selected source: its model and own configuration */
     mc_inj_cfg_t inj;
@@ -145,6 +123,10 @@ typedef struct {
     mc_polarity_cfg_t ip2;
     mc_dvi_cfg_t dvi;
     mc_catch_cfg_t fly;
+    mc_fwe_cfg_t fwe;            /* the field-weakening entry (mc/fw_entry.h)                    */
+    mc_protect_cfg_t prot;       /* protection: hard trips, detectors, reactions (mc/protect.h)  */
+    mc_polcheck_cfg_t pol;       /* the running polarity re-check (mc/polcheck.h)                */
+    mc_offsets_cfg_t offs;       /* the current offsets' calibration and scaling (mc/offset_cal.h) */
 } mc_drive_blk_t;
 
 /* A complete derived configuration: the parameters, the ISR's values and every block's
@@ -183,16 +165,11 @@ typedef struct {
     mc_drive_cmd_t cmd;          /* the ISR's copy of the command in force   */
 
     mc_seq_t seq;                /* state, init step, faults          */
-    uint32_t cal_count;
-    mc_ocal_t ocal;              /* the calibration's samples (mc/offset_cal.h)  */
-    bool offsets_moved;          /* (O.1) changed the offsets in this period      */
-    bool entry_corner;           /* an angle-sensor drive latched the entry's corner (startup.c) */
-    bool gate_on_next;           /* RUN's first duties latched with the outputs off: on at the
-                                    next period's start (a flying start at a diode pulse's low) */
-    bool fwe_active;             /* a RUN entry at speed: the flux into the voltage limit first
+    mc_offsets_t offs;           /* the current offsets and their calibration (mc/offset_cal.h) */
+    mc_catch_entry_t entry;      /* a RUN entry at speed: the corner latched, the gates' enable
+                                    next period (mc/catch.h) */
+    mc_fwe_t fwe;                /* a RUN entry at speed: the flux into the voltage limit first
                                     (mc/fw_entry.h) */
-    uint32_t fwe_n;              /* periods it has run since that entry */
-    float offset[3];             /* calibrated [counts]                      */
 
     const mc_angle_src_desc_t *src;
     mc_angle_src_state_t src_state;
@@ -200,26 +177,9 @@ typedef struct {
     mc_biquad_t notch_d, notch_q;
     mc_phase_t phase;            /* the running phase program (Step I, II) and its workspace */
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
-    struct {                     /* the plausibility detectors' state (protect.c)            */
-        uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n, accel_n, jump_n;   /* periods the condition held */
-        float w_prev, accel;                  /* last speed, its derivative low-passed [rad/s^2 el] */
-        float w_raw, err_d, err_q;            /* averages (blk.avg_k): raw speed, current error */
-        float w_dev2;                         /* mean square of the speed's swing about w    */
-        float u_d, u_q, i_d, i_q, w;          /* voltage, current, speed for the residual    */
-    } prot;
+    mc_protect_t prot;           /* protection's detectors and recoveries (mc/protect.h)      */
     uint32_t step3_count;
-    uint32_t retries;            /* recoveries since the last retry_reset_s of clean RUN      */
-    struct {                     /* the running polarity re-check (polcheck.c)                */
-        int phase;
-        uint32_t n, cnt[2];
-        float acc[2];            /* sums of the squared HF d current, +I_b and -I_b           */
-        float moved;             /* largest unsettledness during the check (see polcheck.c)  */
-        float w0;                /* speed estimate (20 Hz average) at its start [rad/s el]    */
-        float innov;             /* |raw angle - PLL angle|, 20 Hz average [rad]              */
-        uint32_t starts;         /* at_start: checks begun since the enable (at most 3)       */
-        bool unsure;             /* this RUN entry follows a 'standing' verdict of the catch's
-                                    probe that the device drop makes unsure: checked as at_start */
-    } pol;
+    mc_polcheck_t pol;           /* the running polarity re-check (mc/polcheck.h)             */
     mc_cc_t cc;
     mc_sc_t sc;
     mc_tref_t tref;

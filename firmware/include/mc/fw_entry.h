@@ -38,7 +38,7 @@
  * the circle: (F.2) with U, cos(beta) = U / (|omega| r), the more tangential the more U, so the
  * lag grows less. rho stays u_max / |omega|: the flux the references hold (control.u_margin),
  * the drive caps it at the inscribed circle's (the hexagon's sides reach no further, so beyond
- * it the lag of (F.4) may never go) and ends the law after one electrical turn (drive.c).
+ * it the lag of (F.4) may never go) and ends the law after one electrical turn (mc_fwe_step).
  * Measured on the thesis motor: the vector's stator-frame direction stays nearly fixed while the
  * flux shrinks (its rotor-frame angle falls about as fast as the rotor turns), and the catch's
  * entry instant, a diode pulse's low, puts it near a side of the hexagon, so the gain is small
@@ -57,22 +57,62 @@
 #ifndef MC_FW_ENTRY_H
 #define MC_FW_ENTRY_H
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "mc/types.h"
 
 #define MC_FWE_LAG_END 0.05f        /* [rad] the lag left to the current loop */
 #define MC_FWE_TAN_LAG_END 0.0500417f   /* tan(MC_FWE_LAG_END) */
 
-/* psi: the flux at the sample [Wb]; i: the current [A]; u_now: the voltage acting until the next
- * sample [V]; rs [ohm]; omega [rad/s el]; ts [s]; u_max: the voltage the flux is to be held with,
- * rho = u_max / |omega| [V]; vdc > 0: the modulator may overmodulate, and what it gives in a
- * direction is the hexagon's reach there (mc_svpwm_reach; sc: the rotation from this rotor frame
- * into the stator frame in the middle of the period the result acts in) [V]; vdc <= 0: a circle
- * of u_max. started: it ran in an earlier period. *u_out: the voltage for the period after [V].
- * Returns false (and *u_out = u_now) where the flux, 1.5 periods on, can be held: at once if not
- * started or without overmodulation, else once it also lags by at most MC_FWE_LAG_END; and for
- * non-finite inputs. */
-bool mc_fwe_step(mc_dq_t psi, mc_dq_t i, mc_dq_t u_now, float rs, float omega, float ts, float u_max,
-                 float vdc, mc_sincos_t sc, bool started, mc_dq_t *u_out);
+/* The entry's configuration, built in the background (mc_drive_build). */
+typedef struct {
+    float ts;        /* [s] */
+    float rs;        /* the estimator model's stator resistance [ohm] */
+    float i_stop;    /* the law has no current feedback: at this |i| the current loop takes over [A] */
+    bool overmod;    /* the loop may overmodulate (control.u_loop > 1): the voltage in a direction
+                        is the hexagon's reach there, and held flux still lagging goes on (F.4) */
+} mc_fwe_cfg_t;
+
+/* One period's inputs (rotor frame, SI). */
+typedef struct {
+    mc_dq_t psi;      /* the flux at the sample from the model psi(i) [Wb] */
+    mc_dq_t i;        /* the current at the sample, raw (an injection notch would delay it) [A] */
+    mc_dq_t u_now;    /* the voltage acting until the next sample [V] */
+    float omega;      /* [rad/s el] */
+    float u_land;     /* the voltage the flux is to be held with, rho = u_land / |omega| [V] */
+    float vdc;        /* [V]: the hexagon's size where cfg.overmod */
+    mc_sincos_t sc;   /* the rotation from this rotor frame into the stator frame in the middle of
+                         the period the result acts in (mc_svpwm_reach) */
+} mc_fwe_in_t;
+
+/* Its state: running since a RUN entry at speed (mc_fwe_begin), for n periods. */
+typedef struct {
+    bool active;
+    uint32_t n;
+} mc_fwe_t;
+
+typedef enum {
+    MC_FWE_OFF = 0,      /* not running (nothing to do for the caller)                        */
+    MC_FWE_RUNNING,      /* *u is the voltage for the next period; the current loop waits        */
+    MC_FWE_ENDED         /* ended this period after running: the loop starts again from its
+                            references                                                          */
+} mc_fwe_status_t;
+
+void mc_fwe_reset(mc_fwe_t *s);   /* not running */
+void mc_fwe_begin(mc_fwe_t *s);   /* a RUN entry that may find the rotor above the generation speed */
+static inline bool mc_fwe_active(const mc_fwe_t *s)
+{
+    return s->active;
+}
+/* One period while active: the law below, ended where it is done, at cfg.i_stop (a model error
+ * takes the flux too far) or after one electrical turn (every direction of the hexagon has
+ * passed: what it has not done by then it will not do). */
+mc_fwe_status_t mc_fwe_step(mc_fwe_t *s, const mc_fwe_cfg_t *c, const mc_fwe_in_t *in, mc_dq_t *u);
+
+/* The law alone, one period. started: it ran in an earlier period. *u_out: the voltage for the
+ * period after [V]. Returns false (and *u_out = in->u_now) where the flux, 1.5 periods on, can be
+ * held: at once if not started or without overmodulation, else once it also lags by at most
+ * MC_FWE_LAG_END; and for non-finite inputs. */
+bool mc_fwe_law(const mc_fwe_cfg_t *c, const mc_fwe_in_t *in, bool started, mc_dq_t *u_out);
 
 #endif

@@ -34,6 +34,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "mc/types.h"
+
 #define MC_OCAL_N 128u        /* samples kept: 12.8 ms at 10 kHz */
 #define MC_OCAL_MIN_PAIRS 8u
 
@@ -50,5 +52,48 @@ bool mc_ocal_mean(const mc_ocal_t *s, float off[3]);
 /* (O.1) at omega_e [rad/s el] with the period ts [s]; false (off untouched) when the kept
  * samples hold fewer than MC_OCAL_MIN_PAIRS pairs, or for a non-finite or zero speed */
 bool mc_ocal_periodic(const mc_ocal_t *s, float omega_e, float ts, float off[3]);
+
+/* The drive's offset calibration, a block around the samples above: the plain mean at every
+ * enable (the outputs off), checked against mid-scale, and (O.1) once a speed is known; and the
+ * phase currents with the offsets in force. Units: counts, A, rad/s el. */
+typedef struct {
+    uint32_t samples;             /* periods averaged (control.offset_cal_samples)             */
+    float nominal, tol;           /* mid-scale and the plausible distance from it [counts]     */
+    float amps_per_count;         /* [A / count]                                               */
+    float ts;                     /* [s]                                                        */
+} mc_offsets_cfg_t;
+
+typedef struct {
+    mc_ocal_t ocal;               /* this enable's samples                                      */
+    uint32_t count;               /* periods since the enable                                   */
+    float offset[3];              /* in force [counts]                                          */
+    bool moved;                   /* (O.1) changed them in this period (the caller clears it)   */
+} mc_offsets_t;
+
+typedef enum {
+    MC_OFFSETS_COLLECTING = 0,    /* a sample taken, more to come                               */
+    MC_OFFSETS_DONE,              /* the last sample: the mean is in force                      */
+    MC_OFFSETS_FAILED,            /* the mean is implausible (or none): nothing changed         */
+    MC_OFFSETS_COUNTING           /* done earlier: the periods since the enable go on counting  */
+} mc_offsets_status_t;
+
+/* At init: mid-scale. */
+void mc_offsets_init(mc_offsets_t *s, const mc_offsets_cfg_t *c);
+/* An enable: the calibration again (the offsets in force stay until it is done). */
+void mc_offsets_restart(mc_offsets_t *s);
+/* One period of the calibration with the outputs off: the sample raw [counts]. */
+mc_offsets_status_t mc_offsets_add(mc_offsets_t *s, const mc_offsets_cfg_t *c, const uint16_t raw[3]);
+/* Once the speed omega is known [rad/s el]: (O.1) over this enable's samples, if it applies and
+ * gives plausible offsets; then the samples are dropped (a later catch at another speed would
+ * pair them at the wrong lag). true: the offsets moved (s->moved set), *di the change of the
+ * stator-frame current this makes (new minus old) [A]; false: nothing changed, *di zero. */
+bool mc_offsets_at_speed(mc_offsets_t *s, const mc_offsets_cfg_t *c, float omega, mc_ab_t *di);
+/* The phase currents of a raw sample with the offsets in force [A]. */
+static inline mc_abc_t mc_offsets_currents(const mc_offsets_t *s, const mc_offsets_cfg_t *c, const uint16_t raw[3])
+{
+    const float k = c->amps_per_count;
+    return (mc_abc_t){((float)raw[0] - s->offset[0]) * k, ((float)raw[1] - s->offset[1]) * k,
+                      ((float)raw[2] - s->offset[2]) * k};
+}
 
 #endif

@@ -49,7 +49,7 @@ static void rig_init(rig_t *r, const char *source)
     assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_catch_on, "off", NULL));   /* straight to RUN */
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     for (int k = 0; k < 3; ++k) {
-        r->adc.sample.i[k] = (uint16_t)r->d.cfg->blk.offset_nominal;   /* zero current */
+        r->adc.sample.i[k] = (uint16_t)r->d.cfg->blk.offs.nominal;   /* zero current */
     }
     r->adc.sample.vdc = (uint16_t)lrintf(300.0f / r->d.cfg->blk.volts_per_count);
 }

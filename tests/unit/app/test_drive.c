@@ -23,7 +23,7 @@ typedef struct {
 /* ADC counts for a phase current with the drive's scaling (default 12 bit over +-25 A). */
 static uint16_t counts(const mc_drive_t *d, float amps)
 {
-    return (uint16_t)lrintf(d->cfg->blk.offset_nominal + amps / d->cfg->blk.amps_per_count);
+    return (uint16_t)lrintf(d->cfg->blk.offs.nominal + amps / d->cfg->blk.offs.amps_per_count);
 }
 
 static void set_inputs(rig_t *r, float ia, float ib, float vdc)
@@ -145,7 +145,7 @@ static void test_implausible_offset_faults(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    r.adc.sample.i[1] = (uint16_t)(r.adc.sample.i[1] + (uint16_t)(r.d.cfg->blk.offset_tol + 20.0f));
+    r.adc.sample.i[1] = (uint16_t)(r.adc.sample.i[1] + (uint16_t)(r.d.cfg->blk.offs.tol + 20.0f));
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
@@ -361,7 +361,7 @@ static void test_adc_rail_trips(void **st)
     assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_span, 30.0f, NULL));
     assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_trip, 27.2f, NULL));
     assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
-    assert_int_equal(r.d.cfg->blk.adc_max, 4095);
+    assert_int_equal(r.d.cfg->blk.prot.adc_max, 4095);
     const struct { int phase; int offset; uint16_t near, rail; } cases[] = {
         {0, +200, 4094u, 4095u},
         {1, -200, 1u, 0u},
@@ -377,26 +377,26 @@ static void test_adc_rail_trips(void **st)
         command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
         run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
-        assert_float_equal(r.d.offset[ph], (float)(mid + cases[n].offset), 1e-3f);
+        assert_float_equal(r.d.offs.offset[ph], (float)(mid + cases[n].offset), 1e-3f);
 
         /* one count inside the rail: below the trip level, no trip */
         r.adc.sample.i[ph] = cases[n].near;
-        const float i_near = ((float)cases[n].near - r.d.offset[ph]) * r.d.cfg->blk.amps_per_count;
-        assert_true(fabsf(i_near) < r.d.cfg->blk.i_trip);
+        const float i_near = ((float)cases[n].near - r.d.offs.offset[ph]) * r.d.cfg->blk.offs.amps_per_count;
+        assert_true(fabsf(i_near) < r.d.cfg->blk.prot.i_trip);
         run(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 
         /* at the rail: still below the trip level as a current, but it trips */
         r.adc.sample.i[ph] = cases[n].rail;
-        const float i_rail = ((float)cases[n].rail - r.d.offset[ph]) * r.d.cfg->blk.amps_per_count;
-        assert_true(fabsf(i_rail) < r.d.cfg->blk.i_trip);
+        const float i_rail = ((float)cases[n].rail - r.d.offs.offset[ph]) * r.d.cfg->blk.offs.amps_per_count;
+        assert_true(fabsf(i_rail) < r.d.cfg->blk.prot.i_trip);
         run(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
         assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERCURRENT);
         assert_false(hal_pwm_enabled(&r.pwm));
         const float i_tm[3] = {r.d.tm.i_abc.a, r.d.tm.i_abc.b, r.d.tm.i_abc.c};
         assert_float_equal(i_tm[ph], i_rail, 1e-4f);
-        assert_true(fabsf(i_tm[ph]) < r.d.cfg->blk.i_trip);
+        assert_true(fabsf(i_tm[ph]) < r.d.cfg->blk.prot.i_trip);
         assert_duties_sane(&r);
     }
 }
@@ -659,7 +659,7 @@ static void test_param_write_rule_follows(void **st)
     assert_true(r.d.cfg->p.i_rated == 12.0f);
     assert_true(mc_param_is_auto(&r.d.cfg->p, MC_PARAM_i_trip));
     assert_float_equal(r.d.cfg->p.i_trip, 18.0f, 1e-5f);
-    assert_float_equal(r.d.cfg->blk.i_trip, 18.0f, 1e-5f);
+    assert_float_equal(r.d.cfg->blk.prot.i_trip, 18.0f, 1e-5f);
     assert_float_equal(r.d.cfg->p.i_max, 12.0f, 1e-6f);   /* control.i_max_a follows too */
     /* a trip level set by the user stays where it was put */
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_trip, 16.0f, &err));
@@ -727,7 +727,7 @@ static void test_protect_current_sum(void **st)
     rig_enabled(&r);
     const int n = (int)lrintf(r.d.cfg->p.i_sum_time / r.d.cfg->p.ts);
     /* just inside the tolerance: never */
-    r.adc.sample.i[2] = (uint16_t)(r.adc.sample.i[2] + (uint16_t)(0.8f * r.d.cfg->p.i_sum_tol / r.d.cfg->blk.amps_per_count));
+    r.adc.sample.i[2] = (uint16_t)(r.adc.sample.i[2] + (uint16_t)(0.8f * r.d.cfg->p.i_sum_tol / r.d.cfg->blk.offs.amps_per_count));
     assert_int_equal(periods_to_fault(&r, 10 * n, false), -1);
     /* beyond it */
     r.adc.sample.i[2] = counts(&r.d, 1.5f * r.d.cfg->p.i_sum_tol);

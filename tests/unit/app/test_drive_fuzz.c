@@ -148,8 +148,8 @@ static void check_outputs(const rig_t *r)
 
 static uint16_t to_counts(const rig_t *r, double amps)
 {
-    const double c = (double)r->d.cfg->blk.offset_nominal + amps / (double)r->d.cfg->blk.amps_per_count;
-    const double hi = (double)r->d.cfg->blk.adc_max;
+    const double c = (double)r->d.cfg->blk.offs.nominal + amps / (double)r->d.cfg->blk.offs.amps_per_count;
+    const double hi = (double)r->d.cfg->blk.prot.adc_max;
     if (!(c >= 0.0)) {
         return 0u;   /* also NaN */
     }
@@ -173,7 +173,7 @@ static void sample(rig_t *r)
     r->adc.sample.i[1] = to_counts(r, ib);
     r->adc.sample.i[2] = to_counts(r, -ia - ib);
     const double v = r->vdc / (double)r->d.cfg->blk.volts_per_count;
-    r->adc.sample.vdc = (uint16_t)(v > (double)r->d.cfg->blk.adc_max ? (double)r->d.cfg->blk.adc_max : lrint(v));
+    r->adc.sample.vdc = (uint16_t)(v > (double)r->d.cfg->blk.prot.adc_max ? (double)r->d.cfg->blk.prot.adc_max : lrint(v));
     if (r->rail_phase >= 0) {
         r->adc.sample.i[r->rail_phase] = r->rail_count;
     }
@@ -337,7 +337,7 @@ static void run_config(rig_t *r, bool must_refuse)
         period(r);
         const mc_state_t before = r->d.seq.state;
         r->rail_phase = (int)rnd(3u);
-        r->rail_count = rnd(2u) ? 0u : (uint16_t)r->d.cfg->blk.adc_max;
+        r->rail_count = rnd(2u) ? 0u : (uint16_t)r->d.cfg->blk.prot.adc_max;
         period(r);
         r->rail_phase = -1;
         if (before == MC_STATE_RUN || before == MC_STATE_INIT_POS) {

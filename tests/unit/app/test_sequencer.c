@@ -150,7 +150,7 @@ typedef struct {
 
 static uint16_t counts(const mc_drive_t *d, double amps)
 {
-    return (uint16_t)lrint(d->cfg->blk.offset_nominal + amps / d->cfg->blk.amps_per_count);
+    return (uint16_t)lrint(d->cfg->blk.offs.nominal + amps / d->cfg->blk.offs.amps_per_count);
 }
 
 /* One PWM period of a salient RL machine at standstill with the latched duties (exact enough

@@ -135,7 +135,7 @@ static inline void drive_inputs(float vdc)
 {
     const mc_drive_blk_t *b = &rig.d.cfg->blk;
     for (int k = 0; k < 3; ++k) {
-        rig.adc.sample.i[k] = (uint16_t)(b->offset_nominal + 0.5f);
+        rig.adc.sample.i[k] = (uint16_t)(b->offs.nominal + 0.5f);
     }
     rig.adc.sample.vdc = (uint16_t)(vdc / b->volts_per_count + 0.5f);
 }

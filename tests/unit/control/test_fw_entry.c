@@ -29,6 +29,16 @@ static mc_dq_t flux(mc_dq_t i)
     return (mc_dq_t){(float)(LD * i.d + PSI), (float)(LQ * i.q)};
 }
 
+/* The law alone (mc_fwe_law) with its inputs spelled out: a circle of u_max, or with vdc > 0 the
+ * hexagon of vdc (overmodulation). */
+static bool law(mc_dq_t psi, mc_dq_t i, mc_dq_t u_now, float rs, float omega, float ts, float u_max, float vdc,
+                mc_sincos_t sc, bool started, mc_dq_t *u)
+{
+    const mc_fwe_cfg_t c = {.ts = ts, .rs = rs, .i_stop = INFINITY, .overmod = vdc > 0.0f};
+    const mc_fwe_in_t in = {.psi = psi, .i = i, .u_now = u_now, .omega = omega, .u_land = u_max, .vdc = vdc, .sc = sc};
+    return mc_fwe_law(&c, &in, started, u);
+}
+
 /* The first vector from the magnet's flux, without overmodulation: |u| = u_max at 90 deg + beta
  * ahead of the flux with cos(beta) = u_max / |omega psi| (F.2), (F.3); mirrored for the other
  * direction. With it: |u| the hexagon's reach in the vector's direction, and (F.2) with that. */
@@ -37,18 +47,18 @@ static void test_first_vector(void **st)
     (void)st;
     const mc_dq_t i0 = {0.0f, 0.0f}, u0 = {0.0f, 0.0f};
     mc_dq_t u;
-    assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 0.0f, SC0, true, &u));
+    assert_true(law(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 0.0f, SC0, true, &u));
     const double beta = acos(UMAX / (W * PSI));
     assert_near(atan2(u.q, u.d), PI_D / 2.0 + beta, 1e-4);   /* 140 deg */
     assert_near(hypot(u.d, u.q), UMAX, 1e-3);
-    assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)-W, 0.0f, (float)UMAX, 0.0f, SC0, false, &u));
+    assert_true(law(flux(i0), i0, u0, 0.0f, (float)-W, 0.0f, (float)UMAX, 0.0f, SC0, false, &u));
     assert_near(atan2(u.q, u.d), -(PI_D / 2.0 + beta), 1e-4);
     assert_near(hypot(u.d, u.q), UMAX, 1e-3);
     /* overmodulation, at two rotor angles: the reach there, and (F.2) with it */
     for (int k = 0; k < 2; ++k) {
         const double th = k * 0.5;
         const mc_sincos_t sc = {(float)sin(th), (float)cos(th)};
-        assert_true(mc_fwe_step(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 300.0f, sc, true, &u));
+        assert_true(law(flux(i0), i0, u0, 0.0f, (float)W, 0.0f, (float)UMAX, 300.0f, sc, true, &u));
         const double a = atan2(u.q, u.d), m = hypot(u.d, u.q);
         assert_near(m, hex_reach(cos(a + th), sin(a + th)), 1e-2);
         assert_true(m > UMAX - 1e-3);
@@ -68,15 +78,15 @@ static void test_held_and_landing(void **st)
     mc_dq_t u;
     /* held (0.98 rho), lagging 0.2 rad: tangential, |u| the hexagon's reach there */
     const mc_dq_t ph = {0.98f * rho * cosf(lag), -0.98f * rho * sinf(lag)};
-    assert_true(mc_fwe_step(ph, z, z, 0.0f, (float)W, 0.0f, (float)UMAX, 300.0f, SC0, true, &u));
+    assert_true(law(ph, z, z, 0.0f, (float)W, 0.0f, (float)UMAX, 300.0f, SC0, true, &u));
     assert_near(hypot(u.d, u.q), hex_reach(u.d, u.q), 1e-2);
     /* without overmodulation nothing takes the lag back: held is done */
-    assert_false(mc_fwe_step(ph, z, z, 0.0f, (float)W, 0.0f, (float)UMAX, 0.0f, SC0, true, &u));
+    assert_false(law(ph, z, z, 0.0f, (float)W, 0.0f, (float)UMAX, 0.0f, SC0, true, &u));
     assert_near(u.d * ph.d + u.q * ph.q, 0.0, 1e-3);   /* no radial part */
     /* 0.3 % beyond rho: the radial part covers exactly what is left in one period */
     const mc_dq_t pn = {1.003f * rho, 0.0f};
     const mc_dq_t hold = {0.0f, (float)W * pn.d};   /* j omega psi: the prediction stays put */
-    assert_true(mc_fwe_step(pn, z, hold, 0.0f, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
+    assert_true(law(pn, z, hold, 0.0f, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
     const double radial = -(u.d * pn.d + u.q * pn.q) / hypot(pn.d, pn.q);
     assert_near(radial * TS, 0.003 * rho, 2e-6);
     assert_near(hypot(u.d, u.q), UMAX, 1e-3);
@@ -91,16 +101,16 @@ static void test_done_and_bad_input(void **st)
     const mc_dq_t i = {-12.0f, 0.0f};
     const mc_dq_t u0 = {(float)(RS * i.d), (float)(W * (LD * i.d + PSI))};
     mc_dq_t u;
-    assert_false(mc_fwe_step(flux(i), i, u0, (float)RS, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
+    assert_false(law(flux(i), i, u0, (float)RS, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
     assert_near(u.d, u0.d, 0.0);
     assert_near(u.q, u0.q, 0.0);
     const mc_dq_t z = {0.0f, 0.0f};
     /* below the generation speed under V(000) the flux lags (4 deg in 1.5 periods): not a start */
-    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, (float)(0.6 * W), (float)TS, (float)UMAX, 0.0f, SC0, false, &u));
-    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, NAN, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
+    assert_false(law(flux(z), z, z, (float)RS, (float)(0.6 * W), (float)TS, (float)UMAX, 0.0f, SC0, false, &u));
+    assert_false(law(flux(z), z, z, (float)RS, NAN, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
     const mc_dq_t bad = {NAN, 0.0f};
-    assert_false(mc_fwe_step(bad, z, z, (float)RS, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
-    assert_false(mc_fwe_step(flux(z), z, z, (float)RS, (float)W, (float)TS, 0.0f, 0.0f, SC0, true, &u));
+    assert_false(law(bad, z, z, (float)RS, (float)W, (float)TS, (float)UMAX, 0.0f, SC0, true, &u));
+    assert_false(law(flux(z), z, z, (float)RS, (float)W, (float)TS, 0.0f, 0.0f, SC0, true, &u));
 }
 
 /* Closed loop on the linear machine (Rs = 0, the law's voltage acting at once, fine steps): the
@@ -123,7 +133,7 @@ static void test_min_lag_path(void **st)
             const double th = w * k * h;
             const mc_sincos_t sc = {(float)sin(th), (float)cos(th)};
             mc_dq_t u;
-            on = mc_fwe_step((mc_dq_t){(float)pd, (float)pq}, i, z, 0.0f, (float)w, 0.0f, (float)UMAX, vdc, sc, k > 0, &u);
+            on = law((mc_dq_t){(float)pd, (float)pq}, i, z, 0.0f, (float)w, 0.0f, (float)UMAX, vdc, sc, k > 0, &u);
             if (!on) {
                 break;
             }
@@ -146,6 +156,61 @@ static void test_min_lag_path(void **st)
     }
 }
 
+/* The block's life cycle (begin / step / active): off until begun, then the law's voltage each
+ * period until it is done, the current reaches cfg.i_stop or one electrical turn has passed;
+ * ENDED tells the caller to restart its loop only when the entry ran at least a period. */
+static void test_block_life_cycle(void **st)
+{
+    (void)st;
+    const mc_fwe_cfg_t c = {.ts = (float)TS, .rs = (float)RS, .i_stop = 14.6f, .overmod = true};
+    const mc_dq_t z = {0.0f, 0.0f};
+    /* the magnet's flux at 1500 rpm, no current: not holdable, the law runs */
+    mc_fwe_in_t in = {.psi = flux(z), .i = z, .u_now = z, .omega = (float)W, .u_land = (float)UMAX, .vdc = 300.0f,
+                      .sc = SC0};
+    mc_fwe_t s;
+    mc_fwe_reset(&s);
+    mc_dq_t u = {1.0f, 2.0f};
+    assert_false(mc_fwe_active(&s));
+    assert_int_equal(mc_fwe_step(&s, &c, &in, &u), MC_FWE_OFF);
+    assert_near(u.d, 1.0f, 0.0);   /* untouched: nothing ran */
+    mc_fwe_begin(&s);
+    assert_true(mc_fwe_active(&s));
+    mc_dq_t u_law;
+    assert_true(mc_fwe_law(&c, &in, false, &u_law));
+    assert_int_equal(mc_fwe_step(&s, &c, &in, &u), MC_FWE_RUNNING);
+    assert_near(u.d, u_law.d, 0.0);   /* the law's own voltage */
+    assert_near(u.q, u_law.q, 0.0);
+    assert_int_equal(s.n, 1);
+    assert_int_equal(mc_fwe_step(&s, &c, &in, &u), MC_FWE_RUNNING);
+    /* the current at i_stop: the loop takes over, whatever the law would do */
+    in.i = (mc_dq_t){-14.6f, 0.0f};
+    assert_int_equal(mc_fwe_step(&s, &c, &in, &u), MC_FWE_ENDED);
+    assert_false(mc_fwe_active(&s));
+    assert_int_equal(mc_fwe_step(&s, &c, &in, &u), MC_FWE_OFF);
+    /* one electrical turn: W ts per period, so 2 pi / (W ts) periods at most */
+    in.i = z;
+    mc_fwe_begin(&s);
+    const int turn = (int)ceil(2.0 * PI_D / (W * TS));
+    int k = 0;
+    while (mc_fwe_step(&s, &c, &in, &u) == MC_FWE_RUNNING) {
+        ++k;
+        assert_true(k <= turn + 1);
+    }
+    assert_false(mc_fwe_active(&s));
+    assert_true(k >= turn - 1);
+    /* begun where the flux can be held (below the generation speed): it ends at once, and as it
+     * never ran the loop is not restarted (OFF, not ENDED) */
+    in.omega = (float)(0.5 * W);
+    mc_fwe_begin(&s);
+    assert_int_equal(mc_fwe_step(&s, &c, &in, &u), MC_FWE_OFF);
+    assert_false(mc_fwe_active(&s));
+    /* reset stops it */
+    in.omega = (float)W;
+    mc_fwe_begin(&s);
+    mc_fwe_reset(&s);
+    assert_int_equal(mc_fwe_step(&s, &c, &in, &u), MC_FWE_OFF);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -153,6 +218,7 @@ int main(void)
         cmocka_unit_test(test_held_and_landing),
         cmocka_unit_test(test_done_and_bad_input),
         cmocka_unit_test(test_min_lag_path),
+        cmocka_unit_test(test_block_life_cycle),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -4,6 +4,7 @@
 
 #include "core_test.h"
 #include "mc/offset_cal.h"
+#include "mc/transforms.h"
 
 #define APC 0.0122   /* A per count: a 50 A span at 12 bits */
 #define PI_D 3.14159265358979323846
@@ -121,6 +122,84 @@ static void test_declines(void **st)
     assert_false(mc_ocal_periodic(&s, 785.4f, 1e-4f, per));
 }
 
+/* The drive's calibration block: the plain mean at the enable (checked against mid-scale),
+ * then (O.1) once the speed is known, once; the currents with the offsets in force. */
+static void test_block(void **st)
+{
+    (void)st;
+    const mc_offsets_cfg_t c = {.samples = 128u, .nominal = 2048.0f, .tol = 204.8f, .amps_per_count = (float)APC,
+                                .ts = 1e-4f};
+    mc_offsets_t s;
+    mc_offsets_init(&s, &c);
+    const uint16_t mid[3] = {2048u, 2048u, 2048u};
+    const mc_abc_t i0 = mc_offsets_currents(&s, &c, mid);
+    assert_true(i0.a == 0.0f && i0.b == 0.0f && i0.c == 0.0f);
+    /* the diodes' current at 1500 rpm: the mean is biased, (O.1) is not */
+    const double omega = 1500.0 / 60.0 * 2.0 * PI_D * 5.0;
+    mc_ocal_t ref;
+    fill(&ref, omega, 1e-4, 128u, 1.0, 0.0);
+    mc_offsets_restart(&s);
+    unsigned st_n = 0u;
+    for (uint32_t j = 0u; j < c.samples; ++j) {
+        const uint16_t *raw = ref.buf[j];
+        const mc_offsets_status_t r = mc_offsets_add(&s, &c, raw);
+        assert_int_equal(r, j + 1u < c.samples ? MC_OFFSETS_COLLECTING : MC_OFFSETS_DONE);
+        st_n++;
+    }
+    float mean[3];
+    assert_true(mc_ocal_mean(&ref, mean));
+    for (int k = 0; k < 3; ++k) {
+        assert_float_equal(s.offset[k], mean[k], 0.0f);
+    }
+    assert_true(worst_err_a(s.offset) > 0.1);   /* the plain mean is off */
+    assert_int_equal(mc_offsets_add(&s, &c, mid), MC_OFFSETS_COUNTING);
+    assert_int_equal(s.count, st_n + 1u);
+    const uint16_t probe[3] = {2100u, 2000u, 2048u};
+    const mc_abc_t i_old = mc_offsets_currents(&s, &c, probe);
+    mc_ab_t di;
+    assert_false(s.moved);
+    assert_true(mc_offsets_at_speed(&s, &c, (float)omega, &di));
+    assert_true(s.moved);
+    assert_true(worst_err_a(s.offset) < 0.05);
+    /* di: the change of the stator-frame current the new offsets make */
+    const mc_abc_t i_new = mc_offsets_currents(&s, &c, probe);
+    const mc_ab_t ab_old = mc_clarke(i_old), ab_new = mc_clarke(i_new);
+    assert_near(di.alpha, ab_new.alpha - ab_old.alpha, 1e-4);
+    assert_near(di.beta, ab_new.beta - ab_old.beta, 1e-4);
+    assert_true(fabsf(di.alpha) + fabsf(di.beta) > 0.05f);
+    /* once: the samples are gone */
+    s.moved = false;
+    const float after[3] = {s.offset[0], s.offset[1], s.offset[2]};
+    assert_false(mc_offsets_at_speed(&s, &c, (float)omega, &di));
+    assert_true(di.alpha == 0.0f && di.beta == 0.0f && !s.moved);
+    for (int k = 0; k < 3; ++k) {
+        assert_float_equal(s.offset[k], after[k], 0.0f);
+    }
+    /* an implausible mean (a channel 300 counts off mid-scale): FAILED, nothing changes */
+    mc_offsets_restart(&s);
+    const uint16_t far[3] = {2348u, 2048u, 2048u};
+    for (uint32_t j = 0u; j + 1u < c.samples; ++j) {
+        assert_int_equal(mc_offsets_add(&s, &c, far), MC_OFFSETS_COLLECTING);
+    }
+    assert_int_equal(mc_offsets_add(&s, &c, far), MC_OFFSETS_FAILED);
+    for (int k = 0; k < 3; ++k) {
+        assert_float_equal(s.offset[k], after[k], 0.0f);
+    }
+    /* (O.1) beyond the plausible range does not apply either */
+    mc_offsets_restart(&s);
+    for (uint32_t j = 0u; j < c.samples; ++j) {
+        (void)mc_offsets_add(&s, &c, far);
+    }
+    assert_false(mc_offsets_at_speed(&s, &c, (float)omega, &di));
+    /* at a standstill (no speed) the mean stays */
+    mc_offsets_init(&s, &c);
+    for (uint32_t j = 0u; j < c.samples; ++j) {
+        assert_int_not_equal(mc_offsets_add(&s, &c, mid), MC_OFFSETS_FAILED);
+    }
+    assert_false(mc_offsets_at_speed(&s, &c, 0.0f, &di));
+    assert_float_equal(s.offset[0], 2048.0f, 0.0f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -128,6 +207,7 @@ int main(void)
         cmocka_unit_test(test_diode_current),
         cmocka_unit_test(test_ring),
         cmocka_unit_test(test_declines),
+        cmocka_unit_test(test_block),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -16,6 +16,7 @@
 
 #include "mc/angle.h"
 #include "mc/catch.h"
+#include "mc/svpwm.h"
 
 #define TS 1e-4
 #define PSI 0.34305
@@ -297,6 +298,45 @@ static void test_nan_currents(void **st)
     assert_true(s == MC_IP_FAILED || !c.moving);
 }
 
+/* The drive's side: what a finished catch means, an angle-sensor drive's wait for a diode pulse's
+ * low and the entry corner it latches (C.6): the corner within 30 deg of the sensor's angle
+ * + sign(omega) 135 deg two periods on, none where the flux can be held. */
+static void test_drive_side(void **st)
+{
+    (void)st;
+    assert_int_equal(mc_catch_outcome(MC_IP_FAILED, true, false, false), MC_CATCH_NO_FIT);
+    assert_int_equal(mc_catch_outcome(MC_IP_FAILED, false, true, false), MC_CATCH_NO_FIT);
+    assert_int_equal(mc_catch_outcome(MC_IP_DONE, true, true, false), MC_CATCH_TURNING);
+    assert_int_equal(mc_catch_outcome(MC_IP_DONE, false, false, false), MC_CATCH_STANDING);
+    assert_int_equal(mc_catch_outcome(MC_IP_DONE, false, true, false), MC_CATCH_STALE);
+    assert_int_equal(mc_catch_outcome(MC_IP_DONE, false, true, true), MC_CATCH_STANDING);
+    const mc_catch_cfg_t c = cfg_for(10.5e-3, 12.9e-3);
+    const mc_ab_t low = {0.3f + 0.3f * 3.3f, 0.0f}, high = {0.0f, -1.4f - 0.01f};
+    assert_true(mc_catch_sensor_waits(&c, 0u, high));
+    assert_true(mc_catch_sensor_waits(&c, c.n_wait_max - 1u, high));
+    assert_false(mc_catch_sensor_waits(&c, c.n_wait_max, high));   /* at most the catch's wait */
+    assert_false(mc_catch_sensor_waits(&c, 0u, low));
+    /* 1500 rpm on the thesis motor, 300 V, landing at 0.95 of the inscribed circle */
+    const float u_land = (float)(VDC / sqrt(3.0) * 0.95);
+    const double w = 1500.0 / 60.0 * 2.0 * PI_D * 5.0;
+    for (int dir = -1; dir <= 1; dir += 2) {
+        for (int j = 0; j < 12; ++j) {
+            const double th = -PI_D + (j + 0.37) * PI_D / 6.0;
+            const int k = mc_catch_entry_corner(&c, (float)th, (float)(dir * w), (float)VDC, u_land);
+            assert_true(k >= 0 && k < 6);
+            mc_ab_t e;
+            (void)mc_svpwm_corner(k, &e);
+            const double want = th + 2.0 * dir * w * TS + dir * 0.75 * PI_D;
+            const double err = remainder(atan2(e.beta, e.alpha) - want, 2.0 * PI_D);
+            assert_true(fabs(err) <= PI_D / 6.0 + 1e-5);
+        }
+    }
+    /* holdable (below the generation speed), no link, NaN: none */
+    assert_int_equal(mc_catch_entry_corner(&c, 0.0f, (float)(0.5 * w), (float)VDC, u_land), -1);
+    assert_int_equal(mc_catch_entry_corner(&c, 0.0f, (float)w, 0.0f, u_land), -1);
+    assert_int_equal(mc_catch_entry_corner(&c, 0.0f, NAN, (float)VDC, u_land), -1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -307,6 +347,7 @@ int main(void)
         cmocka_unit_test(test_known_vector_refuses_a_far_model),
         cmocka_unit_test(test_bad_config),
         cmocka_unit_test(test_nan_currents),
+        cmocka_unit_test(test_drive_side),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

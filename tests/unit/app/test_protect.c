@@ -1,0 +1,246 @@
+/* Protection on its own (mc/protect.h): the hard trips and sensor checks, the running detectors
+ * and the reactions, each on a state and a configuration of its own, no drive. */
+#include <math.h>
+
+#include "../mc_test.h"
+#include "mc/protect.h"
+#include "mc/sequencer.h"
+
+#define TS 1e-4f
+
+/* a 5-pole-pair machine (the thesis motor's entries) on 12-bit ADCs, every detector on */
+static mc_protect_cfg_t config(void)
+{
+    return (mc_protect_cfg_t){.ts = TS, .pole_pairs = 5, .adc_max = 4095, .i_trip = 18.0f, .vdc_min = 100.0f,
+                              .vdc_max = 400.0f, .i_sum_tol = 1.0f, .i_sum_n = 10u, .overspeed = 1000.0f,
+                              .track_err = 2.0f, .track_n = 200u, .lock_tol = 0.3f, .lock_floor = 20.0f,
+                              .lock_n = 200u, .jump_n = 20u, .jump = 0.5f, .stall_speed = 10.0f,
+                              .stall_torque = 9.0f, .stall_n = 300u, .accel_n = 100u, .accel_torque = 5.0f,
+                              .accel_per_nm = 100.0f, .resid_v = 20.0f, .resid_w_coef = 0.05f, .resid_n = 300u,
+                              .avg_k = 1.0f - expf(-6.2831853f * 20.0f * TS), .rs = 0.4f, .ld = 10.5e-3f,
+                              .lq = 12.9e-3f, .psi_pm = 0.34305f, .recover = true, .hold_fw = true,
+                              .ug_coef = 1.7320508f * 0.34305f, .retries = 2u, .retry_reset_n = 100u};
+}
+
+static hal_adc_sample_t mid(void)
+{
+    return (hal_adc_sample_t){.i = {2048u, 2048u, 2048u}, .vdc = 2000u, .overrun = false};
+}
+
+/* The hard trips in their order (over-current before the link voltage before the sensors), the
+ * ADC rails as over-current, and the sum check counting its periods even when another trips. */
+static void test_hard_trips(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    mc_protect_t s = {0};
+    mc_protect_reset(&s, &c, 0.0f);
+    hal_adc_sample_t raw = mid();
+    const mc_abc_t zero = {0.0f, 0.0f, 0.0f};
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), 0u);
+    const mc_abc_t over = {18.5f, -9.0f, -9.5f};
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, over, 300.0f), MC_FAULT_OVERCURRENT);
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, over, 500.0f), MC_FAULT_OVERCURRENT);
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 401.0f), MC_FAULT_OVERVOLTAGE);
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 99.0f), MC_FAULT_UNDERVOLTAGE);
+    for (int k = 0; k < 3; ++k) {
+        raw = mid();
+        raw.i[k] = 0u;
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), MC_FAULT_OVERCURRENT);
+        raw.i[k] = 4095u;
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), MC_FAULT_OVERCURRENT);
+        raw.i[k] = 4094u;
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), 0u);
+    }
+    raw = mid();
+    raw.overrun = true;
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), MC_FAULT_OVERRUN);
+    /* the currents do not sum to zero: a fault after i_sum_n periods in a row, not before; the
+     * count goes on under a period's over-voltage trip */
+    raw = mid();
+    const mc_abc_t off = {1.5f, 0.0f, 0.0f};
+    for (uint32_t n = 1u; n < c.i_sum_n - 1u; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+    }
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 401.0f), MC_FAULT_OVERVOLTAGE);
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), MC_FAULT_CURRENT_SENSOR);
+    /* one good period starts it again */
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), 0u);
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+}
+
+/* A steady state that fits the model (5.1) at speed w: i_q flowing, the voltage the machine needs. */
+static mc_protect_in_t steady(const mc_protect_cfg_t *c, float w, float iq)
+{
+    const mc_dq_t i = {0.0f, iq};
+    const mc_dq_t u = {-w * c->lq * iq, c->rs * iq + w * c->psi_pm};
+    return (mc_protect_in_t){.theta = 0.1f, .omega = w, .theta_raw = 0.1f, .omega_raw = w, .i_ref = i, .i_fb = i,
+                             .u_dq = u, .torque_ref = 2.0f, .speed_mode = false};
+}
+
+static uint32_t run(mc_protect_t *s, const mc_protect_cfg_t *c, const mc_protect_in_t *in, int n, bool *doubt_seen)
+{
+    uint32_t r = 0u;
+    for (int k = 0; k < n && r == 0u; ++k) {
+        bool doubt = false;
+        r = mc_protect_running(s, c, in, &doubt);
+        if (doubt_seen != NULL) {
+            *doubt_seen = *doubt_seen || doubt;
+        }
+    }
+    return r;
+}
+
+/* The running checks: quiet on a plausible steady state; over-speed (and NaN) at once, except
+ * while its reaction holds; loss of lock after its persistence, in doubt at a quarter of it and
+ * waiting while the polarity re-check runs; the fast path; tracking; the residual of (5.1). */
+static void test_running_checks(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    mc_protect_t s;
+    const float w = 500.0f;
+    mc_protect_reset(&s, &c, w);
+    mc_protect_in_t in = steady(&c, w, 5.0f);
+    bool doubt = false;
+    assert_int_equal(run(&s, &c, &in, 5000, &doubt), 0u);
+    assert_false(doubt);
+    /* over-speed */
+    in.omega = 1001.0f;
+    assert_int_equal(run(&s, &c, &in, 1, NULL), MC_FAULT_OVERSPEED);
+    in.omega = NAN;
+    assert_int_equal(run(&s, &c, &in, 1, NULL), MC_FAULT_OVERSPEED);
+    in.reacting = true;
+    assert_int_equal(run(&s, &c, &in, 1, NULL), MC_FAULT_OVERSPEED);   /* NaN even then */
+    in.omega = 1001.0f;   /* latched already in its reaction: the other checks go on */
+    mc_protect_reset(&s, &c, in.omega);
+    in.omega_raw = in.omega;
+    assert_int_equal(run(&s, &c, &in, 1, NULL), 0u);
+    /* loss of lock: the raw speed on the other side */
+    mc_protect_reset(&s, &c, w);
+    in = steady(&c, w, 5.0f);
+    in.omega_raw = -w;
+    doubt = false;
+    int n = 0;
+    uint32_t r = 0u;
+    while (r == 0u && n < 2000) {
+        bool dq = false;
+        r = mc_protect_running(&s, &c, &in, &dq);
+        if (dq) {
+            assert_int_equal(s.lock_n, c.lock_n / 4u);
+            doubt = true;
+        }
+        ++n;
+    }
+    assert_int_equal(r, MC_FAULT_LOSS_OF_LOCK);
+    assert_true(doubt);
+    assert_true(n >= (int)c.lock_n && n < (int)c.lock_n + 100);   /* persistence + the 20 Hz average */
+    /* ... which waits while the re-check runs */
+    mc_protect_reset(&s, &c, w);
+    in.lock_paused = true;
+    assert_int_equal(run(&s, &c, &in, 3000, NULL), 0u);
+    /* the fast path: the raw angle 1 rad off the filtered one, jump_n periods */
+    mc_protect_reset(&s, &c, w);
+    in = steady(&c, w, 5.0f);
+    in.theta_raw = in.theta + 1.0f;
+    for (uint32_t k = 1u; k < c.jump_n; ++k) {
+        assert_int_equal(run(&s, &c, &in, 1, NULL), 0u);
+    }
+    assert_int_equal(run(&s, &c, &in, 1, NULL), MC_FAULT_LOSS_OF_LOCK);
+    /* tracking: the current 4 A off its reference */
+    mc_protect_reset(&s, &c, w);
+    in = steady(&c, w, 5.0f);
+    in.i_ref.q = 9.0f;
+    assert_int_equal(run(&s, &c, &in, 3000, NULL), MC_FAULT_TRACKING);
+    /* the voltage model: half of the back-EMF unexplained (a wrong angle, an open phase) */
+    mc_protect_reset(&s, &c, w);
+    in = steady(&c, w, 5.0f);
+    in.u_dq.q *= 0.5f;
+    assert_int_equal(run(&s, &c, &in, 3000, NULL), MC_FAULT_VOLTAGE_MODEL);
+    /* a detector with persistence 0 is off */
+    mc_protect_cfg_t off = c;
+    off.resid_n = 0u;
+    mc_protect_reset(&s, &off, w);
+    assert_int_equal(run(&s, &off, &in, 3000, NULL), 0u);
+}
+
+/* Speed mode: a stall (the torque at its limit, no speed) and a torque that the speed estimate
+ * contradicts; neither outside speed mode. */
+static void test_speed_mode_checks(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    mc_protect_t s;
+    mc_protect_reset(&s, &c, 0.0f);
+    mc_protect_in_t in = steady(&c, 0.0f, 5.0f);
+    in.torque_ref = 9.5f;
+    in.speed_ref = 100.0f;   /* 500 rad/s el */
+    assert_int_equal(run(&s, &c, &in, 1000, NULL), 0u);
+    in.speed_mode = true;
+    assert_int_equal(run(&s, &c, &in, 1000, NULL), MC_FAULT_STALL);
+    /* accelerating at 2000 rad/s^2 against 8 N m (half of its 800 would be plausible) */
+    mc_protect_reset(&s, &c, 300.0f);
+    in = steady(&c, 300.0f, 5.0f);
+    in.speed_mode = true;
+    in.speed_ref = 100.0f;
+    in.torque_ref = 8.0f;
+    in.i_ref = in.i_fb = (mc_dq_t){0.0f, 0.0f};
+    uint32_t r = 0u;
+    for (int k = 0; k < 2000 && r == 0u; ++k) {
+        in.omega = in.omega_raw = 300.0f - 2000.0f * TS * (float)k;
+        in.u_dq = (mc_dq_t){0.0f, in.omega * c.psi_pm};
+        bool doubt;
+        r = mc_protect_running(&s, &c, &in, &doubt);
+    }
+    assert_int_equal(r, MC_FAULT_TORQUE);
+}
+
+/* The reactions: recover only the recoverable reasons, while running, retries times, counted
+ * again from zero after retry_reset_n periods of RUN; hold the field weakening only for
+ * over-speed above the generation speed; the reaction ends below 95 % of the link. */
+static void test_reactions(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    mc_protect_t s = {0};
+    mc_protect_restart(&s);
+    assert_false(mc_protect_may_recover(&s, &c, MC_FAULT_OVERCURRENT, true));
+    assert_false(mc_protect_may_recover(&s, &c, MC_FAULT_LOSS_OF_LOCK | MC_FAULT_STALL, true));
+    assert_false(mc_protect_may_recover(&s, &c, MC_FAULT_LOSS_OF_LOCK, false));
+    assert_true(mc_protect_may_recover(&s, &c, MC_FAULT_LOSS_OF_LOCK, true));
+    assert_true(mc_protect_may_recover(&s, &c, MC_FAULT_TRACKING | MC_FAULT_VOLTAGE_MODEL, true));
+    assert_false(mc_protect_may_recover(&s, &c, MC_FAULT_TRACKING, true));   /* retries used up */
+    mc_protect_tick(&s, &c, true, c.retry_reset_n - 1u);
+    assert_false(mc_protect_may_recover(&s, &c, MC_FAULT_TRACKING, true));
+    mc_protect_tick(&s, &c, false, c.retry_reset_n);
+    assert_false(mc_protect_may_recover(&s, &c, MC_FAULT_TRACKING, true));
+    mc_protect_tick(&s, &c, true, c.retry_reset_n);
+    assert_true(mc_protect_may_recover(&s, &c, MC_FAULT_TRACKING, true));
+    mc_protect_restart(&s);
+    assert_int_equal(s.retries, 0u);
+    mc_protect_cfg_t no = c;
+    no.recover = false;
+    assert_false(mc_protect_may_recover(&s, &no, MC_FAULT_LOSS_OF_LOCK, true));
+    /* hold_fw: the line-to-line back-EMF 0.594 V s/rad x 600 = 356 V against the link */
+    assert_true(mc_protect_may_hold(&c, MC_FAULT_OVERSPEED, true, -600.0f, 300.0f));
+    assert_false(mc_protect_may_hold(&c, MC_FAULT_OVERSPEED, true, 600.0f, 400.0f));
+    assert_false(mc_protect_may_hold(&c, MC_FAULT_OVERSPEED, false, 600.0f, 300.0f));
+    assert_false(mc_protect_may_hold(&c, MC_FAULT_TRACKING, true, 600.0f, 300.0f));
+    no = c;
+    no.hold_fw = false;
+    assert_false(mc_protect_may_hold(&no, MC_FAULT_OVERSPEED, true, 600.0f, 300.0f));
+    assert_false(mc_protect_reaction_done(&c, 600.0f, 300.0f));
+    assert_false(mc_protect_reaction_done(&c, 480.0f, 300.0f));   /* 285.3 V: not below 285 */
+    assert_true(mc_protect_reaction_done(&c, 475.0f, 300.0f));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_hard_trips),
+        cmocka_unit_test(test_running_checks),
+        cmocka_unit_test(test_speed_mode_checks),
+        cmocka_unit_test(test_reactions),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
