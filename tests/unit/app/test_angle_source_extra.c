@@ -127,7 +127,7 @@ static void test_drive_runs_with_held_angle(void **st)
     assert_ptr_equal(r.d.src, &mc_angle_src_test_hold);
     assert_int_equal(r.d.cfg->p.inj_kind, 1);   /* sine: would inject with an estimator */
     assert_false(r.d.cfg->blk.inject);
-    assert_true(r.d.cfg->blk.lock_n > 0u);
+    assert_true(r.d.cfg->blk.prot.lock_n > 0u);
     const float held = 1.234f;
     enable(&r, held);
     for (int k = 0; k < 200; ++k) {
@@ -161,7 +161,7 @@ static void test_drive_follows_ramp(void **st)
     mc_param_err_t err;
     assert_true(mc_drive_param_write(&r.d, MC_PARAM_lock_time, 0.0f, &err));
     run(&r, 1);
-    assert_int_equal(r.d.cfg->blk.lock_n, 0u);
+    assert_int_equal(r.d.cfg->blk.prot.lock_n, 0u);
     enable(&r, 3.0f);
     float prev = mc_drive_telemetry(&r.d)->theta;
     int wraps = 0;
@@ -223,22 +223,22 @@ static void test_checks_follow_capabilities(void **st)
     test_hold_omega = 0.0f;
     assert_true(build_with("test_hold", "const", &b, &err));
     assert_false(b.blk.inject);
-    assert_int_equal(b.blk.lock_n, periods(b.p.lock_time, b.p.ts));
-    assert_int_equal(b.blk.jump_n, periods(b.p.jump_time, b.p.ts));
-    assert_true(b.blk.lock_n > 0u && b.blk.jump_n > 0u);
-    assert_true(b.blk.recover);
+    assert_int_equal(b.blk.prot.lock_n, periods(b.p.lock_time, b.p.ts));
+    assert_int_equal(b.blk.prot.jump_n, periods(b.p.jump_time, b.p.ts));
+    assert_true(b.blk.prot.lock_n > 0u && b.blk.prot.jump_n > 0u);
+    assert_true(b.blk.prot.recover);
     assert_true(b.blk.seq.catch_first);   /* startup.catch = on, the default */
     assert_false(b.blk.src_measures);
 
     assert_true(build_with("encoder", "const", &b, &err));
-    assert_int_equal(b.blk.lock_n, 0u);
-    assert_int_equal(b.blk.jump_n, 0u);
-    assert_false(b.blk.recover);
+    assert_int_equal(b.blk.prot.lock_n, 0u);
+    assert_int_equal(b.blk.prot.jump_n, 0u);
+    assert_false(b.blk.prot.recover);
     assert_false(b.blk.seq.catch_first);
     assert_true(b.blk.src_measures);
 
     assert_true(build_with("unop", "const", &b, &err));
-    assert_true(b.blk.inject && b.blk.lock_n > 0u && b.blk.recover);
+    assert_true(b.blk.inject && b.blk.prot.lock_n > 0u && b.blk.prot.recover);
 
     /* estimator.model = fluxmap without a map: refused for the sources that declare the need */
     assert_false(build_with("test_hold", "fluxmap", &b, &err));
@@ -297,7 +297,7 @@ static void test_lock_loss_detected_without_injection(void **st)
     run(&r, 1000);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     test_hold_raw_offset = 500.0f;   /* lock band: 0.5 |w| + 52 rad/s el */
-    const uint32_t limit = r.d.cfg->blk.lock_n + 100u;
+    const uint32_t limit = r.d.cfg->blk.prot.lock_n + 100u;
     uint32_t n = 0u;
     while (mc_drive_state(&r.d) == MC_STATE_RUN && n < limit) {
         run(&r, 1);
@@ -306,7 +306,7 @@ static void test_lock_loss_detected_without_injection(void **st)
     test_hold_raw_offset = 0.0f;
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
     assert_true((mc_drive_faults(&r.d) & MC_FAULT_LOSS_OF_LOCK) != 0u);
-    assert_true(n >= r.d.cfg->blk.lock_n);
+    assert_true(n >= r.d.cfg->blk.prot.lock_n);
 }
 
 /* cfg_of gives the configuration the running source holds; cfg_equal compares two by their

@@ -53,7 +53,7 @@ static bool rig_init(rig_t *r, const mc_drive_cfg_t *cfg)
         return false;
     }
     for (int k = 0; k < 3; ++k) {
-        r->adc.sample.i[k] = (uint16_t)r->d.cfg->blk.offset_nominal;   /* zero current */
+        r->adc.sample.i[k] = (uint16_t)r->d.cfg->blk.offs.nominal;   /* zero current */
     }
     r->adc.sample.vdc = (uint16_t)lrintf(300.0f / r->d.cfg->blk.volts_per_count);
     return true;
@@ -220,64 +220,79 @@ static void cmp_blk(const mc_drive_blk_t *a, const mc_drive_blk_t *b)
 {
     F(ts);
     I(pole_pairs);
-    F(amps_per_count);
     F(volts_per_count);
-    F(offset_nominal);
-    F(offset_tol);
-    I(adc_max);
-    F(i_trip);
-    F(vdc_min);
-    F(vdc_max);
     F(i_ref_max);
     F(i_slew);
-    F(fwe_i_stop);
     F(u_loop);
-    I(cal_samples);
     F(step3_speed_tol);
     I(step3_hold);
     I(inject);
     I(three_step);
     I(src_measures);
     I(cc_map);
-    F(avg_k);
-    F(overspeed);
-    F(i_sum_tol);
-    F(track_err);
-    F(lock_tol);
-    F(lock_floor);
-    F(stall_speed);
-    F(stall_torque);
-    F(resid_v);
-    F(resid_w_coef);
-    I(i_sum_n);
-    I(track_n);
-    I(lock_n);
-    I(stall_n);
-    I(resid_n);
-    I(accel_n);
-    I(jump_n);
-    F(jump);
-    F(accel_torque);
-    F(accel_per_nm);
-    I(recover);
-    I(hold_fw);
-    I(pol_check);
-    I(pol_at_start);
-    F(pol_bias);
-    F(pol_log_ratio);
-    I(pol_settle_n);
-    I(pol_measure_n);
-    I(pol_start_n);
-    F(pol_w_scale);
-    F(ug_coef);
-    I(retries);
-    I(retry_reset_n);
     F(src.rs);
     cmp_model(&a->src.model, &b->src.model);
     F(fly.i_band);
     F(fly.i_pulse);
     F(fly.i_rest);
     I(fly.n_wait_max);
+    /* the blocks that read their configuration from the one in force */
+    F(fwe.ts);
+    F(fwe.rs);
+    F(fwe.i_stop);
+    I(fwe.overmod);
+    F(offs.amps_per_count);
+    F(offs.nominal);
+    F(offs.tol);
+    F(offs.ts);
+    I(offs.samples);
+    F(prot.ts);
+    I(prot.pole_pairs);
+    I(prot.adc_max);
+    F(prot.i_trip);
+    F(prot.vdc_min);
+    F(prot.vdc_max);
+    F(prot.avg_k);
+    F(prot.overspeed);
+    F(prot.i_sum_tol);
+    F(prot.track_err);
+    F(prot.lock_tol);
+    F(prot.lock_floor);
+    F(prot.stall_speed);
+    F(prot.stall_torque);
+    F(prot.resid_v);
+    F(prot.resid_w_coef);
+    I(prot.i_sum_n);
+    I(prot.track_n);
+    I(prot.lock_n);
+    I(prot.stall_n);
+    I(prot.resid_n);
+    I(prot.accel_n);
+    I(prot.jump_n);
+    F(prot.jump);
+    F(prot.accel_torque);
+    F(prot.accel_per_nm);
+    F(prot.rs);
+    F(prot.ld);
+    F(prot.lq);
+    F(prot.psi_pm);
+    I(prot.recover);
+    I(prot.hold_fw);
+    F(prot.ug_coef);
+    I(prot.retries);
+    I(prot.retry_reset_n);
+    I(pol.enable);
+    I(pol.at_start);
+    I(pol.inject);
+    I(pol.three_step);
+    F(pol.omega_n1);
+    F(pol.bias);
+    F(pol.log_ratio);
+    I(pol.settle_n);
+    I(pol.measure_n);
+    I(pol.start_n);
+    F(pol.w_scale);
+    F(pol.avg_k);
 }
 
 #undef F
@@ -461,9 +476,9 @@ static void test_comparison_sees_differences(void **st)
     fresh.d.inj.cfg.omega_n1 += 1.0f;
     assert_string_equal(compare(&running.d, &fresh.d), "injection");
     assert_true(rig_init(&fresh, &base));
-    ((mc_drive_blk_t *)&fresh.d.cfg->blk)->lock_floor += 1.0f;
+    ((mc_drive_blk_t *)&fresh.d.cfg->blk)->prot.lock_floor += 1.0f;
     assert_string_equal(compare(&running.d, &fresh.d), "drive (d->cfg->blk)");
-    assert_string_equal(first_diff, "lock_floor");
+    assert_string_equal(first_diff, "prot.lock_floor");
     mc_drive_cfg_t other = base;
     assert_true(mc_param_set(&other.p, MC_PARAM_ts, 2e-4f, NULL));   /* read by every source */
     assert_true(rig_init(&fresh, &other));
