@@ -5,6 +5,13 @@
 
 #define RPM_TO_RAD_S (MC_2PI / 60.0f)
 
+/* The blocks' own enums take these choices by position. */
+_Static_assert(MC_CHOICE_inj_kind_off == (int)MC_INJ_OFF && MC_CHOICE_inj_kind_sine == (int)MC_INJ_SINE &&
+                   MC_CHOICE_inj_kind_rect == (int)MC_INJ_RECT, "injection.kind and mc_inj_kind_t");
+_Static_assert(MC_CHOICE_ip1_cost_linear == (int)MC_IP_COST_LINEAR &&
+                   MC_CHOICE_ip1_cost_nonlinear == (int)MC_IP_COST_NONLINEAR &&
+                   MC_CHOICE_ip1_cost_fluxdiff == (int)MC_IP_COST_FLUXDIFF, "startup.step1_cost and mc_ip_cost_t");
+
 void mc_drive_cfg_default(mc_drive_cfg_t *cfg)
 {
     mc_params_default(&cfg->p);
@@ -123,13 +130,13 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     b->dvi.n = (int)p->dvi_n;
     b->dvi.i_trip = p->i_trip;
     b->dvi.i_rest = p->ip_i_rest;
-    b->three_step = p->init_three_step != 0;
-    b->ip1_pulse3 = p->ip1_pulse3 != 0;
-    b->ip2_dvi = p->ip2_dvi != 0;
+    b->three_step = p->init_three_step == MC_CHOICE_init_three_step_three_step;
+    b->ip1_pulse3 = p->ip1_pulse3 == MC_CHOICE_ip1_pulse3_three_phase;
+    b->ip2_dvi = p->ip2_dvi == MC_CHOICE_ip2_dvi_dvi;
     const float cal = 2.0f * (float)p->offset_cal_samples * p->ts;
     b->seq = (mc_seq_cfg_t){.ts = p->ts, .init_pos = b->three_step, .timeout_cal = cal > 0.1f ? cal : 0.1f,
                             .timeout_step12 = p->timeout_step12, .timeout_step3 = p->timeout_step3};
-    b->seq.catch_first = p->catch_on != 0 && mc_angle_src_get(p->angle_src)->cls == MC_ANGLE_ESTIMATOR;
+    b->seq.catch_first = p->catch_on == MC_CHOICE_catch_on_on && mc_angle_src_get(p->angle_src)->cls == MC_ANGLE_ESTIMATOR;
     b->src_measures = mc_angle_src_get(p->angle_src)->cls == MC_ANGLE_SENSOR;
     build_catch(p, m, b);
     b->step3_speed_tol = p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
@@ -144,12 +151,12 @@ static bool build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive
 {
     const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
     b->src.rs = m->rs;
-    b->src.model = p->est_model == 1 ? (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map}
+    b->src.model = p->est_model == MC_CHOICE_est_model_fluxmap ? (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map}
                                      : (mc_flux_model_t){MC_FLUX_CONST, m->ld, m->lq, m->psi_pm, 0};
     if (!src->build(p, b->src.rs, &b->src.model, &b->src.cfg, err)) {
         return false;
     }
-    b->inject = src->needs_injection && p->inj_kind != (int32_t)MC_INJ_OFF;
+    b->inject = src->needs_injection && p->inj_kind != MC_CHOICE_inj_kind_off;
     b->cc_map = b->src.model.kind == MC_FLUX_MAP && b->src.model.map != 0;
     b->inj = (mc_inj_cfg_t){.kind = (mc_inj_kind_t)p->inj_kind, .v1 = p->inj_v1, .f_hz = p->inj_f_hz,
                             .omega_n1 = p->n1_rpm * RPM_TO_RAD_S * (float)p->pole_pairs, .ts = p->ts};
@@ -179,8 +186,8 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
     r->lq = p->lq;
     r->psi_pm = p->psi_pm;
     r->overspeed = p->overspeed_rpm * el;
-    r->recover = p->lock_action == 1 && src->cls == MC_ANGLE_ESTIMATOR;
-    r->hold_fw = p->overspeed_action == 1;
+    r->recover = p->lock_action == MC_CHOICE_lock_action_recover && src->cls == MC_ANGLE_ESTIMATOR;
+    r->hold_fw = p->overspeed_action == MC_CHOICE_overspeed_action_hold_fw;
     r->ug_coef = 1.7320508f * p->psi_pm;
     b->seq.timeout_reaction = p->reaction_timeout;
     r->retries = (uint32_t)p->retries;
@@ -211,8 +218,8 @@ static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
 static void build_polcheck(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
 {
     mc_polcheck_cfg_t *pc = &b->pol;
-    pc->enable = p->pol_check != 0;
-    pc->at_start = p->pol_check == 2;
+    pc->enable = p->pol_check != MC_CHOICE_pol_check_off;
+    pc->at_start = p->pol_check == MC_CHOICE_pol_check_at_start;
     pc->inject = b->inject;
     pc->three_step = b->three_step;
     pc->omega_n1 = b->inj.omega_n1;
@@ -252,7 +259,9 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     /* the flux map: where the source needs it with this estimator.model, and for Steps I-II's
      * l_dd profile and nonlinear costs */
     const bool need_map = (mc_angle_src_get(p->angle_src)->map_models & 1u << p->est_model) != 0u ||
-                          (p->init_three_step != 0 && (p->ip2_dvi == 0 || (p->ip1_pulse3 == 0 && p->ip1_cost != 0)));
+                          (p->init_three_step == MC_CHOICE_init_three_step_three_step &&
+                           (p->ip2_dvi == MC_CHOICE_ip2_dvi_generalized ||
+                            (p->ip1_pulse3 == MC_CHOICE_ip1_pulse3_pulses && p->ip1_cost != MC_CHOICE_ip1_cost_linear)));
     mc_est_model_t m;
     if (!check_model(p, &cfg->est, &m, need_map, err)) {
         return false;
@@ -285,7 +294,7 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
                             .torque_max = p->torque_max, .decimation = (int)p->sc_decimation};
     out->tref = (mc_tref_cfg_t){.pole_pairs = (int)p->pole_pairs,
                                 .mach = {.ld = p->ld, .lq = p->lq, .psi_pm = p->psi_pm},
-                                .i_max = b->i_ref_max, .u_margin = p->u_margin, .use_table = p->mtpa_table != 0,
+                                .i_max = b->i_ref_max, .u_margin = p->u_margin, .use_table = p->mtpa_table == MC_CHOICE_mtpa_table_table,
                                 .ts = p->ts};
     mc_mtpa_table_fill_linear(&out->tref.table, &out->tref.mach, b->i_ref_max);
     out->dtc = (mc_dtc_cfg_t){.t_dead = p->dead_time, .t_pwm = p->ts, .i_band = p->dtc_i_band,

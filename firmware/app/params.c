@@ -239,7 +239,7 @@ static bool needs_injection(const mc_params_t *p)
 
 static bool injecting(const mc_params_t *p)
 {
-    return needs_injection(p) && p->inj_kind != 0;
+    return needs_injection(p) && p->inj_kind != MC_CHOICE_inj_kind_off;
 }
 
 static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
@@ -487,7 +487,7 @@ bool mc_params_validate(const mc_params_t *p, mc_param_err_t *err)
                      "the Step III hold must last at least two periods");
     }
     if (needs_injection(p)) {
-        if (p->inj_kind != 0 && p->inj_f_hz * p->ts > 0.5f) {
+        if (p->inj_kind != MC_CHOICE_inj_kind_off && p->inj_f_hz * p->ts > 0.5f) {
             return cross(err, MC_PARAM_inj_f_hz, MC_PARAM_ts, p, mc_param_table[MC_PARAM_inj_f_hz].min, 0.5f * fs,
                          "the injection frequency must be at most half the sampling frequency");
         }
@@ -496,7 +496,7 @@ bool mc_params_validate(const mc_params_t *p, mc_param_err_t *err)
                          "the injection must fit inside the voltage circle Vdc/sqrt3");
         }
     }
-    if (p->init_three_step != 0 && !needs_injection(p)) {   /* Step III runs on the injection */
+    if (p->init_three_step == MC_CHOICE_init_three_step_three_step && !needs_injection(p)) {   /* Step III runs on the injection */
         return cross(err, MC_PARAM_init_three_step, MC_PARAM_angle_src, p, 0.0f, 0.0f,
                      "the three-step start needs control.angle_source = unop");
     }

@@ -125,7 +125,7 @@ static void test_drive_runs_with_held_angle(void **st)
     test_hold_omega = 0.0f;
     rig_init(&r, "test_hold");
     assert_ptr_equal(r.d.src, &mc_angle_src_test_hold);
-    assert_int_equal(r.d.cfg->p.inj_kind, 1);   /* sine: would inject with an estimator */
+    assert_int_equal(r.d.cfg->p.inj_kind, MC_CHOICE_inj_kind_sine);   /* sine: would inject with an estimator */
     assert_false(r.d.cfg->blk.inject);
     assert_true(r.d.cfg->blk.prot.lock_n > 0u);
     const float held = 1.234f;
