@@ -216,11 +216,6 @@ bool mc_ip_prog_direct(mc_ip_prog_t *p, unsigned pattern, int len, int tag)
     return mc_ip_run_direct(&p->run, pattern, len, tag);
 }
 
-bool mc_ip_prog_vector(mc_ip_prog_t *p, mc_ab_t u, int len, int tag)
-{
-    return mc_ip_run_vector(&p->run, u, len, tag);
-}
-
 bool mc_ip_prog_gap(mc_ip_prog_t *p, int len_min)
 {
     return mc_ip_run_gap(&p->run, len_min);

@@ -1,4 +1,4 @@
-// The simulator's side of the drive's parameter table (firmware/include/mc/params_table.h):
+// The simulator's side of the drive's parameter table (firmware/app/include/mc/params_table.h):
 // the drive keys of the scenario schema are generated from it, and a scenario configures the
 // drive by name, with no hand-written mapping. Motor and hardware entries come from the preset
 // and the simulator's own sensor and inverter keys.

@@ -11,7 +11,8 @@ mkdir -p "$out/corpus"
 srcs=(tests/fuzz/co_fuzz.c firmware/comms/*.c firmware/app/*.c firmware/control/*.c firmware/estimators/*.c
       firmware/core/*.c hal/host/*.c)
 "$CC" -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -DCO_FUZZ_LIBFUZZER \
-  -Ifirmware/include -Ihal/include -Ihal/host/include "${srcs[@]}" -lm -o "$out/co_fuzz_libfuzzer"
+  -Ifirmware/core/include -Ifirmware/control/include -Ifirmware/estimators/include \
+  -Ifirmware/app/include -Ifirmware/comms/include -Ihal/include -Ihal/host/include "${srcs[@]}" -lm -o "$out/co_fuzz_libfuzzer"
 seeder=${SEEDER:-build/host/tests/fuzz/co_fuzz}
 if [ -x "$seeder" ] && [ -z "$(ls -A "$out/corpus")" ]; then
   "$seeder" --write-seeds "$out/corpus"

@@ -1,5 +1,5 @@
 /* CAN hardware interface: classic CAN 2.0 frames (11- and 29-bit identifiers, up to 8 data bytes),
- * queued in both directions, never blocking: the CANopen stack (later, firmware/comms) calls it
+ * queued in both directions, never blocking: the CANopen stack (firmware/comms) calls it
  * from the background loop with bounded work per call. A port keeps its own queues (the host
  * port: rings the simulator fills and drains; a target: the controller's message RAM, e.g.
  * MCAN's TX FIFO and RX FIFO 0) and counts what it had to drop. Bit rate and acceptance filters

@@ -1,4 +1,4 @@
-/* Non-volatile memory interface for the parameter store (CiA 301 0x1010 / 0x1011, later): a few
+/* Non-volatile memory interface for the parameter store (CiA 301 0x1010 / 0x1011): a few
  * equal blocks with flash semantics, so that a store can be made power-cut safe by the layer
  * above (two copies, a version and a CRC, written in an order that always leaves one whole):
  *   - erase sets a whole block to 0xFF;

@@ -3,7 +3,7 @@ test (app_store_tables): the same table with one parameter added (in the middle:
 it moves), one removed, two swapped and one range narrowed, as a firmware update might change it.
 Each edit is made by the parameter's dotted name and must apply, so that the test breaks loudly
 when the table it edits changes instead of quietly testing less.
-Usage: params_variant.py firmware/include/mc/params_table.h OUT/mc/params_table.h"""
+Usage: params_variant.py firmware/app/include/mc/params_table.h OUT/mc/params_table.h"""
 import re
 import sys
 from pathlib import Path

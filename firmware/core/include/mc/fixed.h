@@ -1,6 +1,10 @@
 /* Q15 / Q31 fixed-point variants of the inner math. Q15: int16, 1.0 == 32768 (saturating);
  * Q31: int32, 1.0 == 2^31. Angles in fixed point are per-unit of pi: -1.0 == -pi, so one full
- * turn wraps naturally in two's complement. Quantities are per-unit of a caller-chosen base. */
+ * turn wraps naturally in two's complement. Quantities are per-unit of a caller-chosen base.
+ * Where they are used: nowhere in the shipped images (both targets have an FPU and run the float32
+ * path); they are the inner math for a port without one, tested against the float32 functions in
+ * tests/unit/core/test_fixed.c (docs/core.md gives the error bounds). To use them, convert at the
+ * ADC and PWM boundaries and keep the estimator in float32 or port it with them. */
 #ifndef MC_FIXED_H
 #define MC_FIXED_H
 #include <stdint.h>

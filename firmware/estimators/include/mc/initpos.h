@@ -108,7 +108,6 @@ typedef struct {
 
 void mc_ip_prog_init(mc_ip_prog_t *p, float rs, float i_rest, float i_trip, int gap_max);
 bool mc_ip_prog_direct(mc_ip_prog_t *p, unsigned pattern, int len, int tag);
-bool mc_ip_prog_vector(mc_ip_prog_t *p, mc_ab_t u, int len, int tag);
 bool mc_ip_prog_gap(mc_ip_prog_t *p, int len_min);
 /* mc_ip_run_step, appending each recorded interval to rec[] (overflow when full). */
 mc_ip_status_t mc_ip_prog_step(mc_ip_prog_t *p, mc_ab_t i_ab, float vdc, mc_abc_t *duty);

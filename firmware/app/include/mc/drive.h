@@ -49,7 +49,7 @@ typedef struct {
     mc_est_model_t est;
 } mc_drive_cfg_t;
 
-/* Commands: written by the background side (sim, later CANopen), taken by the ISR at the start
+/* Commands: written by the background side (the simulator, CANopen), taken by the ISR at the start
  * of a period as one consistent copy (see mc_drive_command). */
 typedef struct {
     bool      enable;

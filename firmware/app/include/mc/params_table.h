@@ -1,5 +1,5 @@
 /* The drive's parameter table: every tunable drive parameter once. Everything that names a
- * parameter comes from this list (design note shared/design/parameters.md):
+ * parameter comes from this list (docs/parameters.md):
  *   - the members of mc_params_t and the ids MC_PARAM_<member> (mc/params.h),
  *   - the runtime table mc_param_table[] (name, type, unit, range, default, group, access, doc),
  *   - validation (mc_params_validate: finiteness and range per entry, then the cross-checks),

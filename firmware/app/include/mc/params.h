@@ -1,5 +1,5 @@
 /* The drive's parameters: one struct generated from the table (mc/params_table.h), its runtime
- * description, and the three steps of the flow (shared/design/parameters.md):
+ * description, and the three steps of the flow (docs/parameters.md):
  *
  *   mc_params_default()  constants, rule parameters marked "auto"
  *   mc_param_set*()      user overrides (an override clears "auto")
