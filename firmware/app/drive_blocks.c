@@ -8,7 +8,7 @@
 void mc_drive_apply(mc_drive_t *d, const mc_drive_built_t *b)
 {
     d->cfg = b;
-    d->src = mc_angle_src_get(b->p.angle_src);
+    d->src = mc_angle_src_get(b->p.control_angle_source);
     mc_cc_init(&d->cc, &b->cc);
     mc_sc_init(&d->sc, &b->sc);
     mc_tref_init(&d->tref, &b->tref);

@@ -6,11 +6,11 @@
 #define RPM_TO_RAD_S (MC_2PI / 60.0f)
 
 /* The blocks' own enums take these choices by position. */
-_Static_assert(MC_CHOICE_inj_kind_off == (int)MC_INJ_OFF && MC_CHOICE_inj_kind_sine == (int)MC_INJ_SINE &&
-                   MC_CHOICE_inj_kind_rect == (int)MC_INJ_RECT, "injection.kind and mc_inj_kind_t");
-_Static_assert(MC_CHOICE_ip1_cost_linear == (int)MC_IP_COST_LINEAR &&
-                   MC_CHOICE_ip1_cost_nonlinear == (int)MC_IP_COST_NONLINEAR &&
-                   MC_CHOICE_ip1_cost_fluxdiff == (int)MC_IP_COST_FLUXDIFF, "startup.step1_cost and mc_ip_cost_t");
+_Static_assert(MC_CHOICE_injection_kind_off == (int)MC_INJ_OFF && MC_CHOICE_injection_kind_sine == (int)MC_INJ_SINE &&
+                   MC_CHOICE_injection_kind_rect == (int)MC_INJ_RECT, "injection.kind and mc_inj_kind_t");
+_Static_assert(MC_CHOICE_startup_step1_cost_linear == (int)MC_IP_COST_LINEAR &&
+                   MC_CHOICE_startup_step1_cost_nonlinear == (int)MC_IP_COST_NONLINEAR &&
+                   MC_CHOICE_startup_step1_cost_fluxdiff == (int)MC_IP_COST_FLUXDIFF, "startup.step1_cost and mc_ip_cost_t");
 
 void mc_drive_cfg_default(mc_drive_cfg_t *cfg)
 {
@@ -28,10 +28,10 @@ static float or_motor(float v, float motor)
 static bool check_model(const mc_params_t *p, const mc_est_model_t *in, mc_est_model_t *m, bool need_map,
                         mc_param_err_t *err)
 {
-    *m = (mc_est_model_t){.rs = or_motor(in->rs, p->rs), .ld = or_motor(in->ld, p->ld),
-                          .lq = or_motor(in->lq, p->lq), .psi_pm = or_motor(in->psi_pm, p->psi_pm), .map = in->map};
+    *m = (mc_est_model_t){.rs = or_motor(in->rs, p->motor_rs_ohm), .ld = or_motor(in->ld, p->motor_ld_h),
+                          .lq = or_motor(in->lq, p->motor_lq_h), .psi_pm = or_motor(in->psi_pm, p->motor_psi_pm_wb), .map = in->map};
     const struct { float v; int id; } vals[4] = {
-        {m->rs, MC_PARAM_rs}, {m->ld, MC_PARAM_ld}, {m->lq, MC_PARAM_lq}, {m->psi_pm, MC_PARAM_psi_pm}};
+        {m->rs, MC_PARAM_motor_rs_ohm}, {m->ld, MC_PARAM_motor_ld_h}, {m->lq, MC_PARAM_motor_lq_h}, {m->psi_pm, MC_PARAM_motor_psi_pm_wb}};
     for (int k = 0; k < 4; ++k) {
         const mc_param_info_t *e = &mc_param_table[vals[k].id];
         if (!isfinite(vals[k].v) || vals[k].v < e->min || vals[k].v > e->max) {
@@ -40,21 +40,21 @@ static bool check_model(const mc_params_t *p, const mc_est_model_t *in, mc_est_m
     }
     const mc_flux_map_t *map = m->map;
     if (map == 0) {
-        return need_map ? mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_est_model, 0.0f, "this configuration needs the estimator's flux map")
+        return need_map ? mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_estimator_model, 0.0f, "this configuration needs the estimator's flux map")
                         : true;
     }
     if (map->n_d < 2 || map->n_d > MC_FLUX_MAP_MAX || map->n_q < 2 || map->n_q > MC_FLUX_MAP_MAX) {
-        return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_est_model, (float)(map->n_d < 2 || map->n_d > MC_FLUX_MAP_MAX ? map->n_d : map->n_q),
+        return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_estimator_model, (float)(map->n_d < 2 || map->n_d > MC_FLUX_MAP_MAX ? map->n_d : map->n_q),
                          "flux map grid points per axis must be 2..41");
     }
     if (!isfinite(map->id0) || !isfinite(map->iq0) || !(map->did > 0.0f) || !(map->diq > 0.0f) ||
         !isfinite(map->did) || !isfinite(map->diq)) {
-        return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_est_model, map->did, "flux map grid origin and steps must be finite, steps > 0");
+        return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_estimator_model, map->did, "flux map grid origin and steps must be finite, steps > 0");
     }
     for (int k = 0; k < map->n_d * map->n_q; ++k) {
         if (!isfinite(map->psi_d[k]) || !isfinite(map->psi_q[k]) || fabsf(map->psi_d[k]) > 100.0f ||
             fabsf(map->psi_q[k]) > 100.0f) {
-            return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_est_model, map->psi_d[k], "flux map values must be finite and below 100 Wb");
+            return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_estimator_model, map->psi_d[k], "flux map values must be finite and below 100 Wb");
         }
     }
     return true;
@@ -72,22 +72,22 @@ static uint32_t periods_up(float x)
  * quarter of catch_i_a), the longest pulse (1.5 x catch_i_a) and the longest gap (a 20 deg turn). */
 static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
 {
-    const float w_min = p->catch_min_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
+    const float w_min = p->startup_catch_min_rpm * RPM_TO_RAD_S * (float)p->motor_pole_pairs;
     const float t_per_a = m->lq / (m->psi_pm * w_min);   /* [s/A] at w_min */
     const float rot = 0.35f;
     /* the longest wait: where the diodes conduct (above omega_ug = Vdc / (sqrt3 psi_pm)) their
      * current comes in pulses a sixth of a turn apart; 2.5 of them at omega_ug give (C.5) its
      * sign and a low to start from (5.2 ms on the thesis motor); at least 1 ms */
-    const float w_ug = p->vdc_nominal / (1.7320508f * m->psi_pm);
+    const float w_ug = p->hw_vdc_nominal_v / (1.7320508f * m->psi_pm);
     const float wait = fmaxf(2.5f * 1.0471976f / w_ug, 1e-3f);
-    b->fly = (mc_catch_cfg_t){.ts = p->ts, .ld = m->ld, .lq = m->lq, .psi_pm = m->psi_pm,
-                              .i_pulse = p->catch_i, .i_detect = 0.25f * p->catch_i, .i_rest = p->ip_i_rest,
-                              .rot_target = rot, .high_speed_share = 0.9f, .v_device = p->v_device,
-                              .i_band = p->dtc_i_band,
-                              .n_probe = periods_up(0.25f * p->catch_i * t_per_a / p->ts),
-                              .n_pulse_max = periods_up(1.5f * p->catch_i * t_per_a / p->ts),
-                              .n_gap_max = periods_up(rot / (w_min * p->ts)),
-                              .n_wait_max = periods_up(wait / p->ts)};
+    b->fly = (mc_catch_cfg_t){.ts = p->control_ts_s, .ld = m->ld, .lq = m->lq, .psi_pm = m->psi_pm,
+                              .i_pulse = p->startup_catch_i_a, .i_detect = 0.25f * p->startup_catch_i_a, .i_rest = p->startup_i_rest_a,
+                              .rot_target = rot, .high_speed_share = 0.9f, .v_device = p->hw_device_drop_v,
+                              .i_band = p->control_dtc_i_band_a,
+                              .n_probe = periods_up(0.25f * p->startup_catch_i_a * t_per_a / p->control_ts_s),
+                              .n_pulse_max = periods_up(1.5f * p->startup_catch_i_a * t_per_a / p->control_ts_s),
+                              .n_gap_max = periods_up(rot / (w_min * p->control_ts_s)),
+                              .n_wait_max = periods_up(wait / p->control_ts_s)};
     if (b->fly.n_gap_max < 2u) {
         b->fly.n_gap_max = 2u;
     }
@@ -95,53 +95,53 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
         b->fly.n_wait_max = b->fly.n_gap_max;
     }
     b->seq.timeout_catch =
-        (float)(2u * b->fly.n_pulse_max + 2u * b->fly.n_gap_max + 10u) * p->ts;
+        (float)(2u * b->fly.n_pulse_max + 2u * b->fly.n_gap_max + 10u) * p->control_ts_s;
 }
 
 static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
 {
     mc_initpos_cfg_default(&b->ip1);
-    b->ip1.ts = p->ts;
+    b->ip1.ts = p->control_ts_s;
     b->ip1.rs = m->rs;
     b->ip1.ld = m->ld;
     b->ip1.lq = m->lq;
-    b->ip1.cost = (mc_ip_cost_t)p->ip1_cost;
+    b->ip1.cost = (mc_ip_cost_t)p->startup_step1_cost;
     b->ip1.model = (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
-    b->ip1.m = (int)p->ip1_m;
-    b->ip1.n_dir = (int)p->ip1_dirs;
-    b->ip1.i_trip = p->i_trip;
-    b->ip1.i_rest = p->ip_i_rest;
+    b->ip1.m = (int)p->startup_step1_m;
+    b->ip1.n_dir = (int)p->startup_step1_dirs;
+    b->ip1.i_trip = p->control_i_trip_a;
+    b->ip1.i_rest = p->startup_i_rest_a;
     mc_pulse3_cfg_default(&b->pulse3);
     b->pulse3.rs = m->rs;
-    b->pulse3.n = (int)p->ip1_m;
-    b->pulse3.i_trip = p->i_trip;
-    b->pulse3.i_rest = p->ip_i_rest;
+    b->pulse3.n = (int)p->startup_step1_m;
+    b->pulse3.i_trip = p->control_i_trip_a;
+    b->pulse3.i_rest = p->startup_i_rest_a;
     mc_polarity_cfg_default(&b->ip2);
-    b->ip2.ts = p->ts;
+    b->ip2.ts = p->control_ts_s;
     b->ip2.rs = m->rs;
     b->ip2.model = b->ip1.model;
-    b->ip2.v_pol = p->v_pol;
-    b->ip2.n = (int)p->ip2_n;
-    b->ip2.i_trip = p->i_trip;
-    b->ip2.i_rest = p->ip_i_rest;
+    b->ip2.v_pol = p->startup_v_pol_v;
+    b->ip2.n = (int)p->startup_step2_n;
+    b->ip2.i_trip = p->control_i_trip_a;
+    b->ip2.i_rest = p->startup_i_rest_a;
     mc_dvi_cfg_default(&b->dvi);
     b->dvi.rs = m->rs;
-    b->dvi.v = p->v_pol;
-    b->dvi.n = (int)p->dvi_n;
-    b->dvi.i_trip = p->i_trip;
-    b->dvi.i_rest = p->ip_i_rest;
-    b->three_step = p->init_three_step == MC_CHOICE_init_three_step_three_step;
-    b->ip1_pulse3 = p->ip1_pulse3 == MC_CHOICE_ip1_pulse3_three_phase;
-    b->ip2_dvi = p->ip2_dvi == MC_CHOICE_ip2_dvi_dvi;
-    const float cal = 2.0f * (float)p->offset_cal_samples * p->ts;
-    b->seq = (mc_seq_cfg_t){.ts = p->ts, .init_pos = b->three_step, .timeout_cal = cal > 0.1f ? cal : 0.1f,
-                            .timeout_step12 = p->timeout_step12, .timeout_step3 = p->timeout_step3};
-    b->seq.catch_first = p->catch_on == MC_CHOICE_catch_on_on && mc_angle_src_get(p->angle_src)->cls == MC_ANGLE_ESTIMATOR;
-    b->src_measures = mc_angle_src_get(p->angle_src)->cls == MC_ANGLE_SENSOR;
+    b->dvi.v = p->startup_v_pol_v;
+    b->dvi.n = (int)p->startup_dvi_n;
+    b->dvi.i_trip = p->control_i_trip_a;
+    b->dvi.i_rest = p->startup_i_rest_a;
+    b->three_step = p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step;
+    b->ip1_pulse3 = p->startup_step1_method == MC_CHOICE_startup_step1_method_three_phase;
+    b->ip2_dvi = p->startup_polarity == MC_CHOICE_startup_polarity_dvi;
+    const float cal = 2.0f * (float)p->control_offset_cal_samples * p->control_ts_s;
+    b->seq = (mc_seq_cfg_t){.ts = p->control_ts_s, .init_pos = b->three_step, .timeout_cal = cal > 0.1f ? cal : 0.1f,
+                            .timeout_step12 = p->startup_timeout_step12_s, .timeout_step3 = p->startup_timeout_step3_s};
+    b->seq.catch_first = p->startup_catch == MC_CHOICE_startup_catch_on && mc_angle_src_get(p->control_angle_source)->cls == MC_ANGLE_ESTIMATOR;
+    b->src_measures = mc_angle_src_get(p->control_angle_source)->cls == MC_ANGLE_SENSOR;
     build_catch(p, m, b);
-    b->step3_speed_tol = p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs;
-    b->step3_hold = (uint32_t)(p->step3_hold / p->ts + 0.5f);
-    mc_lpf1_init(&b->step3_lpf, 50.0f, p->ts, 0.0f);
+    b->step3_speed_tol = p->startup_step3_speed_tol_rpm * RPM_TO_RAD_S * (float)p->motor_pole_pairs;
+    b->step3_hold = (uint32_t)(p->startup_step3_hold_s / p->control_ts_s + 0.5f);
+    mc_lpf1_init(&b->step3_lpf, 50.0f, p->control_ts_s, 0.0f);
 }
 
 /* The selected angle source: the machine model it gets (estimator.model's form of the estimator's
@@ -149,19 +149,19 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
  * configuration by its descriptor; the injection follows its capabilities. */
 static bool build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b, mc_param_err_t *err)
 {
-    const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->control_angle_source);
     b->src.rs = m->rs;
-    b->src.model = p->est_model == MC_CHOICE_est_model_fluxmap ? (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map}
+    b->src.model = p->estimator_model == MC_CHOICE_estimator_model_fluxmap ? (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map}
                                      : (mc_flux_model_t){MC_FLUX_CONST, m->ld, m->lq, m->psi_pm, 0};
     if (!src->build(p, b->src.rs, &b->src.model, &b->src.cfg, err)) {
         return false;
     }
-    b->inject = src->needs_injection && p->inj_kind != MC_CHOICE_inj_kind_off;
+    b->inject = src->needs_injection && p->injection_kind != MC_CHOICE_injection_kind_off;
     b->cc_map = b->src.model.kind == MC_FLUX_MAP && b->src.model.map != 0;
-    b->inj = (mc_inj_cfg_t){.kind = (mc_inj_kind_t)p->inj_kind, .v1 = p->inj_v1, .f_hz = p->inj_f_hz,
-                            .omega_n1 = p->n1_rpm * RPM_TO_RAD_S * (float)p->pole_pairs, .ts = p->ts};
-    const float f_notch = p->inj_f_hz < 0.45f / p->ts ? p->inj_f_hz : 0.45f / p->ts;
-    mc_biquad_init_notch(&b->notch, f_notch, p->notch_q, p->ts);
+    b->inj = (mc_inj_cfg_t){.kind = (mc_inj_kind_t)p->injection_kind, .v1 = p->injection_v1_v, .f_hz = p->injection_f_hz,
+                            .omega_n1 = p->injection_n1_rpm * RPM_TO_RAD_S * (float)p->motor_pole_pairs, .ts = p->control_ts_s};
+    const float f_notch = p->injection_f_hz < 0.45f / p->control_ts_s ? p->injection_f_hz : 0.45f / p->control_ts_s;
+    mc_biquad_init_notch(&b->notch, f_notch, p->injection_notch_q, p->control_ts_s);
     return true;
 }
 
@@ -172,79 +172,79 @@ static uint32_t periods_of(float seconds, float ts)
 
 static void build_protection(const mc_params_t *p, mc_drive_blk_t *b)
 {
-    const float el = RPM_TO_RAD_S * (float)p->pole_pairs;
+    const float el = RPM_TO_RAD_S * (float)p->motor_pole_pairs;
     mc_protect_cfg_t *r = &b->prot;
-    const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
-    r->ts = p->ts;
-    r->pole_pairs = (int)p->pole_pairs;
-    r->adc_max = (int32_t)(float)((1L << p->adc_bits) - 1L);
-    r->i_trip = p->i_trip;
-    r->vdc_min = p->vdc_min;
-    r->vdc_max = p->vdc_max;
-    r->rs = p->rs;
-    r->ld = p->ld;
-    r->lq = p->lq;
-    r->psi_pm = p->psi_pm;
-    r->overspeed = p->overspeed_rpm * el;
-    r->recover = p->lock_action == MC_CHOICE_lock_action_recover && src->cls == MC_ANGLE_ESTIMATOR;
-    r->hold_fw = p->overspeed_action == MC_CHOICE_overspeed_action_hold_fw;
-    r->ug_coef = 1.7320508f * p->psi_pm;
-    b->seq.timeout_reaction = p->reaction_timeout;
-    r->retries = (uint32_t)p->retries;
-    r->retry_reset_n = periods_of(p->retry_reset, p->ts);
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->control_angle_source);
+    r->ts = p->control_ts_s;
+    r->pole_pairs = (int)p->motor_pole_pairs;
+    r->adc_max = (int32_t)(float)((1L << p->hw_adc_bits) - 1L);
+    r->i_trip = p->control_i_trip_a;
+    r->vdc_min = p->control_vdc_min_v;
+    r->vdc_max = p->control_vdc_max_v;
+    r->rs = p->motor_rs_ohm;
+    r->ld = p->motor_ld_h;
+    r->lq = p->motor_lq_h;
+    r->psi_pm = p->motor_psi_pm_wb;
+    r->overspeed = p->protection_overspeed_rpm * el;
+    r->recover = p->protection_lock_action == MC_CHOICE_protection_lock_action_recover && src->cls == MC_ANGLE_ESTIMATOR;
+    r->hold_fw = p->protection_overspeed_action == MC_CHOICE_protection_overspeed_action_hold_fw;
+    r->ug_coef = 1.7320508f * p->motor_psi_pm_wb;
+    b->seq.timeout_reaction = p->protection_reaction_timeout_s;
+    r->retries = (uint32_t)p->protection_retries;
+    r->retry_reset_n = periods_of(p->protection_retry_reset_s, p->control_ts_s);
     /* 20 Hz: well below the injection and PWM ripple, fast against the 20 ms persistences */
-    r->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->ts);
-    r->i_sum_tol = p->i_sum_tol;
-    r->i_sum_n = periods_of(p->i_sum_time, p->ts);
-    r->track_err = p->track_err;
-    r->track_n = periods_of(p->track_time, p->ts);
-    r->lock_tol = p->lock_tol;
-    r->lock_floor = p->lock_floor_rpm * el;
-    r->lock_n = src->lock_checks ? periods_of(p->lock_time, p->ts) : 0u;
-    r->jump_n = src->lock_checks ? periods_of(p->jump_time, p->ts) : 0u;
-    r->jump = p->jump_deg * (MC_PI / 180.0f);
-    r->stall_speed = p->stall_rpm * el;
-    r->stall_torque = 0.9f * p->torque_max;
-    r->stall_n = periods_of(p->stall_time, p->ts);
-    r->accel_n = periods_of(p->accel_time, p->ts);
-    r->accel_torque = 0.5f * p->torque_max;
-    r->accel_per_nm = 0.5f * (float)p->pole_pairs / p->inertia;
-    r->resid_v = p->resid_v;
-    r->resid_w_coef = 0.5f * p->lq * p->i_max;
-    r->resid_n = periods_of(p->resid_time, p->ts);
+    r->avg_k = 1.0f - expf(-MC_2PI * 20.0f * p->control_ts_s);
+    r->i_sum_tol = p->protection_i_sum_tol_a;
+    r->i_sum_n = periods_of(p->protection_i_sum_time_s, p->control_ts_s);
+    r->track_err = p->protection_tracking_err_a;
+    r->track_n = periods_of(p->protection_tracking_time_s, p->control_ts_s);
+    r->lock_tol = p->protection_lock_speed_tol;
+    r->lock_floor = p->protection_lock_speed_floor_rpm * el;
+    r->lock_n = src->lock_checks ? periods_of(p->protection_lock_time_s, p->control_ts_s) : 0u;
+    r->jump_n = src->lock_checks ? periods_of(p->protection_lock_jump_time_s, p->control_ts_s) : 0u;
+    r->jump = p->protection_lock_jump_deg * (MC_PI / 180.0f);
+    r->stall_speed = p->protection_stall_speed_rpm * el;
+    r->stall_torque = 0.9f * p->control_torque_max_nm;
+    r->stall_n = periods_of(p->protection_stall_time_s, p->control_ts_s);
+    r->accel_n = periods_of(p->protection_accel_time_s, p->control_ts_s);
+    r->accel_torque = 0.5f * p->control_torque_max_nm;
+    r->accel_per_nm = 0.5f * (float)p->motor_pole_pairs / p->motor_inertia_kgm2;
+    r->resid_v = p->protection_residual_v;
+    r->resid_w_coef = 0.5f * p->motor_lq_h * p->control_i_max_a;
+    r->resid_n = periods_of(p->protection_residual_time_s, p->control_ts_s);
 }
 
 /* The running polarity re-check (mc/polcheck.h); after build_protection (its 20 Hz average). */
 static void build_polcheck(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
 {
     mc_polcheck_cfg_t *pc = &b->pol;
-    pc->enable = p->pol_check != MC_CHOICE_pol_check_off;
-    pc->at_start = p->pol_check == MC_CHOICE_pol_check_at_start;
+    pc->enable = p->protection_polarity_check != MC_CHOICE_protection_polarity_check_off;
+    pc->at_start = p->protection_polarity_check == MC_CHOICE_protection_polarity_check_at_start;
     pc->inject = b->inject;
     pc->three_step = b->three_step;
     pc->omega_n1 = b->inj.omega_n1;
-    pc->bias = p->pol_bias;
+    pc->bias = p->protection_polarity_bias_a;
     /* the polarity re-check's expected HF ratio from the map's l_dd at +-I_b (none: 0) */
     pc->log_ratio = 0.0f;
     if (m->map != 0) {
         const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
         mc_dq_t psi;
         float lp[4], ln[4];
-        mc_flux_eval(&fm, (mc_dq_t){p->pol_bias, 0.0f}, &psi, lp, 0);
-        mc_flux_eval(&fm, (mc_dq_t){-p->pol_bias, 0.0f}, &psi, ln, 0);
+        mc_flux_eval(&fm, (mc_dq_t){p->protection_polarity_bias_a, 0.0f}, &psi, lp, 0);
+        mc_flux_eval(&fm, (mc_dq_t){-p->protection_polarity_bias_a, 0.0f}, &psi, ln, 0);
         if (lp[0] > 0.0f && ln[0] > 0.0f) {
             pc->log_ratio = 2.0f * logf(ln[0] / lp[0]);
         }
     }
     /* 2 injection cycles to settle, 4 to measure */
-    const float cyc = 1.0f / (p->inj_f_hz * p->ts);
+    const float cyc = 1.0f / (p->injection_f_hz * p->control_ts_s);
     pc->settle_n = periods_up(2.0f * cyc);
     pc->measure_n = periods_up(4.0f * cyc);
     /* at_start: after five time constants of the PLL, when a wrong start angle has settled on
      * one of the HF saliency's two solutions */
-    pc->start_n = periods_up(5.0f / (MC_2PI * p->pll_bw_hz) / p->ts);
+    pc->start_n = periods_up(5.0f / (MC_2PI * p->estimator_pll_bw_hz) / p->control_ts_s);
     /* the speed estimate may drift by 5 x Step III's tolerance during the check */
-    pc->w_scale = 0.1745f / (5.0f * p->step3_tol_rpm * RPM_TO_RAD_S * (float)p->pole_pairs);
+    pc->w_scale = 0.1745f / (5.0f * p->startup_step3_speed_tol_rpm * RPM_TO_RAD_S * (float)p->motor_pole_pairs);
     pc->avg_k = b->prot.avg_k;
 }
 
@@ -258,29 +258,29 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     }
     /* the flux map: where the source needs it with this estimator.model, and for Steps I-II's
      * l_dd profile and nonlinear costs */
-    const bool need_map = (mc_angle_src_get(p->angle_src)->map_models & 1u << p->est_model) != 0u ||
-                          (p->init_three_step == MC_CHOICE_init_three_step_three_step &&
-                           (p->ip2_dvi == MC_CHOICE_ip2_dvi_generalized ||
-                            (p->ip1_pulse3 == MC_CHOICE_ip1_pulse3_pulses && p->ip1_cost != MC_CHOICE_ip1_cost_linear)));
+    const bool need_map = (mc_angle_src_get(p->control_angle_source)->map_models & 1u << p->estimator_model) != 0u ||
+                          (p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step &&
+                           (p->startup_polarity == MC_CHOICE_startup_polarity_generalized ||
+                            (p->startup_step1_method == MC_CHOICE_startup_step1_method_pulses && p->startup_step1_cost != MC_CHOICE_startup_step1_cost_linear)));
     mc_est_model_t m;
     if (!check_model(p, &cfg->est, &m, need_map, err)) {
         return false;
     }
     mc_drive_blk_t *b = &out->blk;
     *b = (mc_drive_blk_t){0};
-    b->ts = p->ts;
-    b->pole_pairs = (int)p->pole_pairs;
-    const float max_count = (float)((1L << p->adc_bits) - 1L);
-    b->offs.amps_per_count = 2.0f * p->i_span / max_count;
-    b->volts_per_count = p->vdc_span / max_count;
-    b->offs.nominal = (float)(1L << (p->adc_bits - 1));
-    b->offs.tol = p->adc_offset_tol * (float)(1L << p->adc_bits);
-    b->offs.ts = p->ts;
-    b->i_ref_max = p->i_max * (1.0f - p->i_headroom);
-    b->fwe = (mc_fwe_cfg_t){.ts = p->ts, .rs = m.rs, .i_stop = 1.1f * p->i_max, .overmod = p->u_loop > 1.0f};
-    b->u_loop = p->u_loop;
-    b->i_slew = p->i_slew;
-    b->offs.samples = (uint32_t)p->offset_cal_samples;
+    b->ts = p->control_ts_s;
+    b->pole_pairs = (int)p->motor_pole_pairs;
+    const float max_count = (float)((1L << p->hw_adc_bits) - 1L);
+    b->offs.amps_per_count = 2.0f * p->hw_i_span_a / max_count;
+    b->volts_per_count = p->hw_vdc_span_v / max_count;
+    b->offs.nominal = (float)(1L << (p->hw_adc_bits - 1));
+    b->offs.tol = p->hw_adc_offset_tol * (float)(1L << p->hw_adc_bits);
+    b->offs.ts = p->control_ts_s;
+    b->i_ref_max = p->control_i_max_a * (1.0f - p->control_i_headroom);
+    b->fwe = (mc_fwe_cfg_t){.ts = p->control_ts_s, .rs = m.rs, .i_stop = 1.1f * p->control_i_max_a, .overmod = p->control_u_loop > 1.0f};
+    b->u_loop = p->control_u_loop;
+    b->i_slew = p->control_i_slew_a_per_s;
+    b->offs.samples = (uint32_t)p->control_offset_cal_samples;
     build_startup(p, &m, b);
     if (!build_source(p, &m, b, err)) {
         return false;
@@ -288,17 +288,17 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     build_protection(p, b);
     build_polcheck(p, &m, b);
 
-    mc_cc_cfg_from_bandwidth(&out->cc, p->cc_bw_hz, p->rs, p->ld, p->lq, p->psi_pm, p->ts);
-    out->cc.decouple = p->cc_decouple != 0;
-    out->sc = (mc_sc_cfg_t){.kp = p->sc_kp, .ki = p->sc_ki, .ts = p->ts * (float)p->sc_decimation,
-                            .torque_max = p->torque_max, .decimation = (int)p->sc_decimation};
-    out->tref = (mc_tref_cfg_t){.pole_pairs = (int)p->pole_pairs,
-                                .mach = {.ld = p->ld, .lq = p->lq, .psi_pm = p->psi_pm},
-                                .i_max = b->i_ref_max, .u_margin = p->u_margin, .use_table = p->mtpa_table == MC_CHOICE_mtpa_table_table,
-                                .ts = p->ts};
+    mc_cc_cfg_from_bandwidth(&out->cc, p->control_current_bw_hz, p->motor_rs_ohm, p->motor_ld_h, p->motor_lq_h, p->motor_psi_pm_wb, p->control_ts_s);
+    out->cc.decouple = p->control_decouple != 0;
+    out->sc = (mc_sc_cfg_t){.kp = p->control_speed_kp, .ki = p->control_speed_ki, .ts = p->control_ts_s * (float)p->control_speed_decimation,
+                            .torque_max = p->control_torque_max_nm, .decimation = (int)p->control_speed_decimation};
+    out->tref = (mc_tref_cfg_t){.pole_pairs = (int)p->motor_pole_pairs,
+                                .mach = {.ld = p->motor_ld_h, .lq = p->motor_lq_h, .psi_pm = p->motor_psi_pm_wb},
+                                .i_max = b->i_ref_max, .u_margin = p->control_u_margin, .use_table = p->control_mtpa == MC_CHOICE_control_mtpa_table,
+                                .ts = p->control_ts_s};
     mc_mtpa_table_fill_linear(&out->tref.table, &out->tref.mach, b->i_ref_max);
-    out->dtc = (mc_dtc_cfg_t){.t_dead = p->dead_time, .t_pwm = p->ts, .i_band = p->dtc_i_band,
-                              .enable = p->dtc_enable != 0};
+    out->dtc = (mc_dtc_cfg_t){.t_dead = p->hw_dead_time_s, .t_pwm = p->control_ts_s, .i_band = p->control_dtc_i_band_a,
+                              .enable = p->control_deadtime_comp != 0};
     return true;
 }
 

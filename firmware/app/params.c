@@ -11,17 +11,17 @@
 #define MC_CHOICE_TEXT(choices) (sizeof("" choices(MC_CH_TEXT)) > 1u ? &("" choices(MC_CH_TEXT))[1] : "")
 
 /* An ENUM's range is its choice list: the table's max is the last position. */
-#define MC_X(m, name, type, unit, lo, hi, def, rule, group, access, choices, doc) \
-    _Static_assert(MC_PT_##type != MC_PT_ENUM || ((int)(lo) == 0 && (int)(hi) == MC_CHOICE_##m##_COUNT - 1), \
-                   name ": min..max must span the choice list");
+#define MC_X(g, k, type, unit, lo, hi, def, rule, group, access, choices, doc) \
+    _Static_assert(MC_PT_##type != MC_PT_ENUM || ((int)(lo) == 0 && (int)(hi) == MC_CHOICE_##g##_##k##_COUNT - 1), \
+                   #g "." #k ": min..max must span the choice list");
 MC_PARAMS(MC_X)
 #undef MC_X
 
 /* clang-format off */
 const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
-#define MC_X(m, name_, type_, unit_, lo, hi, def_, rule_, group_, access_, choices_, doc_) \
-    {.name = name_, .unit = unit_, .choices = MC_CHOICE_TEXT(choices_), .doc = doc_, \
-     .offset = (uint16_t)offsetof(mc_params_t, m), .type = (uint8_t)MC_PT_##type_, \
+#define MC_X(g, k, type_, unit_, lo, hi, def_, rule_, group_, access_, choices_, doc_) \
+    {.name = #g "." #k, .unit = unit_, .choices = MC_CHOICE_TEXT(choices_), .doc = doc_, \
+     .offset = (uint16_t)offsetof(mc_params_t, g##_##k), .type = (uint8_t)MC_PT_##type_, \
      .group = (uint8_t)MC_PG_##group_, .access = (uint8_t)MC_PA_##access_, \
      .rule = (uint8_t)MC_RULE_##rule_, .min = (float)(lo), .max = (float)(hi), .def = (float)(def_)},
     MC_PARAMS(MC_X)
@@ -227,55 +227,55 @@ static float maxf(float a, float b)
 /* What the selected angle source is and needs (mc/angle_source.h) */
 static bool estimating(const mc_params_t *p)
 {
-    const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->control_angle_source);
     return src != NULL && src->cls == MC_ANGLE_ESTIMATOR;
 }
 
 static bool needs_injection(const mc_params_t *p)
 {
-    const mc_angle_src_desc_t *src = mc_angle_src_get(p->angle_src);
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->control_angle_source);
     return src != NULL && src->needs_injection;
 }
 
 static bool injecting(const mc_params_t *p)
 {
-    return needs_injection(p) && p->inj_kind != MC_CHOICE_inj_kind_off;
+    return needs_injection(p) && p->injection_kind != MC_CHOICE_injection_kind_off;
 }
 
 static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
 {
     /* f_s to the hertz: 1 / 5e-4f is 1999.99994 Hz in float, and a filter corner 2e-5 Hz off
      * its round value would change nothing but the last bits of every trace */
-    const float fs = roundf(1.0f / p->ts);
+    const float fs = roundf(1.0f / p->control_ts_s);
     const float pi2 = 6.28318531f;
     switch (rule) {
     case MC_RULE_I_TRIP:
         /* 1.5 x rated: room above the current limit for regulation transients, below what
          * the power stage of a drive sized for the motor survives */
-        return 1.5f * p->i_rated;
+        return 1.5f * p->motor_i_rated_a;
     case MC_RULE_VDC_MIN:
-        return 0.5f * p->vdc_nominal;
+        return 0.5f * p->hw_vdc_nominal_v;
     case MC_RULE_VDC_MAX:
-        return 1.5f * p->vdc_nominal;
+        return 1.5f * p->hw_vdc_nominal_v;
     case MC_RULE_I_MAX:
-        return p->i_rated;
+        return p->motor_i_rated_a;
     case MC_RULE_CC_BW: {
         /* f_s / 40 keeps w_bw Ts = 0.16 rad, where the 1.5-period delay costs ~14 deg of phase
          * (250 Hz at 10 kHz); while injecting, at most half the injection frequency, so the
          * notch in the feedback stays outside the loop's crossover */
         const float bw = fs / 40.0f;
-        return injecting(p) ? minf(bw, 0.5f * p->inj_f_hz) : bw;
+        return injecting(p) ? minf(bw, 0.5f * p->injection_f_hz) : bw;
     }
     case MC_RULE_I_SLEW:
         /* a reference step the loop follows without overshooting i_max: half the rated
          * current per loop time constant (10 kA/s on the thesis motor at 250 Hz) */
-        return nice2(0.5f * p->i_max * pi2 * p->cc_bw_hz);
+        return nice2(0.5f * p->control_i_max_a * pi2 * p->control_current_bw_hz);
     case MC_RULE_SPEED_BW: {
         /* at most 1/40 of the speed loop's own sampling rate (25 Hz at 10 kHz and decimation
          * 10), and sensorless at most the PLL's bandwidth, which filters the speed it uses */
-        float bw = minf(25.0f, fs / (40.0f * (float)p->sc_decimation));
+        float bw = minf(25.0f, fs / (40.0f * (float)p->control_speed_decimation));
         if (estimating(p)) {
-            bw = minf(bw, p->pll_bw_hz);
+            bw = minf(bw, p->estimator_pll_bw_hz);
         }
         return bw;
     }
@@ -285,45 +285,45 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
          * runs away (the thesis motor driven past ~1690 rpm tripped on over-current), so the
          * limit is that speed itself; a machine whose characteristic current is inside the limit
          * has none: then 3x the base speed */
-        const float u = p->vdc_nominal * 0.57735027f;
-        const float psi = maxf(p->psi_pm - p->ld * p->i_max, p->psi_pm / 3.0f);
+        const float u = p->hw_vdc_nominal_v * 0.57735027f;
+        const float psi = maxf(p->motor_psi_pm_wb - p->motor_ld_h * p->control_i_max_a, p->motor_psi_pm_wb / 3.0f);
         const float w_el = u / maxf(psi, 1e-6f);
-        return roundf(w_el * 60.0f / (pi2 * (float)p->pole_pairs));
+        return roundf(w_el * 60.0f / (pi2 * (float)p->motor_pole_pairs));
     }
     case MC_RULE_I_SUM: {
         /* three measured channels of an isolated star sum to zero; noise and quantisation of
          * three channels are a few counts, a stuck or drifted channel much more */
-        const float lsb = 2.0f * p->i_span / (float)((1L << p->adc_bits) - 1L);
-        return nice2(maxf(0.05f * p->i_rated, 8.0f * lsb));
+        const float lsb = 2.0f * p->hw_i_span_a / (float)((1L << p->hw_adc_bits) - 1L);
+        return nice2(maxf(0.05f * p->motor_i_rated_a, 8.0f * lsb));
     }
     case MC_RULE_TRACK:
-        return nice2(0.25f * p->i_rated);
+        return nice2(0.25f * p->motor_i_rated_a);
     case MC_RULE_RESID:
         /* a tenth of the voltage circle: dead time, device drops and resistance errors stay
          * far below it; a frozen angle shows the whole back-EMF psi_pm w */
-        return nice2(0.1f * p->vdc_nominal * 0.57735027f);
+        return nice2(0.1f * p->hw_vdc_nominal_v * 0.57735027f);
     case MC_RULE_LOCK_FLOOR:
-        return nice2(0.25f * p->n1_rpm);
+        return nice2(0.25f * p->injection_n1_rpm);
     case MC_RULE_STALL:
-        return nice2(0.05f * p->n1_rpm);
+        return nice2(0.05f * p->injection_n1_rpm);
     case MC_RULE_SC_DEC:
         /* the speed loop at 1 kHz whatever f_s: at 2 kHz a decimation of 10 left it 200 Hz and a
          * 5 Hz bandwidth, too slow to hold an active load at standstill */
         return maxf(1.0f, roundf(fs / 1000.0f));
     case MC_RULE_SPEED_KP:
         /* crossover at w_bw on the inertia alone: kp = J w_bw */
-        return p->inertia * pi2 * p->speed_bw_hz;
+        return p->motor_inertia_kgm2 * pi2 * p->control_speed_bw_hz;
     case MC_RULE_SPEED_KI: {
         /* PI zero a quarter of the crossover below it: kp w_bw / 4 (with kp from its rule,
          * J w_bw^2 / 4, which rounds as the double computation does) */
-        const float w = pi2 * p->speed_bw_hz;
-        return mc_param_is_auto(p, MC_PARAM_sc_kp) ? p->inertia * (w * w) / 4.0f : p->sc_kp * w / 4.0f;
+        const float w = pi2 * p->control_speed_bw_hz;
+        return mc_param_is_auto(p, MC_PARAM_control_speed_kp) ? p->motor_inertia_kgm2 * (w * w) / 4.0f : p->control_speed_kp * w / 4.0f;
     }
     case MC_RULE_TORQUE_MAX:
-        return p->torque_rated * 6.0f / 5.0f;   /* 1.2 x, rounded once less than 1.2f * T */
+        return p->motor_torque_rated_nm * 6.0f / 5.0f;   /* 1.2 x, rounded once less than 1.2f * T */
     case MC_RULE_I_SMALL:
         /* a current "near zero": 2.26 % of rated, the thesis motor's 0.3 A */
-        return nice2(0.0226f * p->i_rated);
+        return nice2(0.0226f * p->motor_i_rated_a);
     case MC_RULE_ENC_FC:
         return minf(500.0f, fs / 4.0f);
     case MC_RULE_INJ_F:
@@ -333,19 +333,19 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
     case MC_RULE_INJ_I:
         /* an HF current large enough to read the saliency through the sensor noise and small
          * against the rated current: 16 % of rated, the thesis' 2.1 A (70 V, 500 Hz, 10.5 mH) */
-        return 0.16f * p->i_rated;
+        return 0.16f * p->motor_i_rated_a;
     case MC_RULE_INJ_V1:
         /* the voltage that drives i_hf through Ld at the injection frequency (R negligible),
          * at most half the voltage circle Vdc/sqrt3, the rest is the control's */
-        return minf(nice2(p->inj_i_hf * pi2 * p->inj_f_hz * p->ld), 0.5f * p->vdc_nominal * 0.57735027f);
+        return minf(nice2(p->injection_i_hf_a * pi2 * p->injection_f_hz * p->motor_ld_h), 0.5f * p->hw_vdc_nominal_v * 0.57735027f);
     case MC_RULE_N1:
         /* the injection fades out at 33.3 Hz electrical, where the back-EMF (ratio to the HF
          * voltage psi_pm w / V1 ~ 1 on the thesis motor) carries the estimate: 400 rpm at p = 5 */
-        return 2000.0f / (float)p->pole_pairs;
+        return 2000.0f / (float)p->motor_pole_pairs;
     case MC_RULE_PLL_BW:
         /* 6 % of the injection frequency: the injection ripple on the raw angle is attenuated
          * ~25 dB while the PLL still follows the speed loop (30 Hz at 500 Hz) */
-        return nice2(0.06f * p->inj_f_hz);
+        return nice2(0.06f * p->injection_f_hz);
     case MC_RULE_PLL_FC:
         return minf(200.0f, fs / 10.0f);
     case MC_RULE_K2: {
@@ -354,52 +354,52 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
          * 107.77 V at 600 rpm) keeps the regularisation's share: a weak-magnet machine
          * (brodatzki-35kw: 19 V) otherwise has its speed estimate held back 30 times harder and
          * UNOP settles in a wrong basin at a few hundred rpm */
-        const float wb = p->speed_scale_rpm * pi2 / 60.0f * (float)p->pole_pairs;
-        const float r = p->psi_pm * wb / 107.77f;
+        const float wb = p->estimator_speed_scale_rpm * pi2 / 60.0f * (float)p->motor_pole_pairs;
+        const float r = p->motor_psi_pm_wb * wb / 107.77f;
         return nice2(100.0f * r * r);
     }
     case MC_RULE_STEP1_M: {
         /* the pulse raises the current by ~0.72 x rated through Ld at 2/3 Vdc (V(100) on the
          * phase): enough for the saliency, far from the trip; m = 5 on the thesis motor */
-        const float di_per_period = (2.0f / 3.0f) * p->vdc_nominal * p->ts / p->ld;
-        const float m = roundf(0.72f * p->i_rated / di_per_period);
+        const float di_per_period = (2.0f / 3.0f) * p->hw_vdc_nominal_v * p->control_ts_s / p->motor_ld_h;
+        const float m = roundf(0.72f * p->motor_i_rated_a / di_per_period);
         return maxf(1.0f, minf(16.0f, m));
     }
     case MC_RULE_V_POL:
         /* a swing of 0.57 x rated through Ld in n periods, where l_dd's asymmetry shows: the
          * thesis' 200 V with n = 4; at most the hexagon's 2/3 Vdc */
-        return minf(nice2(0.573f * p->i_rated * p->ld / ((float)p->ip2_n * p->ts)),
-                    (2.0f / 3.0f) * p->vdc_nominal);
+        return minf(nice2(0.573f * p->motor_i_rated_a * p->motor_ld_h / ((float)p->startup_step2_n * p->control_ts_s)),
+                    (2.0f / 3.0f) * p->hw_vdc_nominal_v);
     case MC_RULE_STEP3_TOL: {
         /* expected noise of the filtered speed estimate: one ADC count of current noise through
          * Lq over one period is a voltage error sqrt2 Lq lsb / Ts, read as speed through psi_pm,
          * averaged over the PLL's bandwidth; 5 sigma of it, but at least 0.42 Hz electrical
          * (25/p rpm: the thesis motor's 5 rpm) */
-        const float lsb = 2.0f * p->i_span / (float)((1L << p->adc_bits) - 1L);
-        const float psi = maxf(p->psi_pm, 0.1f * p->lq * p->i_rated);
-        const float sigma_w = 1.41421356f * p->lq * lsb / (p->ts * psi) * sqrtf(2.0f * p->pll_bw_hz * p->ts);
-        const float rpm_per_el = 60.0f / (pi2 * (float)p->pole_pairs);
-        return nice2(maxf(25.0f / (float)p->pole_pairs, 5.0f * sigma_w * rpm_per_el));
+        const float lsb = 2.0f * p->hw_i_span_a / (float)((1L << p->hw_adc_bits) - 1L);
+        const float psi = maxf(p->motor_psi_pm_wb, 0.1f * p->motor_lq_h * p->motor_i_rated_a);
+        const float sigma_w = 1.41421356f * p->motor_lq_h * lsb / (p->control_ts_s * psi) * sqrtf(2.0f * p->estimator_pll_bw_hz * p->control_ts_s);
+        const float rpm_per_el = 60.0f / (pi2 * (float)p->motor_pole_pairs);
+        return nice2(maxf(25.0f / (float)p->motor_pole_pairs, 5.0f * sigma_w * rpm_per_el));
     }
     case MC_RULE_T_STEP12:
-        return maxf(0.02f, 200.0f * p->ts);
+        return maxf(0.02f, 200.0f * p->control_ts_s);
     case MC_RULE_CATCH_I:
         /* a current that reads the angle to a degree through the sensor noise and brakes little:
          * 15 % of rated (the rotation it takes, i Lq / psi_pm, is 4 deg on the thesis motor).
          * Above the generation speed the pulse's current is also the flux lag the field-weakening
          * entry starts from (mc/fw_entry.h): a quarter of rated made the thesis motor's 1500 rpm
          * entry peak at 15.0 A, 15 % at 14.0 A (10 seeds x 4 estimates) */
-        return nice2(0.15f * p->i_rated);
+        return nice2(0.15f * p->motor_i_rated_a);
     case MC_RULE_OFFSET_CAL:
         /* 6.4 ms of samples (64 at 10 kHz), at least 16 for the average's noise */
         return maxf(16.0f, roundf(6.4e-3f * fs));
     case MC_RULE_POL_BIAS:
         /* Step II's swing (0.57 x rated) rounded down: enough saturation to tell the poles */
-        return nice2(0.5f * p->i_rated);
+        return nice2(0.5f * p->motor_i_rated_a);
     case MC_RULE_CATCH_MIN:
         /* 2 Hz electrical: slower rotors move less than 25 deg during the standstill start's
          * ~30 ms, which Step III and the estimator absorb; the probe to see it lasts ~2.5 ms */
-        return 120.0f / (float)p->pole_pairs;
+        return 120.0f / (float)p->motor_pole_pairs;
     case MC_RULE_NONE:
     case MC_RULE_COUNT:
     default:
@@ -413,8 +413,8 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
  * stored as it is, for the validation to report. */
 void mc_params_derive(mc_params_t *p)
 {
-    if (!(p->ts > 0.0f) || p->pole_pairs < 1 || p->adc_bits < 1 || p->adc_bits > 30 || p->ip2_n < 1 ||
-        p->sc_decimation < 1) {
+    if (!(p->control_ts_s > 0.0f) || p->motor_pole_pairs < 1 || p->hw_adc_bits < 1 || p->hw_adc_bits > 30 || p->startup_step2_n < 1 ||
+        p->control_speed_decimation < 1) {
         return;   /* the validation reports the entry; rules would divide by it */
     }
     for (int pass = 0; pass < 4; ++pass) {
@@ -453,51 +453,51 @@ bool mc_params_validate(const mc_params_t *p, mc_param_err_t *err)
             return mc_param_fail(err, MC_PERR_RANGE, k, v, "out of range");
         }
     }
-    const float fs = 1.0f / p->ts;
+    const float fs = 1.0f / p->control_ts_s;
     /* sensing: the trip must be seen before the ADC clips, with 10 % for noise and ripple */
-    if (p->i_span < 1.1f * p->i_trip) {
-        return cross(err, MC_PARAM_i_span, MC_PARAM_i_trip, p, 1.1f * p->i_trip, mc_param_table[MC_PARAM_i_span].max,
+    if (p->hw_i_span_a < 1.1f * p->control_i_trip_a) {
+        return cross(err, MC_PARAM_hw_i_span_a, MC_PARAM_control_i_trip_a, p, 1.1f * p->control_i_trip_a, mc_param_table[MC_PARAM_hw_i_span_a].max,
                      "the current sensor span must exceed the over-current trip level by 10 %");
     }
-    if (p->i_max >= p->i_trip) {
-        return cross(err, MC_PARAM_i_max, MC_PARAM_i_trip, p, mc_param_table[MC_PARAM_i_max].min, p->i_trip,
+    if (p->control_i_max_a >= p->control_i_trip_a) {
+        return cross(err, MC_PARAM_control_i_max_a, MC_PARAM_control_i_trip_a, p, mc_param_table[MC_PARAM_control_i_max_a].min, p->control_i_trip_a,
                      "the current limit must be below the over-current trip level");
     }
-    if (p->vdc_nominal <= p->vdc_min || p->vdc_nominal >= p->vdc_max) {
-        return cross(err, MC_PARAM_vdc_nominal, p->vdc_nominal <= p->vdc_min ? MC_PARAM_vdc_min : MC_PARAM_vdc_max,
-                     p, p->vdc_min, p->vdc_max, "the nominal DC link must lie inside the trip window");
+    if (p->hw_vdc_nominal_v <= p->control_vdc_min_v || p->hw_vdc_nominal_v >= p->control_vdc_max_v) {
+        return cross(err, MC_PARAM_hw_vdc_nominal_v, p->hw_vdc_nominal_v <= p->control_vdc_min_v ? MC_PARAM_control_vdc_min_v : MC_PARAM_control_vdc_max_v,
+                     p, p->control_vdc_min_v, p->control_vdc_max_v, "the nominal DC link must lie inside the trip window");
     }
-    if (p->vdc_span <= p->vdc_max) {
-        return cross(err, MC_PARAM_vdc_span, MC_PARAM_vdc_max, p, p->vdc_max, mc_param_table[MC_PARAM_vdc_span].max,
+    if (p->hw_vdc_span_v <= p->control_vdc_max_v) {
+        return cross(err, MC_PARAM_hw_vdc_span_v, MC_PARAM_control_vdc_max_v, p, p->control_vdc_max_v, mc_param_table[MC_PARAM_hw_vdc_span_v].max,
                      "the DC-link sensor span must exceed the over-voltage trip level");
     }
-    if (p->u_margin > p->u_loop || p->u_margin > MC_SVPWM_FUND_MAX) {
+    if (p->control_u_margin > p->control_u_loop || p->control_u_margin > MC_SVPWM_FUND_MAX) {
         /* the references must plan for a fundamental the loop can hold: (2.14a) is below both */
-        return cross(err, MC_PARAM_u_margin, MC_PARAM_u_loop, p, mc_param_table[MC_PARAM_u_margin].min,
-                     p->u_loop < MC_SVPWM_FUND_MAX ? p->u_loop : MC_SVPWM_FUND_MAX,
+        return cross(err, MC_PARAM_control_u_margin, MC_PARAM_control_u_loop, p, mc_param_table[MC_PARAM_control_u_margin].min,
+                     p->control_u_loop < MC_SVPWM_FUND_MAX ? p->control_u_loop : MC_SVPWM_FUND_MAX,
                      "the references' voltage share must not exceed the current loop's (nor 1.049, the "
                      "largest steady fundamental of overmodulation)");
     }
-    if (p->cc_bw_hz * p->ts > 0.05f) {
-        return cross(err, MC_PARAM_cc_bw_hz, MC_PARAM_ts, p, mc_param_table[MC_PARAM_cc_bw_hz].min, 0.05f * fs,
+    if (p->control_current_bw_hz * p->control_ts_s > 0.05f) {
+        return cross(err, MC_PARAM_control_current_bw_hz, MC_PARAM_control_ts_s, p, mc_param_table[MC_PARAM_control_current_bw_hz].min, 0.05f * fs,
                      "the current-loop bandwidth must stay below f_s / 20");
     }
-    if (p->step3_hold < 2.0f * p->ts) {
-        return cross(err, MC_PARAM_step3_hold, MC_PARAM_ts, p, 2.0f * p->ts, mc_param_table[MC_PARAM_step3_hold].max,
+    if (p->startup_step3_hold_s < 2.0f * p->control_ts_s) {
+        return cross(err, MC_PARAM_startup_step3_hold_s, MC_PARAM_control_ts_s, p, 2.0f * p->control_ts_s, mc_param_table[MC_PARAM_startup_step3_hold_s].max,
                      "the Step III hold must last at least two periods");
     }
     if (needs_injection(p)) {
-        if (p->inj_kind != MC_CHOICE_inj_kind_off && p->inj_f_hz * p->ts > 0.5f) {
-            return cross(err, MC_PARAM_inj_f_hz, MC_PARAM_ts, p, mc_param_table[MC_PARAM_inj_f_hz].min, 0.5f * fs,
+        if (p->injection_kind != MC_CHOICE_injection_kind_off && p->injection_f_hz * p->control_ts_s > 0.5f) {
+            return cross(err, MC_PARAM_injection_f_hz, MC_PARAM_control_ts_s, p, mc_param_table[MC_PARAM_injection_f_hz].min, 0.5f * fs,
                          "the injection frequency must be at most half the sampling frequency");
         }
-        if (p->inj_v1 > p->vdc_nominal * 0.57735027f) {
-            return cross(err, MC_PARAM_inj_v1, MC_PARAM_vdc_nominal, p, 0.0f, p->vdc_nominal * 0.57735027f,
+        if (p->injection_v1_v > p->hw_vdc_nominal_v * 0.57735027f) {
+            return cross(err, MC_PARAM_injection_v1_v, MC_PARAM_hw_vdc_nominal_v, p, 0.0f, p->hw_vdc_nominal_v * 0.57735027f,
                          "the injection must fit inside the voltage circle Vdc/sqrt3");
         }
     }
-    if (p->init_three_step == MC_CHOICE_init_three_step_three_step && !needs_injection(p)) {   /* Step III runs on the injection */
-        return cross(err, MC_PARAM_init_three_step, MC_PARAM_angle_src, p, 0.0f, 0.0f,
+    if (p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step && !needs_injection(p)) {   /* Step III runs on the injection */
+        return cross(err, MC_PARAM_startup_init_pos, MC_PARAM_control_angle_source, p, 0.0f, 0.0f,
                      "the three-step start needs control.angle_source = unop");
     }
     return true;

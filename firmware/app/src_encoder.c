@@ -17,9 +17,9 @@ static bool enc_build(const mc_params_t *p, float rs, const mc_flux_model_t *mod
     (void)err;   /* the table's ranges cover everything it reads */
     *cfg = (mc_angle_src_cfg_t){0};
     *(mc_encoder_cfg_t *)(void *)cfg =
-        (mc_encoder_cfg_t){.pole_pairs = (int)p->pole_pairs, .counts_per_rev = 4u * (uint32_t)p->enc_lines,
-                           .offset_rad = p->enc_offset, .ts = p->ts, .pll_bw_hz = p->enc_pll_bw_hz,
-                           .speed_fc_hz = p->enc_speed_fc_hz};
+        (mc_encoder_cfg_t){.pole_pairs = (int)p->motor_pole_pairs, .counts_per_rev = 4u * (uint32_t)p->hw_encoder_lines,
+                           .offset_rad = p->hw_encoder_offset_rad, .ts = p->control_ts_s, .pll_bw_hz = p->control_encoder_pll_bw_hz,
+                           .speed_fc_hz = p->control_encoder_speed_fc_hz};
     return true;
 }
 

@@ -30,22 +30,22 @@ static bool unop_build(const mc_params_t *p, float rs, const mc_flux_model_t *mo
     (void)err;   /* the table's ranges and the drive's model check cover everything it reads */
     *cfg = (mc_angle_src_cfg_t){0};
     src_unop_cfg_t *c = (src_unop_cfg_t *)(void *)cfg;
-    const float pp = (float)p->pole_pairs;
+    const float pp = (float)p->motor_pole_pairs;
     mc_unop_cfg_default(&c->unop);
-    c->unop.ts = p->ts;
+    c->unop.ts = p->control_ts_s;
     c->unop.rs = rs;
     c->unop.model = *model;
-    c->unop.iter_max = (int)p->iter_max;
-    c->unop.step_tol = p->step_tol;
-    c->unop.k1 = p->k1;
-    c->unop.k2 = p->k2;
-    c->unop.omega_n1 = p->n1_rpm * RPM_TO_RAD_S * pp;
-    c->unop.omega_base = p->speed_scale_rpm * RPM_TO_RAD_S * pp;
-    c->unop.mid_sample = p->mid_sample != 0;
-    c->unop.reg_predicted = p->reg_predicted != 0;
+    c->unop.iter_max = (int)p->estimator_iter_max;
+    c->unop.step_tol = p->estimator_step_tol;
+    c->unop.k1 = p->estimator_k1;
+    c->unop.k2 = p->estimator_k2;
+    c->unop.omega_n1 = p->injection_n1_rpm * RPM_TO_RAD_S * pp;
+    c->unop.omega_base = p->estimator_speed_scale_rpm * RPM_TO_RAD_S * pp;
+    c->unop.mid_sample = p->estimator_mid_sample != 0;
+    c->unop.reg_predicted = p->estimator_reg_predicted != 0;
     /* critically damped PLL (3.9) */
-    const float w = MC_2PI * p->pll_bw_hz;
-    c->pll = (mc_pll_cfg_t){.kp = 2.0f * w, .ki = w * w, .ts = p->ts, .speed_fc_hz = p->pll_speed_fc_hz};
+    const float w = MC_2PI * p->estimator_pll_bw_hz;
+    c->pll = (mc_pll_cfg_t){.kp = 2.0f * w, .ki = w * w, .ts = p->control_ts_s, .speed_fc_hz = p->estimator_pll_speed_fc_hz};
     return true;
 }
 

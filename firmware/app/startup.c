@@ -193,7 +193,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
             mc_drive_trip(d, MC_FAULT_CONFIG);
             return;
         }
-        write_duties(d, (mc_abc_t){0.0f, 0.0f, 0.0f}, d->cfg->p.vdc_nominal);
+        write_duties(d, (mc_abc_t){0.0f, 0.0f, 0.0f}, d->cfg->p.hw_vdc_nominal_v);
         return;
     }
     const bool started = d->seq.state != MC_STATE_INIT_POS || begin_step1(d);

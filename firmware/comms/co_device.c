@@ -31,10 +31,10 @@ static void sdo_abort(mc_co_t *co, uint16_t index, uint8_t sub, uint32_t code)
 static void ds_cfg(const mc_co_t *co, mc_402_cfg_t *c)
 {
     const mc_params_t *p = mc_drive_params(co->drive);
-    const float accel = 0.05f * p->torque_rated / p->inertia * (60.0f / 6.2831853f);   /* [rpm/s] */
-    *c = (mc_402_cfg_t){.dt = co->cfg.step_s, .pole_pairs = p->pole_pairs, .rated_torque = p->torque_rated,
-                        .rated_current = p->i_rated, .psi_pm = p->psi_pm, .ld = p->ld, .lq = p->lq,
-                        .vdc_on = p->vdc_min, .max_speed_rpm = 0.95f * p->overspeed_rpm,
+    const float accel = 0.05f * p->motor_torque_rated_nm / p->motor_inertia_kgm2 * (60.0f / 6.2831853f);   /* [rpm/s] */
+    *c = (mc_402_cfg_t){.dt = co->cfg.step_s, .pole_pairs = p->motor_pole_pairs, .rated_torque = p->motor_torque_rated_nm,
+                        .rated_current = p->motor_i_rated_a, .psi_pm = p->motor_psi_pm_wb, .ld = p->motor_ld_h, .lq = p->motor_lq_h,
+                        .vdc_on = p->control_vdc_min_v, .max_speed_rpm = 0.95f * p->protection_overspeed_rpm,
                         .accel_rpm_s = accel > 1.0f ? accel : 1.0f};
 }
 

@@ -47,13 +47,13 @@ static void control_isr(void *ctx)
 
 static void board_cfg_from(const mc_params_t *p, hal_board_cfg_t *b)
 {
-    b->f_pwm_hz = 1.0f / p->ts;
-    b->dead_time_s = p->dead_time;
+    b->f_pwm_hz = 1.0f / p->control_ts_s;
+    b->dead_time_s = p->hw_dead_time_s;
     b->adc_ch_i[0] = 0u;
     b->adc_ch_i[1] = 1u;
     b->adc_ch_i[2] = 2u;
     b->adc_ch_vdc = 3u;
-    b->qep_counts_per_rev = 4u * (uint32_t)p->enc_lines;
+    b->qep_counts_per_rev = 4u * (uint32_t)p->hw_encoder_lines;
     b->can_bitrate = 500000u;
 }
 
@@ -149,8 +149,8 @@ int main(void)
         }
     }
     clock = board.time;
-    mc_scope_init(&scope, scope_buf, SCOPE_VALUES, cfg.p.ts);
-    const mc_co_cfg_t cc = {.node_id = 1u, .heartbeat_ms = 1000u, .step_s = 10.0f * cfg.p.ts, .vendor_id = 0u,
+    mc_scope_init(&scope, scope_buf, SCOPE_VALUES, cfg.p.control_ts_s);
+    const mc_co_cfg_t cc = {.node_id = 1u, .heartbeat_ms = 1000u, .step_s = 10.0f * cfg.p.control_ts_s, .vendor_id = 0u,
                             .product_code = 1u, .revision = 0x00020000u, .serial = 0u};
     (void)mc_co_init(&co, &cc, board.can, &drive, board.nvm, &scope, src);
     mc_co_set_defaults(&co, &base.p);   /* a reset node: the stored set, else the area's */

@@ -43,11 +43,11 @@ struct Alias {
     const char* key;
 };
 const Alias kAliases[] = {
-    {MC_PARAM_i_span, "sensors.i_full_scale_a"},    {MC_PARAM_vdc_span, "sensors.vdc_full_scale_v"},
-    {MC_PARAM_adc_bits, "sensors.adc_bits"},        {MC_PARAM_vdc_nominal, "inverter.vdc_v"},
-    {MC_PARAM_dead_time, "inverter.dead_time_s"},   {MC_PARAM_enc_lines, "sensors.encoder_lines"},
-    {MC_PARAM_v_device, "inverter.device_drop_v"},
-    {MC_PARAM_enc_offset, "sensors.encoder_offset_deg"}, {MC_PARAM_inertia, "mechanics.inertia_kgm2"},
+    {MC_PARAM_hw_i_span_a, "sensors.i_full_scale_a"},    {MC_PARAM_hw_vdc_span_v, "sensors.vdc_full_scale_v"},
+    {MC_PARAM_hw_adc_bits, "sensors.adc_bits"},        {MC_PARAM_hw_vdc_nominal_v, "inverter.vdc_v"},
+    {MC_PARAM_hw_dead_time_s, "inverter.dead_time_s"},   {MC_PARAM_hw_encoder_lines, "sensors.encoder_lines"},
+    {MC_PARAM_hw_device_drop_v, "inverter.device_drop_v"},
+    {MC_PARAM_hw_encoder_offset_rad, "sensors.encoder_offset_deg"}, {MC_PARAM_motor_inertia_kgm2, "mechanics.inertia_kgm2"},
 };
 
 }  // namespace
@@ -132,26 +132,26 @@ void set_drive_params(const Scenario& sc, const MachineParams& mp, double vdc, d
 {
     const std::string preset = "machine.preset";
     // the motor: the model the controller gets is the preset's (the estimator's may be scaled)
-    set_or_throw(sc, p, MC_PARAM_pole_pairs, mp.pole_pairs, preset);
-    set_or_throw(sc, p, MC_PARAM_rs, mp.rs, preset);
-    set_or_throw(sc, p, MC_PARAM_ld, mp.ld, preset);
-    set_or_throw(sc, p, MC_PARAM_lq, mp.lq, preset);
-    set_or_throw(sc, p, MC_PARAM_psi_pm, mp.psi_pm, preset);
-    set_or_throw(sc, p, MC_PARAM_i_rated, mp.i_rated_peak, preset);
-    set_or_throw(sc, p, MC_PARAM_torque_rated, mp.torque_rated, preset);
-    set_or_throw(sc, p, MC_PARAM_inertia, sc.has("mechanics.inertia_kgm2") ? sc.f("mechanics.inertia_kgm2") : mp.inertia,
+    set_or_throw(sc, p, MC_PARAM_motor_pole_pairs, mp.pole_pairs, preset);
+    set_or_throw(sc, p, MC_PARAM_motor_rs_ohm, mp.rs, preset);
+    set_or_throw(sc, p, MC_PARAM_motor_ld_h, mp.ld, preset);
+    set_or_throw(sc, p, MC_PARAM_motor_lq_h, mp.lq, preset);
+    set_or_throw(sc, p, MC_PARAM_motor_psi_pm_wb, mp.psi_pm, preset);
+    set_or_throw(sc, p, MC_PARAM_motor_i_rated_a, mp.i_rated_peak, preset);
+    set_or_throw(sc, p, MC_PARAM_motor_torque_rated_nm, mp.torque_rated, preset);
+    set_or_throw(sc, p, MC_PARAM_motor_inertia_kgm2, sc.has("mechanics.inertia_kgm2") ? sc.f("mechanics.inertia_kgm2") : mp.inertia,
                  "mechanics.inertia_kgm2");
     // the power stage and sensing, from the simulator's keys
-    set_or_throw(sc, p, MC_PARAM_vdc_nominal, vdc, "inverter.vdc_v");
-    set_or_throw(sc, p, MC_PARAM_adc_bits, static_cast<double>(sc.i("sensors.adc_bits")), "sensors.adc_bits");
-    set_or_throw(sc, p, MC_PARAM_i_span, i_span, "sensors.i_full_scale_a");
-    set_or_throw(sc, p, MC_PARAM_vdc_span, vdc_span, "sensors.vdc_full_scale_v");
-    set_or_throw(sc, p, MC_PARAM_dead_time, sc.f("inverter.dead_time_s"), "inverter.dead_time_s");
-    set_or_throw(sc, p, MC_PARAM_v_device, sc.f("inverter.device_drop_v"), "inverter.device_drop_v");
-    set_or_throw(sc, p, MC_PARAM_enc_lines, static_cast<double>(sc.i("sensors.encoder_lines")), "sensors.encoder_lines");
-    set_or_throw(sc, p, MC_PARAM_enc_offset, mp.pole_pairs * sc.f("sensors.encoder_offset_deg") * kPi / 180.0,
+    set_or_throw(sc, p, MC_PARAM_hw_vdc_nominal_v, vdc, "inverter.vdc_v");
+    set_or_throw(sc, p, MC_PARAM_hw_adc_bits, static_cast<double>(sc.i("sensors.adc_bits")), "sensors.adc_bits");
+    set_or_throw(sc, p, MC_PARAM_hw_i_span_a, i_span, "sensors.i_full_scale_a");
+    set_or_throw(sc, p, MC_PARAM_hw_vdc_span_v, vdc_span, "sensors.vdc_full_scale_v");
+    set_or_throw(sc, p, MC_PARAM_hw_dead_time_s, sc.f("inverter.dead_time_s"), "inverter.dead_time_s");
+    set_or_throw(sc, p, MC_PARAM_hw_device_drop_v, sc.f("inverter.device_drop_v"), "inverter.device_drop_v");
+    set_or_throw(sc, p, MC_PARAM_hw_encoder_lines, static_cast<double>(sc.i("sensors.encoder_lines")), "sensors.encoder_lines");
+    set_or_throw(sc, p, MC_PARAM_hw_encoder_offset_rad, mp.pole_pairs * sc.f("sensors.encoder_offset_deg") * kPi / 180.0,
                  "sensors.encoder_offset_deg");
-    set_or_throw(sc, p, MC_PARAM_ts, sc.has("control.ts_s") ? sc.f("control.ts_s") : 1.0 / mp.f_sample, "control.ts_s");
+    set_or_throw(sc, p, MC_PARAM_control_ts_s, sc.has("control.ts_s") ? sc.f("control.ts_s") : 1.0 / mp.f_sample, "control.ts_s");
     // every drive key the scenario gives
     for (const KeySpec& s : drive_key_specs()) {
         if (!sc.has(s.key)) continue;

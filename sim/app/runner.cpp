@@ -263,7 +263,7 @@ DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& m
     ds.cfg.est.ld = static_cast<float>(mp.ld * sc.f("estimator.l_scale"));
     ds.cfg.est.lq = static_cast<float>(mp.lq * sc.f("estimator.l_scale"));
     ds.cfg.est.psi_pm = static_cast<float>(mp.psi_pm * sc.f("estimator.psi_scale"));
-    const mc_angle_src_desc_t* src = mc_angle_src_get(ds.cfg.p.angle_src);
+    const mc_angle_src_desc_t* src = mc_angle_src_get(ds.cfg.p.control_angle_source);
     // The machine's flux map is the drive's model of the motor, not only the estimator's: an
     // encoder drive uses it too (the current loop's decoupling, the field-weakening entry law).
     if (src != nullptr) {
@@ -555,8 +555,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     out.periods = periods;
     const mc_drive_telem_t& tm = last_tm;
     std::vector<std::pair<std::string, std::string>> extra = {{"scenario", json_string(sc.s("scenario.name"))},
-                                     {"current_limit_a", json_number(dp.i_max)},
-                                     {"current_trip_a", json_number(dp.i_trip)},
+                                     {"current_limit_a", json_number(dp.control_i_max_a)},
+                                     {"current_trip_a", json_number(dp.control_i_trip_a)},
                                      {"speed_final_rpm", json_number(plant.omega_m() * kRpm)},
                                      {"sim_time_s", json_number(out.sim_time_s)},
                                      {"wall_time_s", json_number(wall)},

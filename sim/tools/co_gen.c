@@ -39,13 +39,13 @@ static void rig_init(void)
 {
     memset(&rig, 0, sizeof rig);
     mc_drive_cfg_default(&rig.cfg);
-    hal_host_pwm_init(&rig.pwm, rig.cfg.p.ts, rig.cfg.p.dead_time);
+    hal_host_pwm_init(&rig.pwm, rig.cfg.p.control_ts_s, rig.cfg.p.hw_dead_time_s);
     hal_host_can_init(&rig.can);
     if (!mc_drive_init(&rig.d, &rig.link, &rig.cfg, &rig.adc, &rig.pwm, &rig.qep)) {
         fprintf(stderr, "co-gen: the default configuration was refused\n");
         exit(1);
     }
-    mc_scope_init(&rig.scope, rig.scope_buf, 64u, rig.cfg.p.ts);
+    mc_scope_init(&rig.scope, rig.scope_buf, 64u, rig.cfg.p.control_ts_s);
     const mc_co_cfg_t c = {.node_id = 1u, .heartbeat_ms = 1000u, .step_s = 1e-3f, .vendor_id = 0u,
                            .product_code = 1u, .revision = 0x00020000u, .serial = 0u};
     if (!mc_co_init(&rig.co, &c, &rig.can, &rig.d, NULL, &rig.scope, MC_PSTORE_EMPTY)) {

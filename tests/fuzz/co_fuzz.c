@@ -371,12 +371,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     memset(&R, 0, sizeof R);
     reached = 0u;
     mc_drive_cfg_default(&R.cfg);
-    hal_host_pwm_init(&R.pwm, R.cfg.p.ts, R.cfg.p.dead_time);
-    R.qep.counts_per_rev = 4u * (uint32_t)R.cfg.p.enc_lines;
+    hal_host_pwm_init(&R.pwm, R.cfg.p.control_ts_s, R.cfg.p.hw_dead_time_s);
+    R.qep.counts_per_rev = 4u * (uint32_t)R.cfg.p.hw_encoder_lines;
     hal_host_can_init(&R.can);
     hal_host_nvm_init(&R.nvm);
     check(mc_drive_init(&R.d, &R.link, &R.cfg, &R.adc, &R.pwm, &R.qep));
-    mc_scope_init(&R.scope, scope_buf, 512u, R.cfg.p.ts);
+    mc_scope_init(&R.scope, scope_buf, 512u, R.cfg.p.control_ts_s);
     const mc_co_cfg_t c = {.node_id = NODE, .heartbeat_ms = 50u, .step_s = 1e-3f, .product_code = 1u};
     check(mc_co_init(&R.co, &c, &R.can, &R.d, &R.nvm, &R.scope, MC_PSTORE_EMPTY));
     set_inputs(0u);

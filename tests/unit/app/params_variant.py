@@ -12,10 +12,10 @@ REMOVED = "protection.lock_jump_deg"
 SWAPPED = ("estimator.iter_max", "protection.lock_action")
 NARROWED = ("estimator.k1", "0.6f")          # was 1e9: a stored 0.75 is now out of range
 ADDED_AFTER = "control.decouple"
-ADDED = ('X(test_added,     "control.test_added",    F32, "1",       0,     10,     2.5f,     NONE, '
+ADDED = ('X(control, test_added,      F32, "1",       0,     10,     2.5f,     NONE, '
          'CONTROL, STANDSTILL, MC_NO_CHOICES, "A parameter only the second table version has.") \\')
 
-ROW = re.compile(r'^X\((\w+),\s*"([^"]+)",\s*(\w+),\s*"([^"]*)",\s*([^,]+),\s*([^,]+),')
+ROW = re.compile(r'^X\((\w+),\s*(\w+),\s*(\w+),\s*"([^"]*)",\s*([^,]+),\s*([^,]+),')   # group, key, type, unit, min, max
 
 
 def main():
@@ -25,7 +25,7 @@ def main():
     for k, line in enumerate(lines):
         m = ROW.match(line)
         if m:
-            where[m.group(2)] = k
+            where[m.group(1) + "." + m.group(2)] = k
     for name in (REMOVED, *SWAPPED, NARROWED[0], ADDED_AFTER):
         if name not in where:
             sys.exit(f"params_variant: no row {name} in {src}")

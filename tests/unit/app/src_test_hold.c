@@ -34,13 +34,13 @@ static bool hold_build(const mc_params_t *p, float rs, const mc_flux_model_t *mo
     (void)rs;
     (void)model;
     /* a ramp the over-speed detector would trip on is refused with the configuration */
-    const float overspeed = p->overspeed_rpm * (MC_2PI / 60.0f) * (float)p->pole_pairs;
+    const float overspeed = p->protection_overspeed_rpm * (MC_2PI / 60.0f) * (float)p->motor_pole_pairs;
     if (!(test_hold_omega < overspeed && -test_hold_omega < overspeed)) {
-        return mc_param_fail(err, MC_PERR_CROSS, MC_PARAM_overspeed_rpm, p->overspeed_rpm,
+        return mc_param_fail(err, MC_PERR_CROSS, MC_PARAM_protection_overspeed_rpm, p->protection_overspeed_rpm,
                              "test_hold's ramp must stay below the over-speed limit");
     }
     *cfg = (mc_angle_src_cfg_t){0};
-    *(test_hold_cfg_t *)(void *)cfg = (test_hold_cfg_t){.ts = p->ts, .omega = test_hold_omega};
+    *(test_hold_cfg_t *)(void *)cfg = (test_hold_cfg_t){.ts = p->control_ts_s, .omega = test_hold_omega};
     return true;
 }
 

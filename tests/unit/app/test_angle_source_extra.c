@@ -44,9 +44,9 @@ static void rig_init(rig_t *r, const char *source)
     hal_host_pwm_init(&r->pwm, 1e-4f, 0.5e-6f);
     r->qep = (hal_qep_t){.counts_per_rev = 80000u};
     mc_drive_cfg_default(&r->cfg);
-    assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_angle_src, source, NULL));
-    assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_est_model, "const", NULL));   /* no map */
-    assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_catch_on, "off", NULL));   /* straight to RUN */
+    assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_control_angle_source, source, NULL));
+    assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_estimator_model, "const", NULL));   /* no map */
+    assert_true(mc_param_set_choice(&r->cfg.p, MC_PARAM_startup_catch, "off", NULL));   /* straight to RUN */
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     for (int k = 0; k < 3; ++k) {
         r->adc.sample.i[k] = (uint16_t)r->d.cfg->blk.offs.nominal;   /* zero current */
@@ -68,7 +68,7 @@ static void enable_iq(rig_t *r, float theta_init, float i_q)
     const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = {0.0f, i_q},
                               .theta_init = theta_init};
     mc_drive_command(&r->d, &c);
-    run(r, (int)r->d.cfg->p.offset_cal_samples + 1);
+    run(r, (int)r->d.cfg->p.control_offset_cal_samples + 1);
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
 }
 
@@ -90,7 +90,7 @@ static void test_registry_has_extra_source(void **st)
     assert_null(mc_angle_src_get(MC_ANGLE_SRC_COUNT));
 
     const int id = mc_param_find("control.angle_source");
-    assert_int_equal(id, MC_PARAM_angle_src);
+    assert_int_equal(id, MC_PARAM_control_angle_source);
     assert_non_null(strstr(mc_param_table[id].choices, "test_hold"));
     assert_float_equal(mc_param_table[id].max, (float)(MC_ANGLE_SRC_COUNT - 1), 0.0f);
 
@@ -98,7 +98,7 @@ static void test_registry_has_extra_source(void **st)
     mc_params_default(&p);
     mc_param_err_t err;
     assert_true(mc_param_set_choice(&p, id, "test_hold", &err));
-    assert_int_equal(p.angle_src, MC_ANGLE_SRC_test_hold);
+    assert_int_equal(p.control_angle_source, MC_ANGLE_SRC_test_hold);
     char buf[32];
     mc_param_choice_text(&p, id, buf, sizeof buf);
     assert_string_equal(buf, "test_hold");
@@ -107,11 +107,11 @@ static void test_registry_has_extra_source(void **st)
     /* a source that is not registered is still refused */
     assert_false(mc_param_set_choice(&p, id, "test_hol", &err));
     assert_int_equal(err.kind, MC_PERR_RANGE);
-    assert_int_equal(p.angle_src, MC_ANGLE_SRC_test_hold);
+    assert_int_equal(p.control_angle_source, MC_ANGLE_SRC_test_hold);
     /* and one past the end of the list is out of range */
-    p.angle_src = MC_ANGLE_SRC_COUNT;
+    p.control_angle_source = MC_ANGLE_SRC_COUNT;
     assert_false(mc_params_validate(&p, &err));
-    assert_int_equal(err.param, MC_PARAM_angle_src);
+    assert_int_equal(err.param, MC_PARAM_control_angle_source);
     assert_int_equal(err.kind, MC_PERR_RANGE);
 }
 
@@ -125,7 +125,7 @@ static void test_drive_runs_with_held_angle(void **st)
     test_hold_omega = 0.0f;
     rig_init(&r, "test_hold");
     assert_ptr_equal(r.d.src, &mc_angle_src_test_hold);
-    assert_int_equal(r.d.cfg->p.inj_kind, MC_CHOICE_inj_kind_sine);   /* sine: would inject with an estimator */
+    assert_int_equal(r.d.cfg->p.injection_kind, MC_CHOICE_injection_kind_sine);   /* sine: would inject with an estimator */
     assert_false(r.d.cfg->blk.inject);
     assert_true(r.d.cfg->blk.prot.lock_n > 0u);
     const float held = 1.234f;
@@ -159,7 +159,7 @@ static void test_drive_follows_ramp(void **st)
     /* it starts at its ramp speed from a hand-over at standstill: the loss-of-lock check's speed
      * swing would rightly call that implausible, so that detector is off here (lock_time 0) */
     mc_param_err_t err;
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_lock_time, 0.0f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_protection_lock_time_s, 0.0f, &err));
     run(&r, 1);
     assert_int_equal(r.d.cfg->blk.prot.lock_n, 0u);
     enable(&r, 3.0f);
@@ -172,7 +172,7 @@ static void test_drive_follows_ramp(void **st)
         assert_true(tm->u_inj == 0.0f);
         assert_true(tm->theta >= -MC_PI && tm->theta < MC_PI);
         const float step = mc_wrap_pi(tm->theta - prev);
-        assert_float_equal(step, 300.0f * r.d.cfg->p.ts, 1e-5f);
+        assert_float_equal(step, 300.0f * r.d.cfg->p.control_ts_s, 1e-5f);
         wraps += tm->theta < prev ? 1 : 0;
         prev = tm->theta;
     }
@@ -206,9 +206,9 @@ static bool build_with(const char *source, const char *model, mc_drive_built_t *
 {
     mc_drive_cfg_t cfg;
     mc_drive_cfg_default(&cfg);
-    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_angle_src, source, NULL));
-    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_est_model, model, NULL));
-    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_lock_action, "recover", NULL));
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_control_angle_source, source, NULL));
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_estimator_model, model, NULL));
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
     return mc_drive_build(&cfg, out, err);
 }
 
@@ -223,8 +223,8 @@ static void test_checks_follow_capabilities(void **st)
     test_hold_omega = 0.0f;
     assert_true(build_with("test_hold", "const", &b, &err));
     assert_false(b.blk.inject);
-    assert_int_equal(b.blk.prot.lock_n, periods(b.p.lock_time, b.p.ts));
-    assert_int_equal(b.blk.prot.jump_n, periods(b.p.jump_time, b.p.ts));
+    assert_int_equal(b.blk.prot.lock_n, periods(b.p.protection_lock_time_s, b.p.control_ts_s));
+    assert_int_equal(b.blk.prot.jump_n, periods(b.p.protection_lock_jump_time_s, b.p.control_ts_s));
     assert_true(b.blk.prot.lock_n > 0u && b.blk.prot.jump_n > 0u);
     assert_true(b.blk.prot.recover);
     assert_true(b.blk.seq.catch_first);   /* startup.catch = on, the default */
@@ -243,7 +243,7 @@ static void test_checks_follow_capabilities(void **st)
     /* estimator.model = fluxmap without a map: refused for the sources that declare the need */
     assert_false(build_with("test_hold", "fluxmap", &b, &err));
     assert_int_equal(err.kind, MC_PERR_MODEL);
-    assert_int_equal(err.param, MC_PARAM_est_model);
+    assert_int_equal(err.param, MC_PARAM_estimator_model);
     assert_false(build_with("unop", "fluxmap", &b, &err));
     assert_int_equal(err.kind, MC_PERR_MODEL);
     assert_true(build_with("encoder", "fluxmap", &b, &err));
@@ -260,27 +260,27 @@ static void test_build_error_reaches_the_drive(void **st)
     test_hold_omega = 2000.0f;   /* above the default over-speed limit (~995 rad/s el) */
     assert_false(build_with("test_hold", "const", &b, &err));
     assert_int_equal(err.kind, MC_PERR_CROSS);
-    assert_int_equal(err.param, MC_PARAM_overspeed_rpm);
+    assert_int_equal(err.param, MC_PARAM_protection_overspeed_rpm);
     assert_string_equal(err.text, "test_hold's ramp must stay below the over-speed limit");
 
     r = (rig_t){0};
     hal_host_pwm_init(&r.pwm, 1e-4f, 0.5e-6f);
     mc_drive_cfg_default(&r.cfg);
-    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_angle_src, "test_hold", NULL));
-    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_est_model, "const", NULL));   /* no map */
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_control_angle_source, "test_hold", NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_estimator_model, "const", NULL));   /* no map */
     assert_false(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
-    assert_int_equal(mc_drive_config_error(&r.d)->param, MC_PARAM_overspeed_rpm);
+    assert_int_equal(mc_drive_config_error(&r.d)->param, MC_PARAM_protection_overspeed_rpm);
     assert_true((mc_drive_faults(&r.d) & MC_FAULT_CONFIG) != 0u);
 
     /* a ramp within the limit runs; a live write of the limit below it is refused */
     test_hold_omega = 300.0f;
     rig_init(&r, "test_hold");
     enable(&r, 0.0f);
-    const float before = r.d.cfg->p.overspeed_rpm;
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_overspeed_rpm, 500.0f, &err));   /* 262 rad/s el */
-    assert_int_equal(err.param, MC_PARAM_overspeed_rpm);
+    const float before = r.d.cfg->p.protection_overspeed_rpm;
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_protection_overspeed_rpm, 500.0f, &err));   /* 262 rad/s el */
+    assert_int_equal(err.param, MC_PARAM_protection_overspeed_rpm);
     run(&r, 2);
-    assert_true(r.d.cfg->p.overspeed_rpm == before);
+    assert_true(r.d.cfg->p.protection_overspeed_rpm == before);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     test_hold_omega = 0.0f;
 }
@@ -327,7 +327,7 @@ static void test_cfg_of_and_equal(void **st)
         assert_true(src->cfg_equal(&r.d.cfg->blk.src.cfg, &now));
         /* control.ts_s (read by every source) at another value: another configuration */
         mc_drive_cfg_t cfg = r.cfg;
-        assert_true(mc_param_set(&cfg.p, MC_PARAM_ts, 2e-4f, NULL));
+        assert_true(mc_param_set(&cfg.p, MC_PARAM_control_ts_s, 2e-4f, NULL));
         mc_param_err_t err;
         assert_true(mc_drive_build(&cfg, &b, &err));
         assert_false(src->cfg_equal(&now, &b.blk.src.cfg));

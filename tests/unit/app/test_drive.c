@@ -42,7 +42,7 @@ static void rig_init(rig_t *r)
     mc_drive_cfg_default(&r->cfg);
     /* without a plant (run(), set_inputs) no voltage explains the currents: the voltage-model
      * detector would trip every test that runs a while; rig_running (with the plant) keeps it */
-    assert_true(mc_param_set(&r->cfg.p, MC_PARAM_resid_time, 0.0f, NULL));
+    assert_true(mc_param_set(&r->cfg.p, MC_PARAM_protection_residual_time_s, 0.0f, NULL));
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     set_inputs(r, 0.0f, 0.0f, 300.0f);
     r->pid = r->piq = 0.0;
@@ -74,7 +74,7 @@ static void test_enable_calibrates_then_runs(void **st)
     /* offsets of +30 counts on phase a: the calibration must find and remove them */
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
     r.adc.sample.i[0] = (uint16_t)(r.adc.sample.i[0] + 30u);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples - 1);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples - 1);
     assert_int_equal(mc_drive_telemetry(&r.d)->state, MC_STATE_OFFSET_CAL);
     assert_false(hal_pwm_enabled(&r.pwm));
     run(&r, 1);
@@ -93,10 +93,10 @@ static void test_overcurrent_trips_and_latches(void **st)
     static rig_t r;
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 5);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 
-    set_inputs(&r, r.d.cfg->p.i_trip + 1.0f, 0.0f, 300.0f);
+    set_inputs(&r, r.d.cfg->p.control_i_trip_a + 1.0f, 0.0f, 300.0f);
     run(&r, 1);
     assert_int_equal(mc_drive_telemetry(&r.d)->state, MC_STATE_FAULT);
     assert_true(mc_drive_telemetry(&r.d)->faults & MC_FAULT_OVERCURRENT);
@@ -116,7 +116,7 @@ static void test_overcurrent_trips_and_latches(void **st)
     run(&r, 1);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
     assert_int_equal(mc_drive_faults(&r.d), 0u);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 }
 
@@ -126,15 +126,15 @@ static void test_dc_link_limits(void **st)
     static rig_t r;
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
-    set_inputs(&r, 0.0f, 0.0f, r.d.cfg->p.vdc_max + 10.0f);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 2);
+    set_inputs(&r, 0.0f, 0.0f, r.d.cfg->p.control_vdc_max_v + 10.0f);
     run(&r, 1);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_OVERVOLTAGE);
 
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
-    set_inputs(&r, 0.0f, 0.0f, r.d.cfg->p.vdc_min - 10.0f);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 2);
+    set_inputs(&r, 0.0f, 0.0f, r.d.cfg->p.control_vdc_min_v - 10.0f);
     run(&r, 1);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_UNDERVOLTAGE);
     assert_false(hal_pwm_enabled(&r.pwm));
@@ -147,7 +147,7 @@ static void test_implausible_offset_faults(void **st)
     rig_init(&r);
     r.adc.sample.i[1] = (uint16_t)(r.adc.sample.i[1] + (uint16_t)(r.d.cfg->blk.offs.tol + 20.0f));
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 2);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
     assert_true(mc_drive_faults(&r.d) & MC_FAULT_OFFSET_CAL);
     assert_false(hal_pwm_enabled(&r.pwm));
@@ -158,12 +158,12 @@ static void test_bad_config_never_runs(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    r.cfg.p.ts = 1.0f; /* 1 Hz control: out of range */
+    r.cfg.p.control_ts_s = 1.0f; /* 1 Hz control: out of range */
     assert_false(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     /* the reason names the parameter, its value and its range */
     const mc_param_err_t *e = mc_drive_config_error(&r.d);
     assert_int_equal(e->kind, MC_PERR_RANGE);
-    assert_int_equal(e->param, MC_PARAM_ts);
+    assert_int_equal(e->param, MC_PARAM_control_ts_s);
     assert_string_equal(mc_param_table[e->param].name, "control.ts_s");
     assert_float_equal(e->value, 1.0f, 0.0f);
     assert_float_equal(e->max, 5e-4f, 1e-9f);
@@ -183,7 +183,7 @@ static void test_voltage_history_and_slew(void **st)
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 5.0f);
     /* the ISR that completes the calibration already runs the first control step */
-    run(&r, (int)r.d.cfg->p.offset_cal_samples);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     const float step = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
     assert_float_equal(mc_drive_telemetry(&r.d)->i_ref.q, step, 1e-5f);
@@ -213,7 +213,7 @@ static void test_slew_step_boundary(void **st)
     rig_init(&r);
     const float step = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
     command(&r, true, MC_MODE_CURRENT, 0.0f, 2.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 10);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 10);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     assert_true(mc_drive_telemetry(&r.d)->i_ref.q == 2.0f);
     /* moves in steps: within the margin, between margin and step, just beyond, far beyond */
@@ -288,7 +288,7 @@ static void test_nonfinite_command_refused(void **st)
     static rig_t r;
     rig_init(&r);
     command(&r, true, MC_MODE_CURRENT, 0.5f, 2.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 400);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 400);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     mc_drive_cmd_t good = {0};
     good = r.d.cmd;
@@ -358,8 +358,8 @@ static void test_adc_rail_trips(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_span, 30.0f, NULL));
-    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_trip, 27.2f, NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_hw_i_span_a, 30.0f, NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_control_i_trip_a, 27.2f, NULL));
     assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     assert_int_equal(r.d.cfg->blk.prot.adc_max, 4095);
     const struct { int phase; int offset; uint16_t near, rail; } cases[] = {
@@ -375,7 +375,7 @@ static void test_adc_rail_trips(void **st)
         const uint16_t mid = r.adc.sample.i[ph];
         r.adc.sample.i[ph] = (uint16_t)(mid + cases[n].offset);
         command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-        run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
+        run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 5);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
         assert_float_equal(r.d.offs.offset[ph], (float)(mid + cases[n].offset), 1e-3f);
 
@@ -408,12 +408,12 @@ static void test_span_below_trip_refused(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_i_span, 20.0f, NULL));   /* trip: 1.5 x 13.29 A */
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_hw_i_span_a, 20.0f, NULL));   /* trip: 1.5 x 13.29 A */
     assert_false(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     const mc_param_err_t *e = mc_drive_config_error(&r.d);
     assert_int_equal(e->kind, MC_PERR_CROSS);
-    assert_int_equal(e->param, MC_PARAM_i_span);
-    assert_int_equal(e->param2, MC_PARAM_i_trip);
+    assert_int_equal(e->param, MC_PARAM_hw_i_span_a);
+    assert_int_equal(e->param2, MC_PARAM_control_i_trip_a);
     assert_string_equal(mc_param_table[e->param].name, "hw.i_span_a");
     assert_string_equal(mc_param_table[e->param2].name, "control.i_trip_a");
     assert_float_equal(e->value, 20.0f, 0.0f);
@@ -464,12 +464,12 @@ static void rig_running(rig_t *r)
 {
     rig_init(r);
     /* the plant has no dead time: without the compensation the integrators hold ~Rs i */
-    assert_true(mc_param_set(&r->cfg.p, MC_PARAM_dtc_enable, 0.0f, NULL));
-    mc_param_set_auto(&r->cfg.p, MC_PARAM_resid_time, false);
-    r->cfg.p.resid_time = 0.02f;   /* the voltage-model detector back on: the plant is there */
+    assert_true(mc_param_set(&r->cfg.p, MC_PARAM_control_deadtime_comp, 0.0f, NULL));
+    mc_param_set_auto(&r->cfg.p, MC_PARAM_protection_residual_time_s, false);
+    r->cfg.p.protection_residual_time_s = 0.02f;   /* the voltage-model detector back on: the plant is there */
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
     command(r, true, MC_MODE_CURRENT, 1.0f, 3.0f);
-    run_plant(r, (int)r->d.cfg->p.offset_cal_samples + 400);
+    run_plant(r, (int)r->d.cfg->p.control_offset_cal_samples + 400);
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
     assert_float_equal(r->d.tm.i_dq.q, 3.0f, 0.1f);
     assert_float_equal(r->d.cc.pi_d.integ, (float)P_RS * 1.0f, 0.1f);   /* a state worth keeping */
@@ -494,14 +494,14 @@ static void test_param_write_runtime(void **st)
     rig_running(&r);
     const float kp_old = r.d.cc.cfg.kp_d;
     mc_param_err_t err;
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 200.0f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_control_current_bw_hz, 200.0f, &err));
     assert_true(r.d.cc.cfg.kp_d == kp_old);           /* not before the ISR */
-    assert_true(r.d.cfg->p.cc_bw_hz == 250.0f);
+    assert_true(r.d.cfg->p.control_current_bw_hz == 250.0f);
     const float integ_d = r.d.cc.pi_d.integ, integ_q = r.d.cc.pi_q.integ;
     run_plant(&r, 1);
     mc_cc_cfg_t want;
-    mc_cc_cfg_from_bandwidth(&want, 200.0f, r.d.cfg->p.rs, r.d.cfg->p.ld, r.d.cfg->p.lq, r.d.cfg->p.psi_pm, r.d.cfg->p.ts);
-    assert_true(r.d.cfg->p.cc_bw_hz == 200.0f);
+    mc_cc_cfg_from_bandwidth(&want, 200.0f, r.d.cfg->p.motor_rs_ohm, r.d.cfg->p.motor_ld_h, r.d.cfg->p.motor_lq_h, r.d.cfg->p.motor_psi_pm_wb, r.d.cfg->p.control_ts_s);
+    assert_true(r.d.cfg->p.control_current_bw_hz == 200.0f);
     assert_float_equal(r.d.cc.cfg.kp_d, want.kp_d, 1e-6f);
     assert_float_equal(r.d.cc.cfg.ki_q, want.ki_q, 1e-6f);
     assert_true(r.d.cc.cfg.kp_d != kp_old);
@@ -525,10 +525,10 @@ static void test_param_write_standstill_while_running(void **st)
     rig_running(&r);
     const mc_params_t before = r.d.cfg->p;
     mc_param_err_t err;
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_step3_tol_rpm, 7.0f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_startup_step3_speed_tol_rpm, 7.0f, &err));
     assert_int_equal(err.kind, MC_PERR_ACCESS);
-    assert_int_equal(err.param, MC_PARAM_step3_tol_rpm);
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_dead_time, 1e-6f, &err));
+    assert_int_equal(err.param, MC_PARAM_startup_step3_speed_tol_rpm);
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_hw_dead_time_s, 1e-6f, &err));
     assert_int_equal(err.kind, MC_PERR_ACCESS);
     assert_unchanged(&r, &before);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
@@ -541,17 +541,17 @@ static void test_param_write_busy(void **st)
     static rig_t r;
     rig_running(&r);
     mc_param_err_t err;
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 200.0f, &err));
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_i_headroom, 0.05f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_control_current_bw_hz, 200.0f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_i_headroom, 0.05f, &err));
     assert_int_equal(err.kind, MC_PERR_BUSY);
     run_plant(&r, 1);
-    assert_true(r.d.cfg->p.cc_bw_hz == 200.0f);
-    assert_true(r.d.cfg->p.i_headroom == 0.03f);
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_headroom, 0.05f, &err));
+    assert_true(r.d.cfg->p.control_current_bw_hz == 200.0f);
+    assert_true(r.d.cfg->p.control_i_headroom == 0.03f);
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_control_i_headroom, 0.05f, &err));
     run_plant(&r, 1);
-    assert_true(r.d.cfg->p.i_headroom == 0.05f);
-    assert_true(r.d.cfg->p.cc_bw_hz == 200.0f);   /* built from the newest, not from the defaults */
-    assert_float_equal(r.d.cfg->blk.i_ref_max, r.d.cfg->p.i_max * 0.95f, 1e-5f);
+    assert_true(r.d.cfg->p.control_i_headroom == 0.05f);
+    assert_true(r.d.cfg->p.control_current_bw_hz == 200.0f);   /* built from the newest, not from the defaults */
+    assert_float_equal(r.d.cfg->blk.i_ref_max, r.d.cfg->p.control_i_max_a * 0.95f, 1e-5f);
 }
 
 /* (d) Out of range (and non-finite, and a cross-check): refused, nothing changes. */
@@ -562,23 +562,23 @@ static void test_param_write_range(void **st)
     rig_running(&r);
     const mc_params_t before = r.d.cfg->p;
     mc_param_err_t err;
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 5.0f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_current_bw_hz, 5.0f, &err));
     assert_int_equal(err.kind, MC_PERR_RANGE);
-    assert_int_equal(err.param, MC_PARAM_cc_bw_hz);
+    assert_int_equal(err.param, MC_PARAM_control_current_bw_hz);
     assert_float_equal(err.value, 5.0f, 0.0f);
     assert_float_equal(err.min, 10.0f, 0.0f);
     assert_float_equal(err.max, 5000.0f, 0.0f);
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, NAN, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_current_bw_hz, NAN, &err));
     assert_int_equal(err.kind, MC_PERR_NOT_FINITE);
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 600.0f, &err));   /* > f_s / 20 */
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_current_bw_hz, 600.0f, &err));   /* > f_s / 20 */
     assert_int_equal(err.kind, MC_PERR_CROSS);
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_cc_decouple, 0.5f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_decouple, 0.5f, &err));
     assert_int_equal(err.kind, MC_PERR_NOT_INTEGER);
     assert_false(mc_drive_param_write(&r.d, (int)MC_PARAM_COUNT, 1.0f, &err));
     assert_int_equal(err.kind, MC_PERR_UNKNOWN);
     assert_unchanged(&r, &before);
     /* the spare slot was left untouched: the next valid write goes through */
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_cc_bw_hz, 200.0f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_control_current_bw_hz, 200.0f, &err));
 }
 
 /* The references may not plan for more voltage than the loop may ask (control.u_margin against
@@ -589,21 +589,21 @@ static void test_param_write_u_margin_cross(void **st)
     static rig_t r;
     rig_running(&r);
     mc_param_err_t err;
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 1.04f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_control_u_margin, 1.04f, &err));
     run_plant(&r, 1);
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_u_loop, 1.02f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_u_loop, 1.02f, &err));
     assert_int_equal(err.kind, MC_PERR_CROSS);
-    assert_int_equal(err.param, MC_PARAM_u_margin);
-    assert_int_equal(err.param2, MC_PARAM_u_loop);
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 0.95f, &err));
+    assert_int_equal(err.param, MC_PARAM_control_u_margin);
+    assert_int_equal(err.param2, MC_PARAM_control_u_loop);
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_control_u_margin, 0.95f, &err));
     run_plant(&r, 1);
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_u_loop, 1.0f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_control_u_loop, 1.0f, &err));
     run_plant(&r, 1);
     assert_true(r.d.cfg->blk.u_loop == 1.0f && r.d.cfg->tref.u_margin == 0.95f);
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 1.02f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_u_margin, 1.02f, &err));
     assert_int_equal(err.kind, MC_PERR_CROSS);
     assert_float_equal(err.max, 1.0f, 0.0f);
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_u_margin, 1.06f, &err));   /* beyond (2.14a) */
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_u_margin, 1.06f, &err));   /* beyond (2.14a) */
     assert_int_equal(err.kind, MC_PERR_RANGE);
 }
 
@@ -615,13 +615,13 @@ static void test_param_write_init_refused(void **st)
     rig_init(&r);
     const mc_params_t before = r.d.cfg->p;
     mc_param_err_t err;
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_ts, 2e-4f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_ts_s, 2e-4f, &err));
     assert_int_equal(err.kind, MC_PERR_ACCESS);
-    assert_int_equal(err.param, MC_PARAM_ts);
+    assert_int_equal(err.param, MC_PARAM_control_ts_s);
     assert_unchanged(&r, &before);
     rig_running(&r);
     const mc_params_t before2 = r.d.cfg->p;
-    assert_false(mc_drive_param_write(&r.d, MC_PARAM_ts, 2e-4f, &err));
+    assert_false(mc_drive_param_write(&r.d, MC_PARAM_control_ts_s, 2e-4f, &err));
     assert_int_equal(err.kind, MC_PERR_ACCESS);
     assert_unchanged(&r, &before2);
 }
@@ -634,15 +634,15 @@ static void test_param_write_standstill_idle(void **st)
     rig_init(&r);
     run(&r, 3);
     mc_param_err_t err;
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_step3_tol_rpm, 7.0f, &err));
-    assert_true(r.d.cfg->p.step3_tol_rpm == 5.0f);
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_startup_step3_speed_tol_rpm, 7.0f, &err));
+    assert_true(r.d.cfg->p.startup_step3_speed_tol_rpm == 5.0f);
     run(&r, 1);
-    assert_true(r.d.cfg->p.step3_tol_rpm == 7.0f);
+    assert_true(r.d.cfg->p.startup_step3_speed_tol_rpm == 7.0f);
     assert_float_equal(r.d.cfg->blk.step3_speed_tol, 7.0f * MC_2PI / 60.0f * 5.0f, 1e-4f);
-    assert_false(mc_param_is_auto(&r.d.cfg->p, MC_PARAM_step3_tol_rpm));
+    assert_false(mc_param_is_auto(&r.d.cfg->p, MC_PARAM_startup_step3_speed_tol_rpm));
     /* and it runs with it */
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 2);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 2);
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 }
 
@@ -652,22 +652,22 @@ static void test_param_write_rule_follows(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    assert_float_equal(r.d.cfg->p.i_trip, 1.5f * 13.29f, 1e-5f);
+    assert_float_equal(r.d.cfg->p.control_i_trip_a, 1.5f * 13.29f, 1e-5f);
     mc_param_err_t err;
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_rated, 12.0f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_motor_i_rated_a, 12.0f, &err));
     run(&r, 1);
-    assert_true(r.d.cfg->p.i_rated == 12.0f);
-    assert_true(mc_param_is_auto(&r.d.cfg->p, MC_PARAM_i_trip));
-    assert_float_equal(r.d.cfg->p.i_trip, 18.0f, 1e-5f);
+    assert_true(r.d.cfg->p.motor_i_rated_a == 12.0f);
+    assert_true(mc_param_is_auto(&r.d.cfg->p, MC_PARAM_control_i_trip_a));
+    assert_float_equal(r.d.cfg->p.control_i_trip_a, 18.0f, 1e-5f);
     assert_float_equal(r.d.cfg->blk.prot.i_trip, 18.0f, 1e-5f);
-    assert_float_equal(r.d.cfg->p.i_max, 12.0f, 1e-6f);   /* control.i_max_a follows too */
+    assert_float_equal(r.d.cfg->p.control_i_max_a, 12.0f, 1e-6f);   /* control.i_max_a follows too */
     /* a trip level set by the user stays where it was put */
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_trip, 16.0f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_control_i_trip_a, 16.0f, &err));
     run(&r, 1);
-    assert_true(mc_drive_param_write(&r.d, MC_PARAM_i_rated, 10.0f, &err));
+    assert_true(mc_drive_param_write(&r.d, MC_PARAM_motor_i_rated_a, 10.0f, &err));
     run(&r, 1);
-    assert_float_equal(r.d.cfg->p.i_trip, 16.0f, 0.0f);
-    assert_float_equal(r.d.cfg->p.i_max, 10.0f, 1e-6f);
+    assert_float_equal(r.d.cfg->p.control_i_trip_a, 16.0f, 0.0f);
+    assert_float_equal(r.d.cfg->p.control_i_max_a, 10.0f, 1e-6f);
 }
 
 
@@ -695,7 +695,7 @@ static void rig_enabled(rig_t *r)
 {
     rig_init(r);
     command(r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(r, (int)r->d.cfg->p.offset_cal_samples + 5);
+    run(r, (int)r->d.cfg->p.control_offset_cal_samples + 5);
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
 }
 
@@ -725,12 +725,12 @@ static void test_protect_current_sum(void **st)
     (void)st;
     static rig_t r;
     rig_enabled(&r);
-    const int n = (int)lrintf(r.d.cfg->p.i_sum_time / r.d.cfg->p.ts);
+    const int n = (int)lrintf(r.d.cfg->p.protection_i_sum_time_s / r.d.cfg->p.control_ts_s);
     /* just inside the tolerance: never */
-    r.adc.sample.i[2] = (uint16_t)(r.adc.sample.i[2] + (uint16_t)(0.8f * r.d.cfg->p.i_sum_tol / r.d.cfg->blk.offs.amps_per_count));
+    r.adc.sample.i[2] = (uint16_t)(r.adc.sample.i[2] + (uint16_t)(0.8f * r.d.cfg->p.protection_i_sum_tol_a / r.d.cfg->blk.offs.amps_per_count));
     assert_int_equal(periods_to_fault(&r, 10 * n, false), -1);
     /* beyond it */
-    r.adc.sample.i[2] = counts(&r.d, 1.5f * r.d.cfg->p.i_sum_tol);
+    r.adc.sample.i[2] = counts(&r.d, 1.5f * r.d.cfg->p.protection_i_sum_tol_a);
     assert_int_equal(periods_to_fault(&r, 10 * n, false), n);
     assert_fault(&r, MC_FAULT_CURRENT_SENSOR);
 }
@@ -762,7 +762,7 @@ static void test_protect_stall(void **st)
     const int k = periods_to_fault(&r, 10000, true);
     print_message("stall fault after %d periods (%.1f ms)\n", k, (double)k * 0.1);
     assert_fault(&r, MC_FAULT_STALL);
-    const int n = (int)lrintf(r.d.cfg->p.stall_time / r.d.cfg->p.ts);
+    const int n = (int)lrintf(r.d.cfg->p.protection_stall_time_s / r.d.cfg->p.control_ts_s);
     assert_true(k >= n && k <= n + 300);   /* + the speed PI winding up to its limit */
 }
 
@@ -773,9 +773,9 @@ static void test_protect_overspeed(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r);
-    assert_float_equal(r.d.cfg->p.overspeed_rpm, 1625.0f, 0.0f);
+    assert_float_equal(r.d.cfg->p.protection_overspeed_rpm, 1625.0f, 0.0f);
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 5);
     const uint32_t step = 80000u * 2000u / 60u / 10000u;   /* counts per period at 2000 rpm */
     int k = 1;
     for (; k <= 1000 && mc_drive_state(&r.d) == MC_STATE_RUN; ++k) {
@@ -801,10 +801,10 @@ static void test_protect_overspeed(void **st)
 
     /* overspeed_action = off: outputs off at once */
     rig_init(&r);
-    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_overspeed_action, "off", NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_overspeed_action, "off", NULL));
     assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
-    run(&r, (int)r.d.cfg->p.offset_cal_samples + 5);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 5);
     for (k = 1; k <= 1000 && mc_drive_state(&r.d) == MC_STATE_RUN; ++k) {
         r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
         run(&r, 1);

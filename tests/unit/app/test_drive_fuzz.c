@@ -116,10 +116,10 @@ static void cfg_sensorless(mc_drive_cfg_t *c)
 {
     mc_drive_cfg_default(c);
     mc_params_t *p = &c->p;
-    assert_true(mc_param_set_choice(p, MC_PARAM_angle_src, "unop", NULL));
-    assert_true(mc_param_set_choice(p, MC_PARAM_est_model, "fluxmap", NULL));
-    assert_true(mc_param_set_choice(p, MC_PARAM_init_three_step, "three_step", NULL));
-    assert_true(mc_param_set(p, MC_PARAM_step3_tol_rpm, 5.73f, NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_control_angle_source, "unop", NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_estimator_model, "fluxmap", NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_startup_init_pos, "three_step", NULL));
+    assert_true(mc_param_set(p, MC_PARAM_startup_step3_speed_tol_rpm, 5.73f, NULL));
     c->est = (mc_est_model_t){.rs = NAN, .ld = (float)LD, .lq = (float)LQ, .psi_pm = (float)PSI, .map = &map_ok};
 }
 
@@ -282,7 +282,7 @@ static void run_config(rig_t *r, bool must_refuse)
     r->id = r->iq = 0.0;
     r->rail_phase = -1;
     /* the encoder at count 0 reads 0 rad; the sensorless start has to find the rotor */
-    r->theta_r = r->cfg.p.angle_src == (int32_t)MC_ANGLE_SRC_unop ? 0.7 : 0.0;
+    r->theta_r = r->cfg.p.control_angle_source == (int32_t)MC_ANGLE_SRC_unop ? 0.7 : 0.0;
     period_no = 0;
     r->accepted = mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep);
     check_outputs(r);
@@ -294,7 +294,7 @@ static void run_config(rig_t *r, bool must_refuse)
         CHECK(e->text != NULL);
         CHECK(r->d.seq.state == MC_STATE_FAULT && (r->d.seq.faults & MC_FAULT_CONFIG) != 0u);
         mc_param_err_t werr;
-        CHECK(!mc_drive_param_write(&r->d, MC_PARAM_cc_bw_hz, 200.0f, &werr));
+        CHECK(!mc_drive_param_write(&r->d, MC_PARAM_control_current_bw_hz, 200.0f, &werr));
         send(r, true, MC_MODE_CURRENT, 0.0f, 2.0f, 0.0f, 0.0f);
         for (int k = 0; k < 300; ++k) {
             period(r);
@@ -312,7 +312,7 @@ static void run_config(rig_t *r, bool must_refuse)
         const float v = mc_param_get(&r->d.cfg->p, k);
         CHECK(isfinite(v) && v >= mc_param_table[k].min && v <= mc_param_table[k].max);
     }
-    r->vdc = (double)r->d.cfg->p.vdc_nominal;
+    r->vdc = (double)r->d.cfg->p.hw_vdc_nominal_v;
 
     /* 1. the RL plant under current, torque and speed commands */
     send(r, true, MC_MODE_CURRENT, 1.0f, 2.0f, 0.0f, 0.0f);
@@ -441,7 +441,7 @@ static void test_fuzz_estimator_model(void **st)
     static rig_t r;
     const unsigned long c0 = stats.configs;
     static const char *const names[4] = {"est.rs", "est.ld", "est.lq", "est.psi_pm"};
-    const int ids[4] = {MC_PARAM_rs, MC_PARAM_ld, MC_PARAM_lq, MC_PARAM_psi_pm};
+    const int ids[4] = {MC_PARAM_motor_rs_ohm, MC_PARAM_motor_ld_h, MC_PARAM_motor_lq_h, MC_PARAM_motor_psi_pm_wb};
     for (size_t b = 0; b < sizeof bases / sizeof bases[0]; ++b) {
         for (int f = 0; f < 4; ++f) {
             const mc_param_info_t *e = &mc_param_table[ids[f]];

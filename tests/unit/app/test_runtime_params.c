@@ -38,9 +38,9 @@ typedef struct {
 static void cfg_for(mc_drive_cfg_t *cfg, int src)
 {
     mc_drive_cfg_default(cfg);
-    assert_true(mc_param_set(&cfg->p, MC_PARAM_angle_src, (float)src, NULL));
-    assert_true(mc_param_set_choice(&cfg->p, MC_PARAM_est_model, "const", NULL));
-    assert_true(mc_param_set_choice(&cfg->p, MC_PARAM_catch_on, "off", NULL));
+    assert_true(mc_param_set(&cfg->p, MC_PARAM_control_angle_source, (float)src, NULL));
+    assert_true(mc_param_set_choice(&cfg->p, MC_PARAM_estimator_model, "const", NULL));
+    assert_true(mc_param_set_choice(&cfg->p, MC_PARAM_startup_catch, "off", NULL));
 }
 
 static bool rig_init(rig_t *r, const mc_drive_cfg_t *cfg)
@@ -74,7 +74,7 @@ static void enable(rig_t *r)
 {
     const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = {0.0f, 0.0f}, .theta_init = 0.3f};
     mc_drive_command(&r->d, &c);
-    run(r, (int)r->d.cfg->p.offset_cal_samples + 1);
+    run(r, (int)r->d.cfg->p.control_offset_cal_samples + 1);
     assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
 }
 
@@ -449,7 +449,7 @@ static void test_comparison_sees_differences(void **st)
         float v;
         const char *block;
     } cases[] = {
-        {MC_PARAM_cc_bw_hz, 200.0f, "parameters"},
+        {MC_PARAM_control_current_bw_hz, 200.0f, "parameters"},
     };
     mc_drive_cfg_t base;
     cfg_for(&base, MC_ANGLE_SRC_encoder);
@@ -480,7 +480,7 @@ static void test_comparison_sees_differences(void **st)
     assert_string_equal(compare(&running.d, &fresh.d), "drive (d->cfg->blk)");
     assert_string_equal(first_diff, "prot.lock_floor");
     mc_drive_cfg_t other = base;
-    assert_true(mc_param_set(&other.p, MC_PARAM_ts, 2e-4f, NULL));   /* read by every source */
+    assert_true(mc_param_set(&other.p, MC_PARAM_control_ts_s, 2e-4f, NULL));   /* read by every source */
     assert_true(rig_init(&fresh, &other));
     running.d.cfg = fresh.d.cfg;   /* the parameters and blk equal: only the held copies differ */
     assert_string_equal(compare(&running.d, &fresh.d), "current loop");

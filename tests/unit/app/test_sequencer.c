@@ -220,11 +220,11 @@ static void rig_init(rig_t *r, double theta_r)
     }
     mc_drive_cfg_default(&r->cfg);
     mc_params_t *p = &r->cfg.p;
-    p->angle_src = MC_ANGLE_SRC_unop;
-    p->est_model = 0;                 /* constant parameters: the plant is linear */
-    p->init_three_step = 1;
-    p->catch_on = 0;                  /* the thesis' path; test_catch_first adds the catch */
-    assert_true(mc_param_set(p, MC_PARAM_step3_tol_rpm, 5.73f, NULL));   /* 3 rad/s electrical */
+    p->control_angle_source = MC_ANGLE_SRC_unop;
+    p->estimator_model = 0;                 /* constant parameters: the plant is linear */
+    p->startup_init_pos = 1;
+    p->startup_catch = 0;                  /* the thesis' path; test_catch_first adds the catch */
+    assert_true(mc_param_set(p, MC_PARAM_startup_step3_speed_tol_rpm, 5.73f, NULL));   /* 3 rad/s electrical */
     r->cfg.est = (mc_est_model_t){.rs = NAN, .ld = (float)LD, .lq = (float)LQ, .psi_pm = 0.34305f, .map = &r->map};
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
 }
@@ -296,7 +296,7 @@ static void test_catch_first(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r, 0.7);
-    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_catch_on, 1.0f, NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_startup_catch, 1.0f, NULL));
     assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     command(&r, true);
     step(&r, 1);
@@ -419,8 +419,8 @@ static void test_step3_timeout(void **st)
     (void)st;
     static rig_t r;
     rig_init(&r, 0.3);
-    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_step3_tol_rpm, 0.01f, NULL));   /* the table's minimum */
-    r.cfg.p.timeout_step3 = 0.05f;
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_startup_step3_speed_tol_rpm, 0.01f, NULL));   /* the table's minimum */
+    r.cfg.p.startup_timeout_step3_s = 0.05f;
     assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     command(&r, true);
     step(&r, 64 + 60 + 501);

@@ -34,11 +34,11 @@ static rig_t rig;
 /* The drive (rig.cfg) and the device (c) on the host HAL; rig.nvm as it is. */
 static inline void rig_start_cfg(const mc_co_cfg_t *c, mc_pstore_status_t src)
 {
-    hal_host_pwm_init(&rig.pwm, rig.cfg.p.ts, 0.5e-6f);
+    hal_host_pwm_init(&rig.pwm, rig.cfg.p.control_ts_s, 0.5e-6f);
     rig.qep.counts_per_rev = 80000u;
     hal_host_can_init(&rig.can);
     assert_true(mc_drive_init(&rig.d, &rig.link, &rig.cfg, &rig.adc, &rig.pwm, &rig.qep));
-    mc_scope_init(&rig.scope, rig.scope_buf, 256u, rig.cfg.p.ts);
+    mc_scope_init(&rig.scope, rig.scope_buf, 256u, rig.cfg.p.control_ts_s);
     assert_true(mc_co_init(&rig.co, c, &rig.can, &rig.d, &rig.nvm, &rig.scope, src));
     rig.now = 0;
 }

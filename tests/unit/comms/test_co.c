@@ -248,10 +248,10 @@ static void test_emcy_on_fault(void **state)
     hal_can_frame_t f;
     (void)take(&f);   /* boot-up */
     drive_inputs(300.0f);
-    drive_run((int)rig.d.cfg->p.offset_cal_samples + 2, true);
+    drive_run((int)rig.d.cfg->p.control_offset_cal_samples + 2, true);
     mc_co_step(&rig.co, rig.now);
     assert_false(take(&f));   /* no fault, no EMCY */
-    drive_inputs(rig.d.cfg->p.vdc_max + 20.0f);
+    drive_inputs(rig.d.cfg->p.control_vdc_max_v + 20.0f);
     drive_run(1, true);
     assert_true(mc_drive_faults(&rig.d) & MC_FAULT_OVERVOLTAGE);
     mc_co_step(&rig.co, rig.now);

@@ -114,7 +114,7 @@ static void test_store_restore(void **state)
     assert_int_equal(sdo_write(0x1011, 1, MC_CO_LOAD_SIGNATURE, 4), 0u);
     nvm = rig.nvm;
     assert_int_equal(mc_co_boot_config(&nvm, &base, &rig.cfg, &map, NULL), MC_PSTORE_EMPTY);
-    assert_true(rig.cfg.p.cc_bw_hz == base.p.cc_bw_hz);
+    assert_true(rig.cfg.p.control_current_bw_hz == base.p.control_current_bw_hz);
     /* a corrupt store: the defaults and EMCY 0x6310 with the boot-up */
     assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), 0u);
     nvm = rig.nvm;
@@ -127,7 +127,7 @@ static void test_store_restore(void **state)
     rig.nvm = nvm;
     const mc_pstore_status_t st = mc_co_boot_config(&rig.nvm, &base, &rig.cfg, &map, NULL);
     assert_int_equal(st, MC_PSTORE_CORRUPT);
-    assert_true(rig.cfg.p.cc_bw_hz == base.p.cc_bw_hz);
+    assert_true(rig.cfg.p.control_current_bw_hz == base.p.control_current_bw_hz);
     rig_start(st);
     mc_co_step(&rig.co, rig.now);
     hal_can_frame_t f;
@@ -191,7 +191,7 @@ static void test_reset_node_reloads(void **state)
     assert_int_equal(sdo_write(0x1011, 1, MC_CO_LOAD_SIGNATURE, 4), 0u);
     nmt(0x81);
     run_ms(3);
-    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == defaults.cc_bw_hz);
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == defaults.control_current_bw_hz);
     /* a stored set with another INIT parameter (the PWM period) is refused: EMCY, nothing changes */
     mc_drive_cfg_t other = {.p = rig.d.cfg->p, .est = rig.d.est};
     assert_true(mc_param_set(&other.p, mc_param_find("control.ts_s"), 2e-4f, NULL));
@@ -205,7 +205,7 @@ static void test_reset_node_reloads(void **state)
     assert_true(take_id(0x080u + NODE, &f));
     assert_int_equal(f.data[0] | (f.data[1] << 8), 0x6320);
     assert_int_equal(f.data[4] | (f.data[5] << 8), mc_param_find("control.ts_s"));
-    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == defaults.cc_bw_hz);
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == defaults.control_current_bw_hz);
     /* without defaults a reset node keeps the parameters */
     mc_co_set_defaults(&rig.co, NULL);
     assert_int_equal(sdo_write(obj, 0, mc_f32_bits(222.0f), 4), 0u);
@@ -254,7 +254,7 @@ static void test_scope_upload(void **state)
     run_ms(3);
     assert_int_equal(sdo_read(0x2303, 0, &a), 3u);
     assert_int_equal(sdo_read(0x2304, 0, &a), 9u);
-    assert_true(mc_bits_f32(sdo_read(0x2306, 0, &a)) == 2.0f * rig.cfg.p.ts);
+    assert_true(mc_bits_f32(sdo_read(0x2306, 0, &a)) == 2.0f * rig.cfg.p.control_ts_s);
     /* segmented upload: 9 samples x 2 channels x 4 bytes */
     hal_can_frame_t f = sdo(0x40, 0x2307, 0, 0);
     assert_int_equal(f.data[0], 0x41u);

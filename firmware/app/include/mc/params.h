@@ -36,7 +36,7 @@ typedef enum {
 
 /* Parameter ids: MC_PARAM_<member>; the index is stable (CANopen 0x2000 + id, stored block). */
 typedef enum {
-#define MC_X(m, name, type, unit, lo, hi, def, rule, group, access, choices, doc) MC_PARAM_##m,
+#define MC_X(g, k, type, unit, lo, hi, def, rule, group, access, choices, doc) MC_PARAM_##g##_##k,
     MC_PARAMS(MC_X)
 #undef MC_X
     MC_PARAM_COUNT
@@ -45,16 +45,16 @@ typedef enum {
 #define MC_PARAM_MASK_WORDS ((MC_PARAM_COUNT + 31) / 32)
 
 /* The named choices of every ENUM parameter: MC_CHOICE_<member>_<choice> is its stored value
- * (p->est_model == MC_CHOICE_est_model_fluxmap), MC_CHOICE_<member>_COUNT how many there are
+ * (p->estimator_model == MC_CHOICE_estimator_model_fluxmap), MC_CHOICE_<member>_COUNT how many there are
  * (0 for the other types). */
 #define MC_CH_ENUM(m, c) MC_CHOICE_##m##_##c,
-#define MC_X(m, name, type, unit, lo, hi, def, rule, group, access, choices, doc) \
-    enum { choices(MC_CH_ENUM) MC_CHOICE_##m##_COUNT };
+#define MC_X(g, k, type, unit, lo, hi, def, rule, group, access, choices, doc) \
+    enum { choices(MC_CH_ENUM) MC_CHOICE_##g##_##k##_COUNT };
 MC_PARAMS(MC_X)
 #undef MC_X
 
 typedef struct mc_params {
-#define MC_X(m, name, type, unit, lo, hi, def, rule, group, access, choices, doc) MC_PCTYPE_##type m;
+#define MC_X(g, k, type, unit, lo, hi, def, rule, group, access, choices, doc) MC_PCTYPE_##type g##_##k;
     MC_PARAMS(MC_X)
 #undef MC_X
     uint32_t auto_mask[MC_PARAM_MASK_WORDS];   /* bit set: derive this parameter by its rule */
