@@ -235,7 +235,7 @@ static mc_dq_t feedback(mc_drive_t *d, const mc_drive_blk_t *c, float omega, mc_
 static bool fw_entry(mc_drive_t *d, const mc_drive_blk_t *c, const mc_angle_out_t *ang, mc_dq_t i_dq, mc_dq_t i_fb,
                      mc_dq_t *i_ref, mc_ab_t u_acting, mc_sincos_t sc_u, float vdc, mc_dq_t *u_dq)
 {
-    if (!mc_fwe_active(&d->fwe)) {
+    if (!mc_fwe_active(&d->fw_entry)) {
         return false;
     }
     /* the raw currents: the injection's notch would delay a current that moves by a tenth of the
@@ -249,7 +249,7 @@ static bool fw_entry(mc_drive_t *d, const mc_drive_blk_t *c, const mc_angle_out_
     mc_flux_eval(&c->src.model, i_dq, &in.psi, 0, 0);
     in.u_now = mc_park(u_acting, mc_sincos(mc_wrap_pi(ang->theta + 0.5f * ang->omega * c->ts)));
     in.u_land = mc_drive_u_land(d, vdc);
-    switch (mc_fwe_step(&d->fwe, &c->fwe, &in, u_dq)) {
+    switch (mc_fwe_step(&d->fw_entry, &c->fw_entry, &in, u_dq)) {
     case MC_FWE_RUNNING:
         *i_ref = i_fb;   /* bumpless, for the loop after it and for the tracking check */
         d->i_ref_prev = i_fb;

@@ -80,7 +80,7 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
      * sign and a low to start from (5.2 ms on the thesis motor); at least 1 ms */
     const float w_ug = p->hw_vdc_nominal_v / (1.7320508f * m->psi_pm);
     const float wait = fmaxf(2.5f * 1.0471976f / w_ug, 1e-3f);
-    b->fly = (mc_catch_cfg_t){.ts = p->control_ts_s, .ld = m->ld, .lq = m->lq, .psi_pm = m->psi_pm,
+    b->flying = (mc_catch_cfg_t){.ts = p->control_ts_s, .ld = m->ld, .lq = m->lq, .psi_pm = m->psi_pm,
                               .i_pulse = p->startup_catch_i_a, .i_detect = 0.25f * p->startup_catch_i_a, .i_rest = p->startup_i_rest_a,
                               .rot_target = rot, .high_speed_share = 0.9f, .v_device = p->hw_device_drop_v,
                               .i_band = p->control_dtc_i_band_a,
@@ -88,42 +88,42 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
                               .n_pulse_max = periods_up(1.5f * p->startup_catch_i_a * t_per_a / p->control_ts_s),
                               .n_gap_max = periods_up(rot / (w_min * p->control_ts_s)),
                               .n_wait_max = periods_up(wait / p->control_ts_s)};
-    if (b->fly.n_gap_max < 2u) {
-        b->fly.n_gap_max = 2u;
+    if (b->flying.n_gap_max < 2u) {
+        b->flying.n_gap_max = 2u;
     }
-    if (b->fly.n_wait_max > b->fly.n_gap_max) {
-        b->fly.n_wait_max = b->fly.n_gap_max;
+    if (b->flying.n_wait_max > b->flying.n_gap_max) {
+        b->flying.n_wait_max = b->flying.n_gap_max;
     }
     b->seq.timeout_catch =
-        (float)(2u * b->fly.n_pulse_max + 2u * b->fly.n_gap_max + 10u) * p->control_ts_s;
+        (float)(2u * b->flying.n_pulse_max + 2u * b->flying.n_gap_max + 10u) * p->control_ts_s;
 }
 
 static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
 {
-    mc_initpos_cfg_default(&b->ip1);
-    b->ip1.ts = p->control_ts_s;
-    b->ip1.rs = m->rs;
-    b->ip1.ld = m->ld;
-    b->ip1.lq = m->lq;
-    b->ip1.cost = (mc_ip_cost_t)p->startup_step1_cost;
-    b->ip1.model = (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
-    b->ip1.m = (int)p->startup_step1_m;
-    b->ip1.n_dir = (int)p->startup_step1_dirs;
-    b->ip1.i_trip = p->control_i_trip_a;
-    b->ip1.i_rest = p->startup_i_rest_a;
+    mc_initpos_cfg_default(&b->step1);
+    b->step1.ts = p->control_ts_s;
+    b->step1.rs = m->rs;
+    b->step1.ld = m->ld;
+    b->step1.lq = m->lq;
+    b->step1.cost = (mc_ip_cost_t)p->startup_step1_cost;
+    b->step1.model = (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+    b->step1.m = (int)p->startup_step1_m;
+    b->step1.n_dir = (int)p->startup_step1_dirs;
+    b->step1.i_trip = p->control_i_trip_a;
+    b->step1.i_rest = p->startup_i_rest_a;
     mc_pulse3_cfg_default(&b->pulse3);
     b->pulse3.rs = m->rs;
     b->pulse3.n = (int)p->startup_step1_m;
     b->pulse3.i_trip = p->control_i_trip_a;
     b->pulse3.i_rest = p->startup_i_rest_a;
-    mc_polarity_cfg_default(&b->ip2);
-    b->ip2.ts = p->control_ts_s;
-    b->ip2.rs = m->rs;
-    b->ip2.model = b->ip1.model;
-    b->ip2.v_pol = p->startup_v_pol_v;
-    b->ip2.n = (int)p->startup_step2_n;
-    b->ip2.i_trip = p->control_i_trip_a;
-    b->ip2.i_rest = p->startup_i_rest_a;
+    mc_polarity_cfg_default(&b->step2);
+    b->step2.ts = p->control_ts_s;
+    b->step2.rs = m->rs;
+    b->step2.model = b->step1.model;
+    b->step2.v_pol = p->startup_v_pol_v;
+    b->step2.n = (int)p->startup_step2_n;
+    b->step2.i_trip = p->control_i_trip_a;
+    b->step2.i_rest = p->startup_i_rest_a;
     mc_dvi_cfg_default(&b->dvi);
     b->dvi.rs = m->rs;
     b->dvi.v = p->startup_v_pol_v;
@@ -277,7 +277,7 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     b->offs.tol = p->hw_adc_offset_tol * (float)(1L << p->hw_adc_bits);
     b->offs.ts = p->control_ts_s;
     b->i_ref_max = p->control_i_max_a * (1.0f - p->control_i_headroom);
-    b->fwe = (mc_fwe_cfg_t){.ts = p->control_ts_s, .rs = m.rs, .i_stop = 1.1f * p->control_i_max_a, .overmod = p->control_u_loop > 1.0f};
+    b->fw_entry = (mc_fwe_cfg_t){.ts = p->control_ts_s, .rs = m.rs, .i_stop = 1.1f * p->control_i_max_a, .overmod = p->control_u_loop > 1.0f};
     b->u_loop = p->control_u_loop;
     b->i_slew = p->control_i_slew_a_per_s;
     b->offs.samples = (uint32_t)p->control_offset_cal_samples;

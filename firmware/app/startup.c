@@ -50,7 +50,7 @@ void mc_drive_startup_reset(mc_drive_t *d)
     mc_polcheck_restart(&d->pol);
     mc_offsets_restart(&d->offs);
     d->entry = (mc_catch_entry_t){.corner = false, .gate_on_next = false};
-    mc_fwe_reset(&d->fwe);
+    mc_fwe_reset(&d->fw_entry);
     mc_drive_init_blocks(d);
     /* Without the three steps the estimate starts from the angle given with the enable. */
     pipeline_reset(d, d->cmd.theta_init, 0.0f);
@@ -87,11 +87,11 @@ typedef struct {
 } program_slot_t;
 
 static const program_slot_t step1_programs[] = {
-    {&mc_phase_step1_pulses, offsetof(mc_drive_blk_t, ip1)},      /* "pulses"      */
+    {&mc_phase_step1_pulses, offsetof(mc_drive_blk_t, step1)},      /* "pulses"      */
     {&mc_phase_step1_pulse3, offsetof(mc_drive_blk_t, pulse3)},   /* "three_phase" */
 };
 static const program_slot_t step2_programs[] = {
-    {&mc_phase_step2_polarity, offsetof(mc_drive_blk_t, ip2)},    /* "generalized" */
+    {&mc_phase_step2_polarity, offsetof(mc_drive_blk_t, step2)},    /* "generalized" */
     {&mc_phase_step2_dvi, offsetof(mc_drive_blk_t, dvi)},         /* "dvi"         */
 };
 
@@ -118,7 +118,7 @@ static void refs_from_current(mc_drive_t *d, mc_ab_t i_ab, float theta)
 static void run_at_speed(mc_drive_t *d, bool outputs_off_now)
 {
     d->entry.gate_on_next = outputs_off_now;
-    mc_fwe_begin(&d->fwe);
+    mc_fwe_begin(&d->fw_entry);
 }
 
 /* Once the speed is known (the catch, an angle sensor): the offsets over whole electrical half-
@@ -144,10 +144,10 @@ static bool latch_entry_corner(mc_drive_t *d)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
     const float vdc = d->tm.vdc;
-    if (!b->src_measures || !b->fwe.overmod) {
+    if (!b->src_measures || !b->fw_entry.overmod) {
         return false;
     }
-    const int k = mc_catch_entry_corner(&b->fly, d->tm.theta, d->tm.omega, vdc, mc_drive_u_land(d, vdc));
+    const int k = mc_catch_entry_corner(&b->flying, d->tm.theta, d->tm.omega, vdc, mc_drive_u_land(d, vdc));
     if (k < 0) {
         return false;
     }
@@ -179,7 +179,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     }
     /* with this period's offsets: the ISR scaled the sample with the previous ones */
     const mc_ab_t i_now = b->src_measures ? mc_clarke(mc_drive_currents(d, raw)) : (mc_ab_t){0.0f, 0.0f};
-    if (b->src_measures && mc_catch_sensor_waits(&b->fly, d->offs.count - b->offs.samples, i_now)) {
+    if (b->src_measures && mc_catch_sensor_waits(&b->flying, d->offs.count - b->offs.samples, i_now)) {
         /* a sensor drive needs no catch, but above the uncontrolled-generation speed the diodes
          * conduct: it waits (outputs off, at most the catch's longest wait) for a diode pulse's
          * low, as the catch does (C.5), and starts from there */
@@ -189,7 +189,7 @@ static void offset_cal(mc_drive_t *d, const hal_adc_sample_t *raw)
     mc_seq_event(&d->seq, MC_SEQ_CAL_DONE);
     if (d->seq.state == MC_STATE_INIT_POS && d->seq.step == MC_INIT_CATCH) {
         /* the catch switches the outputs itself; V(000) latched for its first pulse */
-        if (!mc_phase_begin(&d->phase, &mc_phase_catch, &d->cfg->blk.fly, 0.0f)) {
+        if (!mc_phase_begin(&d->phase, &mc_phase_catch, &d->cfg->blk.flying, 0.0f)) {
             mc_drive_trip(d, MC_FAULT_CONFIG);
             return;
         }
@@ -232,7 +232,7 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc)
     hal_pwm_enable(d->hal.pwm, false);
     write_duties(d, (mc_abc_t){0.0f, 0.0f, 0.0f}, vdc);
     mc_seq_event(&d->seq, MC_SEQ_RECOVER);
-    if (!mc_phase_begin(&d->phase, &mc_phase_catch, &b->fly, 0.0f)) {
+    if (!mc_phase_begin(&d->phase, &mc_phase_catch, &b->flying, 0.0f)) {
         mc_drive_trip(d, MC_FAULT_CONFIG);
     }
     /* the speed loop starts again from the caught speed, not from what it wound up to */
@@ -318,7 +318,7 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
          * profile: 50 rpm is 1.6 V of back-EMF behind ~2 V of drops). RUN then starts from the
          * given angle, which a turning rotor may have left anywhere: the polarity re-check runs
          * as with polarity_check = at_start, so that a wrong one is not kept at pi. */
-        d->pol.unsure = d->cfg->blk.fly.v_device > 0.0f;
+        d->pol.unsure = d->cfg->blk.flying.v_device > 0.0f;
         hal_pwm_enable(d->hal.pwm, true);
     }
 }

@@ -232,15 +232,15 @@ static void cmp_blk(const mc_drive_blk_t *a, const mc_drive_blk_t *b)
     I(cc_map);
     F(src.rs);
     cmp_model(&a->src.model, &b->src.model);
-    F(fly.i_band);
-    F(fly.i_pulse);
-    F(fly.i_rest);
-    I(fly.n_wait_max);
+    F(flying.i_band);
+    F(flying.i_pulse);
+    F(flying.i_rest);
+    I(flying.n_wait_max);
     /* the blocks that read their configuration from the one in force */
-    F(fwe.ts);
-    F(fwe.rs);
-    F(fwe.i_stop);
-    I(fwe.overmod);
+    F(fw_entry.ts);
+    F(fw_entry.rs);
+    F(fw_entry.i_stop);
+    I(fw_entry.overmod);
     F(offs.amps_per_count);
     F(offs.nominal);
     F(offs.tol);

@@ -304,7 +304,7 @@ static void test_catch_first(void **st)
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
     assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
     const int n = run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_CATCH, 1000);
-    assert_int_equal(n, (int)r.d.cfg->blk.fly.n_probe + 1);
+    assert_int_equal(n, (int)r.d.cfg->blk.flying.n_probe + 1);
     assert_int_equal(r.d.seq.step, MC_INIT_STEP1);
     assert_false(hal_pwm_enabled(&r.pwm));   /* the probe's current decays first */
     step(&r, 1);

@@ -118,12 +118,12 @@ typedef struct {
     mc_seq_cfg_t seq;
     mc_angle_src_built_t src;    /* the selected source: its model and own configuration */
     mc_inj_cfg_t inj;
-    mc_initpos_cfg_t ip1;
+    mc_initpos_cfg_t step1;      /* Step I: the pulse injection (5.5)/(7.1)                       */
     mc_pulse3_cfg_t pulse3;
-    mc_polarity_cfg_t ip2;
+    mc_polarity_cfg_t step2;     /* Step II: the polarity detection (5.6)-(5.7)                   */
     mc_dvi_cfg_t dvi;
-    mc_catch_cfg_t fly;
-    mc_fwe_cfg_t fwe;            /* the field-weakening entry (mc/fw_entry.h)                    */
+    mc_catch_cfg_t flying;       /* the flying-start catch (mc/catch.h)                           */
+    mc_fwe_cfg_t fw_entry;       /* the field-weakening entry (mc/fw_entry.h)                    */
     mc_protect_cfg_t prot;       /* protection: hard trips, detectors, reactions (mc/protect.h)  */
     mc_polcheck_cfg_t pol;       /* the running polarity re-check (mc/polcheck.h)                */
     mc_offsets_cfg_t offs;       /* the current offsets' calibration and scaling (mc/offset_cal.h) */
@@ -168,7 +168,7 @@ typedef struct {
     mc_offsets_t offs;           /* the current offsets and their calibration (mc/offset_cal.h) */
     mc_catch_entry_t entry;      /* a RUN entry at speed: the corner latched, the gates' enable
                                     next period (mc/catch.h) */
-    mc_fwe_t fwe;                /* a RUN entry at speed: the flux into the voltage limit first
+    mc_fwe_t fw_entry;           /* a RUN entry at speed: the flux into the voltage limit first
                                     (mc/fw_entry.h) */
 
     const mc_angle_src_desc_t *src;
