@@ -6,11 +6,14 @@
  * wiring strictly needs: the function and context given to hal_board_attach_isr, which the EOC
  * handler (called from the IRQ entry in startup.S, no argument) must find.
  *
- * Left as TI's SBL / SOC-init GEL configured them (not written by this port): PLLs and module
- * clocks and their gates (SYSCLK 200 MHz, MCAN0 80 MHz, RTI0 25 MHz: am263x/regs_soc.h), the pin
- * multiplexing of ePWM0-2 A/B, eQEP0 A/B/I and MCAN0 TX/RX (board-specific IOMUX pads not
- * verified here), the QSPI clock and its memory-mapped read setup (SPI_SETUP0), and any hardware
- * trip input of the trip zone (TZSEL stays 0: only the forced one-shot trip). */
+ * Set here (the SBL leaves them at reset): the MCAN0 functional clock (80 MHz) and the RTI0 clock
+ * (25 MHz crystal) in MSS_RCM, and the pads of ePWM0-2 A/B, eQEP0 A/B/INDEX and MCAN0 RX/TX
+ * (LP-AM263 wiring and mux modes: am263x/regs_soc.h). The ePWM pads keep a pull-down GPIO input
+ * until am263x_pwm_init has forced the trip, and get the ePWM function only then (outputs low).
+ * The ADC inputs are dedicated analog pins (no IOMUX register). ePWM/eQEP/ADC run from SYSCLK
+ * (200 MHz) with their own dividers (epwm.c TBCTL, adc.c ADCCTL2, eqep.c).
+ * Left as TI's SBL configured them: the PLLs, SYSCLK and the R5F clock (Bootloader_socConfigurePll),
+ * the QSPI clock and its memory-mapped read setup (SPI_SETUP0). */
 #include "hal/board.h"
 #include "am263x/mmio.h"
 #include "am263x/port.h"
@@ -40,6 +43,44 @@ static const struct {
 } soc = {AM263X_VIM_BASE, AM263X_INTXBAR_BASE, AM263X_TOP_CTRL_BASE};
 static bool time_up;
 
+/* pad, value: ePWM0-2 A/B first (the six bridge gates), then eQEP0 and MCAN0 */
+#define PAD_FN(fn) (uint16_t)((fn) | AM263X_PAD_NOPULL | AM263X_PAD_SLEW_LOW)
+#define N_PWM_PADS 6u
+static const uint16_t pads[][2] = {
+    {AM263X_PAD_EPWM_A(0u), PAD_FN(AM263X_PAD_FN_EPWM)}, {AM263X_PAD_EPWM_B(0u), PAD_FN(AM263X_PAD_FN_EPWM)},
+    {AM263X_PAD_EPWM_A(1u), PAD_FN(AM263X_PAD_FN_EPWM)}, {AM263X_PAD_EPWM_B(1u), PAD_FN(AM263X_PAD_FN_EPWM)},
+    {AM263X_PAD_EPWM_A(2u), PAD_FN(AM263X_PAD_FN_EPWM)}, {AM263X_PAD_EPWM_B(2u), PAD_FN(AM263X_PAD_FN_EPWM)},
+    {AM263X_PAD_EQEP0_A, PAD_FN(AM263X_PAD_FN_EQEP)},    {AM263X_PAD_EQEP0_B, PAD_FN(AM263X_PAD_FN_EQEP)},
+    {AM263X_PAD_EQEP0_INDEX, PAD_FN(AM263X_PAD_FN_EQEP)}, {AM263X_PAD_MCAN0_RX, PAD_FN(AM263X_PAD_FN_MCAN)},
+    {AM263X_PAD_MCAN0_TX, PAD_FN(AM263X_PAD_FN_MCAN)},
+};
+
+/* pads[first..end-1]: their function, or (safe) a GPIO input with the pull-down on (PI = 0,
+ * PUPDSEL = 0): a gate input held low whatever the GPIO module does */
+static void pads_set(uint32_t first, uint32_t end, bool safe)
+{
+    const uintptr_t io = AM263X_IOMUX_BASE;
+    am263x_wr32(io + AM263X_IOMUX_KICK0, AM263X_IOMUX_KICK0_UNLOCK);
+    am263x_wr32(io + AM263X_IOMUX_KICK1, AM263X_IOMUX_KICK1_UNLOCK);
+    for (uint32_t k = first; k < end; ++k) {
+        am263x_wr32(io + pads[k][0], safe ? (AM263X_PAD_GPIO | AM263X_PAD_SLEW_LOW) : pads[k][1]);
+    }
+    am263x_wr32(io + AM263X_IOMUX_KICK0, AM263X_KICK_LOCK);
+    am263x_wr32(io + AM263X_IOMUX_KICK1, AM263X_KICK_LOCK);
+}
+
+/* A module clock as TI's SOC_rcmSetPeripheralClock sets it: divider, then source, each read back */
+static void rcm_clock(uint32_t src_reg, uint32_t div_reg, uint32_t src, uint32_t div)
+{
+    const uintptr_t r = AM263X_MSS_RCM_BASE;
+    am263x_wr32(r + div_reg, div);
+    while (am263x_rd32(r + div_reg) != div) {
+    }
+    am263x_wr32(r + src_reg, src);
+    while (am263x_rd32(r + src_reg) != src) {
+    }
+}
+
 static hal_isr_fn_t isr_fn;
 static void *isr_ctx;
 
@@ -62,10 +103,19 @@ static void spin(uint32_t loops)
 
 bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
 {
-    /* outputs off first, whatever follows */
+    /* outputs off first, whatever follows: gate pads pulled low, then the trip forced, and only
+     * then the ePWM function on the pads */
+    pads_set(0u, N_PWM_PADS, true);
     if (!am263x_pwm_init(&pwm0, cfg->f_pwm_hz, cfg->dead_time_s)) {
         return false;
     }
+    pads_set(0u, sizeof pads / sizeof pads[0], false);
+    am263x_mmr_unlock(AM263X_MSS_RCM_BASE);
+    rcm_clock(AM263X_RCM_MCAN0_CLK_SRC_SEL, AM263X_RCM_MCAN0_CLK_DIV_VAL, AM263X_RCM_SRC_MCAN_CORE_HSDIV0,
+              AM263X_RCM_DIV(AM263X_CORE_HSDIV0_HZ / AM263X_MCAN_FCLK_HZ));
+    rcm_clock(AM263X_RCM_RTI0_CLK_SRC_SEL, AM263X_RCM_RTI0_CLK_DIV_VAL, AM263X_RCM_SRC_XTALCLK,
+              AM263X_RCM_DIV(AM263X_XTAL_HZ / AM263X_RTI_CLK_HZ));
+    am263x_mmr_lock(AM263X_MSS_RCM_BASE);
     am263x_can_timing_t ct;
     const uint8_t ch[4] = {cfg->adc_ch_i[0], cfg->adc_ch_i[1], cfg->adc_ch_i[2], cfg->adc_ch_vdc};
     if (cfg->qep_counts_per_rev < 4u || !am263x_can_bit_timing(cfg->can_bitrate, AM263X_MCAN_FCLK_HZ, &ct)) {

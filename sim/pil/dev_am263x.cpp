@@ -30,6 +30,12 @@
 //    IR.RF0L set).
 //  - QSPI0: configuration-port frames of 8-bit words (WREN, RDSR, PP, SE4K) applied to the flash
 //    window through bind_memory (program = AND, erase = 0xFF over 4 KiB), never busy.
+//  - SoC bring-up, from the SoC's reset values (am263x/regs_soc.h): IOMUX pads (0x5F7: GPIO,
+//    behind the IO_CFG_KICK lock) and MSS_RCM module clocks (source 0 = 25 MHz, divider 1, behind
+//    its KICK lock). Only pads with their function carry the signal: the ePWM0-2 A/B pads or the
+//    outputs count as off, the eQEP0 A/B pads or the encoder does not count, MCAN0 RX/TX or no
+//    frame. The CAN bus of the bench runs at kBusBitrate: frames pass only when NBTP at the MCAN0
+//    clock the RCM selects gives exactly that rate. RTIFRC0 counts at the RTI0 clock selected.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -52,7 +58,7 @@
 namespace mcsim::pil {
 namespace {
 
-enum Win : int { kEpwm, kAdcRes, kEqep, kAdc, kXbar, kCtrlss, kTop, kVim, kRti, kMcanRam, kMcanCfg, kQspi, kNumWin };
+enum Win : int { kEpwm, kAdcRes, kEqep, kAdc, kXbar, kCtrlss, kTop, kVim, kRti, kMcanRam, kMcanCfg, kQspi, kIomux, kRcm, kNumWin };
 
 struct WinDef {
     uint32_t base, size;
@@ -72,10 +78,13 @@ constexpr WinDef kWins[kNumWin] = {
     {AM263X_MCAN_MSGRAM_BASE(0), 0x8000, "MCAN0_MSG_RAM"},
     {AM263X_MCAN_CFG_BASE(0), 0x1000, "MCAN0_CFG"},
     {AM263X_QSPI_BASE, 0x1000, "QSPI0"},
+    {AM263X_IOMUX_BASE, 0x1000, "IOMUX"},
+    {AM263X_MSS_RCM_BASE, 0x2000, "MSS_RCM"},
 };
 
 constexpr uint32_t kAdcLine = AM263X_IRQ_ADC_EOC;
 constexpr double kSysclk = AM263X_SYSCLK_HZ;
+constexpr uint64_t kBusBitrate = 500000;   // the bench's CAN bus [bit/s]
 
 class Am263x final : public Peripherals {
 public:
@@ -85,6 +94,7 @@ public:
         // reset values the drivers depend on
         put(kMcanCfg, MCANSS_STAT, 4, MCANSS_STAT_MEM_INIT_DONE);
         put(kQspi, QSPI_SPI_SWITCH, 4, QSPI_SWITCH_MMPT_S);
+        for (uint32_t off = 0; off < AM263X_IOMUX_KICK0; off += 4) put(kIomux, off, 4, AM263X_PAD_RESET);
     }
 
     std::vector<MmioWindow> windows() const override
@@ -129,7 +139,7 @@ public:
         case kRti:
             if (off == RTI_RTIFRC0) {
                 const uint64_t cpuc = get(kRti, RTI_RTICPUC0, 4) + 1u;
-                const uint64_t ticks = uint64_t{time_us_} * (AM263X_RTI_CLK_HZ / 1000000u);
+                const uint64_t ticks = uint64_t{time_us_} * (rcm_hz(AM263X_RCM_RTI0_CLK_SRC_SEL, AM263X_RCM_RTI0_CLK_DIV_VAL, true) / 1000000u);
                 return (get(kRti, RTI_RTIGCTRL, 4) & RTI_GCTRL_CNT0EN) ? static_cast<uint32_t>(ticks / cpuc) : 0u;
             }
             if (off == RTI_RTIUC0) return 0;
@@ -168,8 +178,17 @@ public:
         case kEqep:
             if (eqep_write(off, v)) return;
             break;
+        case kIomux:
+            if (off == AM263X_IOMUX_KICK0 || off == AM263X_IOMUX_KICK1) break;
+            if (get(kIomux, AM263X_IOMUX_KICK0, 4) != AM263X_IOMUX_KICK0_UNLOCK ||
+                get(kIomux, AM263X_IOMUX_KICK1, 4) != AM263X_IOMUX_KICK1_UNLOCK) {
+                ++locked_writes_;
+                return;
+            }
+            break;
         case kCtrlss:
         case kTop:
+        case kRcm:
             if (off == AM263X_LOCK0_KICK0 || off == AM263X_LOCK0_KICK1) break;
             if (!unlocked(w) && is_protected(w, off)) {
                 ++locked_writes_;
@@ -286,7 +305,39 @@ private:
     static bool is_protected(int w, uint32_t off)
     {
         if (w == kCtrlss) return off == AM263X_CTRLSS_EPWM_CLKSYNC;
+        if (w == kRcm) return true;
         return off == AM263X_TOP_ADC_REFBUF0_CTRL || off == AM263X_TOP_ADC_REF_COMP_CTRL;
+    }
+
+    // ---- SoC bring-up: pads and module clocks
+    bool pad_is(uint32_t pad, uint32_t fn) const { return (get(kIomux, pad, 4) & AM263X_PAD_FUNC_MASK) == fn; }
+    bool pwm_pads() const
+    {
+        for (uint32_t m = 0; m < 3; ++m)
+            if (!pad_is(AM263X_PAD_EPWM_A(m), AM263X_PAD_FN_EPWM) || !pad_is(AM263X_PAD_EPWM_B(m), AM263X_PAD_FN_EPWM))
+                return false;
+        return true;
+    }
+    // A module clock [Hz] from its MSS_RCM source code and divider (soc_rcm.c's maps; the PLL
+    // outputs as TI's SBL sets them); 0 for a source this model does not know.
+    uint64_t rcm_hz(uint32_t src_reg, uint32_t div_reg, bool rti) const
+    {
+        const uint32_t src = get(kRcm, src_reg, 4) & 0xFFFu;
+        const uint64_t div = (get(kRcm, div_reg, 4) & 0xFu) + 1u;
+        uint64_t hz = 0;
+        if (src == AM263X_RCM_SRC_WUCPUCLK || src == AM263X_RCM_SRC_XTALCLK) hz = AM263X_XTAL_HZ;
+        else if (src == 0x222u) hz = AM263X_SYSCLK_HZ;
+        else if (src == 0x333u) hz = 192000000u;                        // PER HSDIV0 CLKOUT1
+        else if (src == 0x444u) hz = rti ? 500000000u : AM263X_CORE_HSDIV0_HZ;   // CORE HSDIV0 CLKOUT1 / 0
+        return hz / div;
+    }
+    bool can_on_bus() const
+    {
+        if (!pad_is(AM263X_PAD_MCAN0_RX, AM263X_PAD_FN_MCAN) || !pad_is(AM263X_PAD_MCAN0_TX, AM263X_PAD_FN_MCAN)) return false;
+        const uint32_t nbtp = get(kMcanCfg, MCAN_CORE_OFFSET + MCAN_NBTP, 4);
+        const uint64_t brp = ((nbtp >> MCAN_NBTP_NBRP_SHIFT) & 0x1FFu) + 1u;
+        const uint64_t tq = 1u + ((nbtp >> MCAN_NBTP_NTSEG1_SHIFT) & 0xFFu) + 1u + ((nbtp >> MCAN_NBTP_NTSEG2_SHIFT) & 0x7Fu) + 1u;
+        return rcm_hz(AM263X_RCM_MCAN0_CLK_SRC_SEL, AM263X_RCM_MCAN0_CLK_DIV_VAL, false) == kBusBitrate * brp * tq;
     }
 
     // ---- ePWM
@@ -348,7 +399,7 @@ private:
     PeriphOutputs out(const uint16_t* cmp, const uint16_t* prd) const
     {
         PeriphOutputs o;
-        o.enabled = running() && !tripped();
+        o.enabled = running() && !tripped() && pwm_pads();
         for (int m = 0; m < 3; ++m)
             o.duty[m] = duty(get(kEpwm, 0x1000u * static_cast<uint32_t>(m) + EPWM_AQCTLA, 2), cmp[m], prd[m]);
         return o;
@@ -450,7 +501,9 @@ private:
     void eqep_advance(const PeriphInputs& in, uint32_t dt_us)
     {
         const uint32_t ctl = get(kEqep, EQEP_QEPCTL, 2);
-        if (!(ctl & EQEP_QEPCTL_QPEN)) return;
+        if (!(ctl & EQEP_QEPCTL_QPEN) || !pad_is(AM263X_PAD_EQEP0_A, AM263X_PAD_FN_EQEP) ||
+            !pad_is(AM263X_PAD_EQEP0_B, AM263X_PAD_FN_EQEP))
+            return;   // no edges reach the module
         const uint32_t cpr = get(kEqep, EQEP_QPOSMAX, 4) + 1u;
         const uint32_t pos = cpr != 0 ? in.qep_count % cpr : in.qep_count;
         int64_t d = 0;
@@ -563,7 +616,7 @@ public:
     bool can_supported() const override { return true; }
     bool can_take(CanFrame& f) override
     {
-        if (tx_.empty()) return false;
+        if (tx_.empty() || !can_on_bus()) return false;
         const std::array<uint32_t, 4> w = tx_.front();
         tx_.pop_front();
         f = CanFrame{};
@@ -579,7 +632,7 @@ public:
     {
         const uint32_t cccr = get(kMcanCfg, MCAN_CORE_OFFSET + MCAN_CCCR, 4);
         const uint32_t n = rx_size();
-        if ((cccr & MCAN_CCCR_INIT) || n == 0) return false;   // not on the bus
+        if ((cccr & MCAN_CCCR_INIT) || n == 0 || !can_on_bus()) return false;   // not on the bus
         if (rx_count_ >= n) {
             rx_lost_ = true;   // blocking FIFO: the new frame is lost
             return false;

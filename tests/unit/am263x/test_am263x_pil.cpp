@@ -17,6 +17,7 @@
 extern "C" {
 #include "hal/board.h"
 #include "am263x/port.h"
+#include "am263x/regs_mcan.h"
 #include "am263x/regs_soc.h"
 #include "am263x/regs_vim.h"
 }
@@ -337,6 +338,140 @@ TEST_F(Am263xPil, CanFramesReceived)
     EXPECT_EQ(r.id, x.id);
     EXPECT_EQ(r.dlc, 3);
     EXPECT_EQ(r.data[2], 0x77);
+}
+
+// ---- Bring-up (hal_board_init's pads and module clocks) against the model, which starts from the
+// SoC's reset values. To show that a step is needed, a test puts one register back to its reset
+// value (the lock opened as a debugger would) and looks for the symptom at the pins or the bus.
+void poke_pad(mcsim::pil::Peripherals& m, uint32_t pad, uint32_t v)
+{
+    m.write(AM263X_IOMUX_BASE + AM263X_IOMUX_KICK0, 4, AM263X_IOMUX_KICK0_UNLOCK);
+    m.write(AM263X_IOMUX_BASE + AM263X_IOMUX_KICK1, 4, AM263X_IOMUX_KICK1_UNLOCK);
+    m.write(AM263X_IOMUX_BASE + pad, 4, v);
+    m.write(AM263X_IOMUX_BASE + AM263X_IOMUX_KICK0, 4, 0);
+    m.write(AM263X_IOMUX_BASE + AM263X_IOMUX_KICK1, 4, 0);
+}
+
+void poke_rcm(mcsim::pil::Peripherals& m, uint32_t off, uint32_t v)
+{
+    m.write(AM263X_MSS_RCM_BASE + AM263X_LOCK0_KICK0, 4, AM263X_KICK0_UNLOCK);
+    m.write(AM263X_MSS_RCM_BASE + AM263X_LOCK0_KICK1, 4, AM263X_KICK1_UNLOCK);
+    m.write(AM263X_MSS_RCM_BASE + off, 4, v);
+    m.write(AM263X_MSS_RCM_BASE + AM263X_LOCK0_KICK0, 4, 0);
+    m.write(AM263X_MSS_RCM_BASE + AM263X_LOCK0_KICK1, 4, 0);
+}
+
+uint32_t pad(mcsim::pil::Peripherals& m, uint32_t off) { return static_cast<uint32_t>(m.read(AM263X_IOMUX_BASE + off, 4)); }
+uint32_t rcm(mcsim::pil::Peripherals& m, uint32_t off) { return static_cast<uint32_t>(m.read(AM263X_MSS_RCM_BASE + off, 4)); }
+
+const uint32_t kPwmPads[6] = {AM263X_PAD_EPWM_A(0), AM263X_PAD_EPWM_B(0), AM263X_PAD_EPWM_A(1),
+                              AM263X_PAD_EPWM_B(1), AM263X_PAD_EPWM_A(2), AM263X_PAD_EPWM_B(2)};
+
+TEST_F(Am263xPil, BringUpFromTheResetValues)
+{
+    // reset: every pad a GPIO (0x5F7), both module clocks from source 0 (25 MHz), locked
+    for (uint32_t p : kPwmPads) EXPECT_EQ(pad(*model, p), AM263X_PAD_RESET);
+    EXPECT_EQ(pad(*model, AM263X_PAD_MCAN0_TX), AM263X_PAD_RESET);
+    EXPECT_EQ(rcm(*model, AM263X_RCM_MCAN0_CLK_SRC_SEL), 0u);
+    model->write(AM263X_IOMUX_BASE + AM263X_PAD_EPWM_A(0), 4, 0x500u);   // locked: ignored
+    model->write(AM263X_MSS_RCM_BASE + AM263X_RCM_MCAN0_CLK_SRC_SEL, 4, 0x444u);
+    EXPECT_EQ(pad(*model, AM263X_PAD_EPWM_A(0)), AM263X_PAD_RESET);
+    EXPECT_EQ(rcm(*model, AM263X_RCM_MCAN0_CLK_SRC_SEL), 0u);
+
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    for (uint32_t p : kPwmPads) EXPECT_EQ(pad(*model, p) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_EPWM) << p;
+    EXPECT_EQ(pad(*model, AM263X_PAD_EQEP0_A) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_EQEP);
+    EXPECT_EQ(pad(*model, AM263X_PAD_EQEP0_B) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_EQEP);
+    EXPECT_EQ(pad(*model, AM263X_PAD_EQEP0_INDEX) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_EQEP);
+    EXPECT_EQ(pad(*model, AM263X_PAD_MCAN0_RX) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_MCAN);
+    EXPECT_EQ(pad(*model, AM263X_PAD_MCAN0_TX) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_MCAN);
+    // MCAN0: 400 MHz / 5; RTI0: the 25 MHz crystal / 1 (TI's soc_rcm.c source codes)
+    EXPECT_EQ(rcm(*model, AM263X_RCM_MCAN0_CLK_SRC_SEL), 0x444u);
+    EXPECT_EQ(rcm(*model, AM263X_RCM_MCAN0_CLK_DIV_VAL), 0x444u);
+    EXPECT_EQ(rcm(*model, AM263X_RCM_RTI0_CLK_SRC_SEL), 0x666u);
+    EXPECT_EQ(rcm(*model, AM263X_RCM_RTI0_CLK_DIV_VAL), 0x000u);
+    // both locks closed again
+    model->write(AM263X_IOMUX_BASE + AM263X_PAD_EPWM_A(0), 4, AM263X_PAD_RESET);
+    model->write(AM263X_MSS_RCM_BASE + AM263X_RCM_MCAN0_CLK_SRC_SEL, 4, 0u);
+    EXPECT_EQ(pad(*model, AM263X_PAD_EPWM_A(0)) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_EPWM);
+    EXPECT_EQ(rcm(*model, AM263X_RCM_MCAN0_CLK_SRC_SEL), 0x444u);
+}
+
+// A PWM configuration the counters cannot realise: the gate pads stay GPIO inputs pulled down,
+// never the ePWM function.
+TEST_F(Am263xPil, GatePadsSafeWhenThePwmIsRefused)
+{
+    cfg.f_pwm_hz = 500.0f;
+    EXPECT_FALSE(hal_board_init(&cfg, &board));
+    for (uint32_t p : kPwmPads) {
+        EXPECT_EQ(pad(*model, p) & AM263X_PAD_FUNC_MASK, AM263X_PAD_GPIO) << p;
+        EXPECT_EQ(pad(*model, p) & (AM263X_PAD_NOPULL | 0x200u), 0u) << p;   // pull enabled, down
+    }
+    EXPECT_FALSE(model->outputs().enabled);
+}
+
+TEST_F(Am263xPil, PwmPadWithoutItsMuxShowsNoPwm)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    hal_board_start();
+    hal_pwm_enable(board.pwm, true);
+    EXPECT_TRUE(model->outputs().enabled);
+    for (uint32_t p : kPwmPads) {
+        poke_pad(*model, p, AM263X_PAD_RESET);
+        EXPECT_FALSE(model->outputs().enabled) << p;
+        poke_pad(*model, p, AM263X_PAD_FN_EPWM | AM263X_PAD_NOPULL | AM263X_PAD_SLEW_LOW);
+        EXPECT_TRUE(model->outputs().enabled) << p;
+    }
+}
+
+// The bit timing the driver computes for 80 MHz, run from the reset clock (25 MHz): 156.25 kbit/s,
+// no frame on the 500 kbit/s bus.
+TEST_F(Am263xPil, McanAtTheResetClockMissesTheBitRate)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    const uint32_t nbtp = static_cast<uint32_t>(model->read(AM263X_MCAN_CFG_BASE(0) + MCAN_CORE_OFFSET + MCAN_NBTP, 4));
+    const uint32_t brp = ((nbtp >> MCAN_NBTP_NBRP_SHIFT) & 0x1FFu) + 1u;
+    const uint32_t tq = 3u + ((nbtp >> MCAN_NBTP_NTSEG1_SHIFT) & 0xFFu) + ((nbtp >> MCAN_NBTP_NTSEG2_SHIFT) & 0x7Fu);
+    EXPECT_EQ(80000000u / (brp * tq), 500000u);
+    EXPECT_EQ(25000000u / (brp * tq), 156250u);   // the same timing at the reset clock
+    hal_can_frame_t f{};
+    f.id = 0x181;
+    f.dlc = 2;
+    mcsim::pil::CanFrame b;
+    b.id = 0x201;
+    b.dlc = 1;
+    poke_rcm(*model, AM263X_RCM_MCAN0_CLK_SRC_SEL, AM263X_RCM_SRC_WUCPUCLK);
+    poke_rcm(*model, AM263X_RCM_MCAN0_CLK_DIV_VAL, 0u);
+    EXPECT_TRUE(hal_can_send(board.can, &f));
+    EXPECT_FALSE(model->can_take(b));
+    EXPECT_FALSE(model->can_deliver(b));
+    poke_rcm(*model, AM263X_RCM_MCAN0_CLK_DIV_VAL, AM263X_RCM_DIV(5));
+    poke_rcm(*model, AM263X_RCM_MCAN0_CLK_SRC_SEL, AM263X_RCM_SRC_MCAN_CORE_HSDIV0);
+    EXPECT_TRUE(model->can_take(b));
+    EXPECT_EQ(b.id, 0x181u);
+    EXPECT_TRUE(model->can_deliver(b));
+    // the transceiver's pads back at reset: off the bus again
+    poke_pad(*model, AM263X_PAD_MCAN0_TX, AM263X_PAD_RESET);
+    EXPECT_TRUE(hal_can_send(board.can, &f));
+    EXPECT_FALSE(model->can_take(b));
+}
+
+TEST_F(Am263xPil, EncoderPadsWithoutTheirMuxDoNotCount)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    mcsim::pil::PeriphInputs in;
+    in.qep_count = 100;
+    in.time_us = 50;
+    model->period_boundary(in);
+    hal_qep_sample_t q{};
+    hal_qep_read(board.qep, &q);
+    EXPECT_EQ(q.count, 100u);
+    poke_pad(*model, AM263X_PAD_EQEP0_B, AM263X_PAD_RESET);
+    in.qep_count = 200;
+    in.time_us = 100;
+    model->period_boundary(in);
+    hal_qep_read(board.qep, &q);
+    EXPECT_EQ(q.count, 100u);
 }
 
 }  // namespace

@@ -40,14 +40,16 @@
 #define AM263X_MCAN_CFG_BASE(n) (0x52608000u + 0x10000u * (uint32_t)(n))  /* MCANn MCANSS wrapper;
                                                                               M_CAN core at +0x200 */
 #define AM263X_QSPI_BASE        0x48200000u   /* QSPI0 controller (TI QSPI, config port)       */
+#define AM263X_IOMUX_BASE       0x53100000u   /* IOMUX: pad configuration (CSL_IOMUX_U_BASE)   */
+#define AM263X_MSS_RCM_BASE     0x53208000u   /* MSS_RCM: module clock source/divider          */
 
 /* ---- Clocks (assumptions: the LaunchPad's defaults as TI's SBL / SOC init GEL leave them) */
 #define AM263X_CPU_HZ           400000000u    /* R5F core clock                                */
 #define AM263X_SYSCLK_HZ        200000000u    /* CONTROLSS SYSCLK = EPWMCLK = eQEP/ADC clock:
                                                  TI's ePWM examples use 200 MHz (SYSCLK_FREQ)   */
 #define AM263X_EPWMCLK_HZ       AM263X_SYSCLK_HZ
-#define AM263X_MCAN_FCLK_HZ     80000000u     /* MCAN functional clock                         */
-#define AM263X_RTI_CLK_HZ       25000000u     /* RTI input clock: the 25 MHz crystal           */
+#define AM263X_MCAN_FCLK_HZ     80000000u     /* MCAN functional clock: 400 MHz / 5 (board.c)  */
+#define AM263X_RTI_CLK_HZ       25000000u     /* RTI input clock: the 25 MHz crystal (board.c) */
 
 /* ---- Interrupts. The ADC interrupts reach the R5F through the CONTROLSS interrupt crossbar:
  * INTXBAR output k (registers INTXBARk_G0..G6, groups: G0 ePWM INT, G1 ePWM TZINT, G2 ADC
@@ -73,5 +75,55 @@
  * comparator enables 0x7 << 0 for ADC0). */
 #define AM263X_TOP_ADC_REFBUF0_CTRL   0xC00u
 #define AM263X_TOP_ADC_REF_COMP_CTRL  0xC08u
+
+/* ---- Module clocks (MSS_RCM, cslr_mss_rcm.h; source codes and divider format from TI's
+ * source/drivers/soc/am263x/soc_rcm.c: gMcanClkSrcValMap / gRtiClkSrcValMap, and
+ * SOC_rcmSetPeripheralClock, which writes the divider (N - 1 in each of the three nibbles) first,
+ * then the source, each read back (erratum i2324)). Reset value of both registers: 0 = WUCPUCLK
+ * (25 MHz), divider 1; TI's SBL (bootloader_soc.c, Bootloader_socConfigurePll) sets the PLLs
+ * (core HSDIV0 CLKOUT0 400 MHz, PER HSDIV0 CLKOUT0/1 160/192 MHz) but no module clock, so an
+ * application that assumes 80 MHz must select it itself. */
+#define AM263X_RCM_MCAN0_CLK_SRC_SEL  0x100u
+#define AM263X_RCM_RTI0_CLK_SRC_SEL   0x114u
+#define AM263X_RCM_MCAN0_CLK_DIV_VAL  0x200u
+#define AM263X_RCM_RTI0_CLK_DIV_VAL   0x214u
+#define AM263X_RCM_SRC_WUCPUCLK       0x000u   /* reset: 25 MHz                               */
+#define AM263X_RCM_SRC_XTALCLK        0x666u   /* 25 MHz crystal (MCAN and RTI)               */
+#define AM263X_RCM_SRC_MCAN_CORE_HSDIV0 0x444u /* DPLL_CORE_HSDIV0_CLKOUT0, 400 MHz (MCAN)    */
+#define AM263X_RCM_DIV(n)             (((uint32_t)(n) - 1u) * 0x111u)
+#define AM263X_CORE_HSDIV0_HZ         400000000u
+#define AM263X_XTAL_HZ                25000000u
+
+/* ---- Pad configuration (IOMUX, cslr_iomux.h / TI's pinmux.h bit layout): FUNC_SEL (3:0), the
+ * IE/OE override controls (7:4), PI (8) 1 = pull disabled, PUPDSEL (9) 1 = up, SLEWRATE (10)
+ * 1 = low. Reset value of every pad used here 0x5F7: mode 7 = GPIO, overrides on, no pull.
+ * Writes need the IO_CFG_KICK0/1 unlock (values from TI's pinmux.c). */
+#define AM263X_IOMUX_KICK0            0x298u
+#define AM263X_IOMUX_KICK1            0x29Cu
+#define AM263X_IOMUX_KICK0_UNLOCK     0x83E70B13u
+#define AM263X_IOMUX_KICK1_UNLOCK     0x95A4F1E0u
+#define AM263X_PAD_RESET              0x5F7u
+#define AM263X_PAD_FUNC_MASK          0xFu
+#define AM263X_PAD_GPIO               7u
+#define AM263X_PAD_NOPULL             0x100u
+#define AM263X_PAD_SLEW_LOW           0x400u
+/* The LP-AM263 pads (cslr_iomux.h offsets). Which pads the LaunchPad wires: TI's am263x-lp
+ * examples of mcupsdk-core assign ePWM0..2 A/B to the pads of the same name
+ * (examples/drivers/epwm/epwm_deadband/am263x-lp/.../example.syscfg), eQEP0 A/B/INDEX to pads
+ * EQEP0_A/B/INDEX (eqep/eqep_frequency_measurement/am263x-lp), MCAN0 RX/TX to pads MCAN0_RX/TX
+ * (mcan/canfd_external_read_write/am263x-lp, whose canfd_transceiver.c drives the transceiver's
+ * STB low through the GPIO on pad EPWM4_A). Function numbers from SysConfig-generated
+ * ti_pinmux_config.c for AM263x ZCZ: ePWM on its pad mode 0, eQEP0 on its pads mode 8 (balls
+ * B14/A14/D11); MCAN0 on its pads mode 0 (the pad's primary function, as ePWM and UART0). */
+#define AM263X_PAD_MCAN0_RX           0x01Cu
+#define AM263X_PAD_MCAN0_TX           0x020u
+#define AM263X_PAD_EPWM_A(n)          (0x0ACu + 8u * (uint32_t)(n))
+#define AM263X_PAD_EPWM_B(n)          (0x0B0u + 8u * (uint32_t)(n))
+#define AM263X_PAD_EQEP0_A            0x208u
+#define AM263X_PAD_EQEP0_B            0x20Cu
+#define AM263X_PAD_EQEP0_INDEX        0x214u
+#define AM263X_PAD_FN_EPWM            0u
+#define AM263X_PAD_FN_EQEP            8u
+#define AM263X_PAD_FN_MCAN            0u
 
 #endif
