@@ -7,8 +7,8 @@
  * handler (called from the IRQ entry in startup.S, no argument) must find.
  *
  * Set here (the SBL leaves them at reset): the MCAN0 functional clock (80 MHz) and the RTI0 clock
- * (25 MHz crystal) in MSS_RCM, and the pads of ePWM0-2 A/B, eQEP0 A/B/INDEX and MCAN0 RX/TX
- * (LP-AM263 wiring and mux modes: am263x/regs_soc.h). The ePWM pads keep a pull-down GPIO input
+ * (25 MHz crystal) in MSS_RCM, the pads of ePWM0-2 A/B, eQEP0 A/B/INDEX and MCAN0 RX/TX, and
+ * the CAN transceiver's standby GPIO driven low (LP-AM263 wiring and mux modes: am263x/regs_soc.h). The ePWM pads keep a pull-down GPIO input
  * until am263x_pwm_init has forced the trip, and get the ePWM function only then (outputs low).
  * The ADC inputs are dedicated analog pins (no IOMUX register). ePWM/eQEP/ADC run from SYSCLK
  * (200 MHz) with their own dividers (epwm.c TBCTL, adc.c ADCCTL2, eqep.c).
@@ -29,7 +29,10 @@ static hal_pwm_t pwm0 = {
     .ctrl = AM263X_CTRLSS_CTRL_BASE,
     .clk_hz = AM263X_EPWMCLK_HZ,
 };
-static hal_adc_t adc0 = {.adc = AM263X_ADC_BASE(0u), .result = AM263X_ADC_RESULT_BASE(0u)};
+static hal_adc_t adc0 = {
+    .adc = {AM263X_ADC_BASE(0u), AM263X_ADC_BASE(1u), AM263X_ADC_BASE(2u)},
+    .result = {AM263X_ADC_RESULT_BASE(0u), AM263X_ADC_RESULT_BASE(1u), AM263X_ADC_RESULT_BASE(2u)},
+};
 static hal_qep_t qep0 = {.eqep = AM263X_EQEP_BASE(0u)};
 static hal_time_t tim0 = {.rti = AM263X_RTI_BASE(0u)};
 static hal_can_t can0 = {
@@ -52,7 +55,7 @@ static const uint16_t pads[][2] = {
     {AM263X_PAD_EPWM_A(2u), PAD_FN(AM263X_PAD_FN_EPWM)}, {AM263X_PAD_EPWM_B(2u), PAD_FN(AM263X_PAD_FN_EPWM)},
     {AM263X_PAD_EQEP0_A, PAD_FN(AM263X_PAD_FN_EQEP)},    {AM263X_PAD_EQEP0_B, PAD_FN(AM263X_PAD_FN_EQEP)},
     {AM263X_PAD_EQEP0_INDEX, PAD_FN(AM263X_PAD_FN_EQEP)}, {AM263X_PAD_MCAN0_RX, PAD_FN(AM263X_PAD_FN_MCAN)},
-    {AM263X_PAD_MCAN0_TX, PAD_FN(AM263X_PAD_FN_MCAN)},
+    {AM263X_PAD_MCAN0_TX, PAD_FN(AM263X_PAD_FN_MCAN)},   {AM263X_PAD_EPWM4_A, PAD_FN(AM263X_PAD_GPIO)},
 };
 
 /* pads[first..end-1]: their function, or (safe) a GPIO input with the pull-down on (PI = 0,
@@ -86,11 +89,12 @@ static void *isr_ctx;
 
 static void adc_reference_on(void)
 {
-    /* ADC0..2 share reference buffer 0; ADC0's comparators are bits 2:0 (SOC_enableAdcReference) */
+    /* ADC0..2 share reference buffer 0; the comparators: ADC0 bits 2:0, ADC1/2 bits 6:4
+     * (SOC_enableAdcReference) */
     am263x_mmr_unlock(soc.top);
     am263x_wr16(soc.top + AM263X_TOP_ADC_REFBUF0_CTRL, 0x7u);
     am263x_wr16(soc.top + AM263X_TOP_ADC_REF_COMP_CTRL,
-                (uint16_t)(am263x_rd16(soc.top + AM263X_TOP_ADC_REF_COMP_CTRL) | 0x7u));
+                (uint16_t)(am263x_rd16(soc.top + AM263X_TOP_ADC_REF_COMP_CTRL) | 0x77u));
     am263x_mmr_lock(soc.top);
 }
 
@@ -110,6 +114,13 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
         return false;
     }
     pads_set(0u, sizeof pads / sizeof pads[0], false);
+    /* the CAN transceiver out of standby: its STB GPIO an output driven low */
+    {
+        const uintptr_t g = AM263X_GPIO0_BASE;
+        const uint32_t n = AM263X_CAN_STB_GPIO / 32u, bit = 1u << (AM263X_CAN_STB_GPIO % 32u);
+        am263x_wr32(g + AM263X_GPIO_CLR_DATA(n), bit);
+        am263x_wr32(g + AM263X_GPIO_DIR(n), am263x_rd32(g + AM263X_GPIO_DIR(n)) & ~bit);
+    }
     am263x_mmr_unlock(AM263X_MSS_RCM_BASE);
     rcm_clock(AM263X_RCM_MCAN0_CLK_SRC_SEL, AM263X_RCM_MCAN0_CLK_DIV_VAL, AM263X_RCM_SRC_MCAN_CORE_HSDIV0,
               AM263X_RCM_DIV(AM263X_CORE_HSDIV0_HZ / AM263X_MCAN_FCLK_HZ));
@@ -125,7 +136,8 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
         am263x_time_init(&tim0, AM263X_RTI_CLK_HZ);
         time_up = true;
     }
-    const bool adc_was_off = (am263x_rd16(adc0.adc + ADC_ADCCTL1) & ADC_ADCCTL1_ADCPWDNZ) == 0u;
+    /* init powers ADC0..2 together, ADC2 last: if it is on, all are */
+    const bool adc_was_off = (am263x_rd16(adc0.adc[2] + ADC_ADCCTL1) & ADC_ADCCTL1_ADCPWDNZ) == 0u;
     adc_reference_on();
     if (!am263x_adc_init(&adc0, ch)) {
         return false;

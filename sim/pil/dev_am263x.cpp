@@ -10,10 +10,11 @@
 //    (CAU set / CAD clear: (TBPRD - CMPA) / TBPRD; CAU clear / CAD set: CMPA / TBPRD), the dead
 //    band (DBRED) for dead_time_s(). CONTROLSS_CTRL and TOP_CTRL with their KICK0/KICK1 lock
 //    (writes to EPWM_CLKSYNC and the ADC reference registers while locked are ignored).
-//  - ADC0: at counter zero, if ePWM0 generates SOCA at zero and the ADC is powered, every SOC
-//    triggered by ePWM0 SOCA converts: SOC0..2 = phase a..c current, SOC3 = Vdc (the port's fixed
-//    SOC assignment; the channel numbers are the board's wiring). ADCINT1 (INT1E, INT1SEL)
-//    flag; ADCINTOVF.INT1 when the flag was still set, or on PeriphInputs::adc_overrun.
+//  - ADC0..2: at counter zero, if ePWM0 generates SOCA at zero, every SOC of a powered module
+//    triggered by ePWM0 SOCA converts: SOC0 of ADC0/1/2 = phase a/b/c current, ADC0 SOC1 = Vdc
+//    (the port's assignment; the input numbers are the board's wiring); a SOC on an input the
+//    module does not have (AIN0..5) reads 0. ADC0's ADCINT1 (INT1E, INT1SEL) flag;
+//    ADCINTOVF.INT1 when the flag was still set, or on PeriphInputs::adc_overrun.
 //  - INTXBAR output 0 (group 2 bit 0 = ADC0 INT1) -> VIM line 146; the VIM's enable, map (IRQ),
 //    priority and vector registers; IRQVEC reads the registered vector of the pending line and a
 //    write acknowledges; irq_pending() = ADCINT1 set, enabled in the ADC, routed in the crossbar,
@@ -33,8 +34,8 @@
 //  - SoC bring-up, from the SoC's reset values (am263x/regs_soc.h): IOMUX pads (0x5F7: GPIO,
 //    behind the IO_CFG_KICK lock) and MSS_RCM module clocks (source 0 = 25 MHz, divider 1, behind
 //    its KICK lock). Only pads with their function carry the signal: the ePWM0-2 A/B pads or the
-//    outputs count as off, the eQEP0 A/B pads or the encoder does not count, MCAN0 RX/TX or no
-//    frame. The CAN bus of the bench runs at kBusBitrate: frames pass only when NBTP at the MCAN0
+//    outputs count as off, the eQEP0 A/B pads or the encoder does not count, MCAN0 RX/TX (and
+//    the transceiver's STB, GPIO51 on pad EPWM4_A, a GPIO output driven low) or no frame. The CAN bus of the bench runs at kBusBitrate: frames pass only when NBTP at the MCAN0
 //    clock the RCM selects gives exactly that rate. RTIFRC0 counts at the RTI0 clock selected.
 #include <algorithm>
 #include <array>
@@ -58,7 +59,7 @@
 namespace mcsim::pil {
 namespace {
 
-enum Win : int { kEpwm, kAdcRes, kEqep, kAdc, kXbar, kCtrlss, kTop, kVim, kRti, kMcanRam, kMcanCfg, kQspi, kIomux, kRcm, kNumWin };
+enum Win : int { kEpwm, kAdcRes, kEqep, kAdc, kXbar, kCtrlss, kTop, kVim, kRti, kMcanRam, kMcanCfg, kQspi, kIomux, kRcm, kGpio, kNumWin };
 
 struct WinDef {
     uint32_t base, size;
@@ -67,9 +68,9 @@ struct WinDef {
 
 constexpr WinDef kWins[kNumWin] = {
     {AM263X_EPWM_BASE(0), 0x3000, "EPWM0-2"},
-    {AM263X_ADC_RESULT_BASE(0), 0x1000, "ADC0_RESULT"},
+    {AM263X_ADC_RESULT_BASE(0), 0x3000, "ADC0-2_RESULT"},
     {AM263X_EQEP_BASE(0), 0x1000, "EQEP0"},
-    {AM263X_ADC_BASE(0), 0x1000, "ADC0"},
+    {AM263X_ADC_BASE(0), 0x3000, "ADC0-2"},
     {AM263X_INTXBAR_BASE, 0x1000, "CONTROLSS_INTXBAR"},
     {AM263X_CTRLSS_CTRL_BASE, 0x2000, "CONTROLSS_CTRL"},
     {AM263X_TOP_CTRL_BASE, 0x2000, "TOP_CTRL"},
@@ -80,6 +81,7 @@ constexpr WinDef kWins[kNumWin] = {
     {AM263X_QSPI_BASE, 0x1000, "QSPI0"},
     {AM263X_IOMUX_BASE, 0x1000, "IOMUX"},
     {AM263X_MSS_RCM_BASE, 0x2000, "MSS_RCM"},
+    {AM263X_GPIO0_BASE, 0x1000, "GPIO0"},
 };
 
 constexpr uint32_t kAdcLine = AM263X_IRQ_ADC_EOC;
@@ -207,6 +209,9 @@ public:
                 return;
             }
             break;
+        case kGpio:
+            if (gpio_write(off, v)) return;
+            break;
         default:
             break;
         }
@@ -310,6 +315,15 @@ private:
     }
 
     // ---- SoC bring-up: pads and module clocks
+    bool gpio_write(uint32_t off, uint32_t v)   // SET_DATA / CLR_DATA act on OUT_DATA
+    {
+        if (off < 0x10u || (off - 0x10u) % 0x28u < 0x08u) return false;
+        const uint32_t r = (off - 0x10u) % 0x28u, out = off - r + 0x04u;
+        if (r == 0x08u) put(kGpio, out, 4, get(kGpio, out, 4) | v);
+        else if (r == 0x0Cu) put(kGpio, out, 4, get(kGpio, out, 4) & ~v);
+        else return false;
+        return true;
+    }
     bool pad_is(uint32_t pad, uint32_t fn) const { return (get(kIomux, pad, 4) & AM263X_PAD_FUNC_MASK) == fn; }
     bool pwm_pads() const
     {
@@ -334,6 +348,11 @@ private:
     bool can_on_bus() const
     {
         if (!pad_is(AM263X_PAD_MCAN0_RX, AM263X_PAD_FN_MCAN) || !pad_is(AM263X_PAD_MCAN0_TX, AM263X_PAD_FN_MCAN)) return false;
+        // transceiver standby: the pad a plain GPIO (no IE/OE override), the pin an output, low
+        const uint32_t n = AM263X_CAN_STB_GPIO / 32u, bit = 1u << (AM263X_CAN_STB_GPIO % 32u);
+        if ((get(kIomux, AM263X_PAD_EPWM4_A, 4) & 0xFFu) != AM263X_PAD_GPIO ||
+            (get(kGpio, AM263X_GPIO_DIR(n), 4) & bit) || (get(kGpio, AM263X_GPIO_OUT_DATA(n), 4) & bit))
+            return false;
         const uint32_t nbtp = get(kMcanCfg, MCAN_CORE_OFFSET + MCAN_NBTP, 4);
         const uint64_t brp = ((nbtp >> MCAN_NBTP_NBRP_SHIFT) & 0x1FFu) + 1u;
         const uint64_t tq = 1u + ((nbtp >> MCAN_NBTP_NTSEG1_SHIFT) & 0xFFu) + 1u + ((nbtp >> MCAN_NBTP_NTSEG2_SHIFT) & 0x7Fu) + 1u;
@@ -411,21 +430,26 @@ private:
         const uint32_t etsel = get(kEpwm, EPWM_ETSEL, 2);
         const bool soca = (etsel & EPWM_ETSEL_SOCAEN) != 0 &&
                           ((etsel >> EPWM_ETSEL_SOCASEL_SHIFT) & 7u) == EPWM_ETSEL_SOCASEL_ZERO;
-        if (!soca || (get(kAdc, ADC_ADCCTL1, 2) & ADC_ADCCTL1_ADCPWDNZ) == 0) return;
+        if (!soca) return;
         const uint32_t intsel = get(kAdc, ADC_ADCINTSEL1N2, 2);
         bool eoc1 = false;
-        for (uint32_t n = 0; n < 16; ++n) {
-            const uint32_t ctl = get(kAdc, ADC_ADCSOCCTL(n), 4);
-            if (((ctl >> ADC_SOCCTL_TRIGSEL_SHIFT) & ADC_SOCCTL_TRIGSEL_MASK) != ADC_TRIG_EPWM_SOCA(0)) continue;
-            const uint16_t val = n < 3 ? in.adc_i[n] : n == 3 ? in.adc_vdc : 0;
-            put(kAdcRes, ADC_RESULT(n), 2, val);
-            if (n == (intsel & 0xFu)) eoc1 = true;
+        for (uint32_t m = 0; m < 3; ++m) {
+            const uint32_t b = 0x1000u * m;
+            if ((get(kAdc, b + ADC_ADCCTL1, 2) & ADC_ADCCTL1_ADCPWDNZ) == 0) continue;
+            for (uint32_t n = 0; n < 16; ++n) {
+                const uint32_t ctl = get(kAdc, b + ADC_ADCSOCCTL(n), 4);
+                if (((ctl >> ADC_SOCCTL_TRIGSEL_SHIFT) & ADC_SOCCTL_TRIGSEL_MASK) != ADC_TRIG_EPWM_SOCA(0)) continue;
+                const bool input = ((ctl >> ADC_SOCCTL_CHSEL_SHIFT) & ADC_SOCCTL_CHSEL_MASK) < AM263X_ADC_INPUTS;
+                const uint16_t val = !input ? 0 : n == 0 ? in.adc_i[m] : (m == 0 && n == 1) ? in.adc_vdc : 0;
+                put(kAdcRes, b + ADC_RESULT(n), 2, val);
+                if (m == 0 && n == (intsel & 0xFu)) eoc1 = true;
+            }
         }
         if (eoc1 && (intsel & ADC_INTSEL_INT1E)) {
             if ((adc_flag_ & ADC_INT1) && !(intsel & ADC_INTSEL_INT1CONT)) adc_ovf_ |= ADC_INT1;
             adc_flag_ |= ADC_INT1;
         }
-        if (in.adc_overrun) adc_ovf_ |= ADC_INT1;
+        if (in.adc_overrun && (get(kAdc, ADC_ADCCTL1, 2) & ADC_ADCCTL1_ADCPWDNZ)) adc_ovf_ |= ADC_INT1;
     }
     bool adc_line() const
     {

@@ -1,6 +1,6 @@
-/* AM263x ADC and eQEP drivers against RAM register fakes: the ADC's trigger configuration (SOC0..3
- * on the board's channels, triggered by ePWM0 SOCA, ADCINT1 from the last SOC), the sample and
- * its overrun flag; the eQEP's configuration, the speed from latched counts (unit timer) and from
+/* AM263x ADC and eQEP drivers against RAM register fakes: the ADCs' trigger configuration (one
+ * phase current per module ADC0..2 on SOC0, Vdc on ADC0 SOC1, all triggered by ePWM0 SOCA,
+ * ADC0's ADCINT1 from its last SOC), the inputs each module has, the sample and its overrun flag; the eQEP's configuration, the speed from latched counts (unit timer) and from
  * a captured period (capture unit), the HAL sample; the RTI time base; the VIM and crossbar
  * routing of the ADC interrupt. */
 #include "../mc_test.h"
@@ -13,8 +13,8 @@
 #include "am263x/regs_soc.h"
 #include "am263x/regs_vim.h"
 
-static uint8_t adc_ram[0x1000] __attribute__((aligned(8)));
-static uint8_t res_ram[0x1000] __attribute__((aligned(8)));
+static uint8_t adc_ram[0x3000] __attribute__((aligned(8)));   /* ADC0..2 */
+static uint8_t res_ram[0x3000] __attribute__((aligned(8)));
 static uint8_t qep_ram[0x1000] __attribute__((aligned(8)));
 static uint8_t rti_ram[0x1000] __attribute__((aligned(8)));
 static uint8_t vim_ram[0x3000] __attribute__((aligned(8)));
@@ -31,42 +31,64 @@ static void wr(uint8_t *ram, uint32_t off, unsigned size, uint32_t v)
     memcpy(ram + off, &v, size);
 }
 
+static hal_adc_t fake_adc(void)
+{
+    hal_adc_t adc;
+    for (uint32_t m = 0; m < 3; ++m) {
+        adc.adc[m] = (uintptr_t)adc_ram + 0x1000u * m;
+        adc.result[m] = (uintptr_t)res_ram + 0x1000u * m;
+    }
+    adc.overruns = 0u;
+    return adc;
+}
+
 static void test_adc_trigger_config(void **st)
 {
     (void)st;
     memset(adc_ram, 0x5A, sizeof adc_ram);
-    hal_adc_t adc = {.adc = (uintptr_t)adc_ram, .result = (uintptr_t)res_ram};
-    const uint8_t ch[4] = {5u, 1u, 2u, 14u};
+    hal_adc_t adc = fake_adc();
+    const uint8_t ch[4] = {5u, 5u, 0u, 2u};   /* ia ADC0_AIN5, ib ADC1_AIN5, ic ADC2_AIN0, Vdc ADC0_AIN2 */
     assert_true(am263x_adc_init(&adc, ch));
-    for (uint32_t n = 0; n < 4; ++n) {
-        const uint32_t ctl = rd(adc_ram, ADC_ADCSOCCTL(n), 4);
-        assert_int_equal((ctl >> 15) & 0x1Fu, ch[n]);   /* CHSEL */
-        assert_int_equal((ctl >> 20) & 0x7Fu, 0x08u);   /* TRIGSEL = ePWM0 SOCA (SDK ADC_TRIGGER_EPWM0_SOCA) */
-        assert_int_equal(ctl & 0x1FFu, 19u);            /* 20-cycle sample window */
+    for (uint32_t m = 0; m < 3; ++m) {
+        const uint8_t *r = adc_ram + 0x1000u * m;
+        /* SOC0 of every module: its phase current, on the same trigger: sampled together */
+        const uint32_t n_soc = m == 0 ? 2u : 1u;
+        for (uint32_t n = 0; n < n_soc; ++n) {
+            const uint32_t ctl = rd(r, ADC_ADCSOCCTL(n), 4);
+            assert_int_equal((ctl >> 15) & 0x1Fu, n == 0 ? ch[m] : ch[3]);   /* CHSEL */
+            assert_int_equal((ctl >> 20) & 0x7Fu, 0x08u);   /* TRIGSEL = ePWM0 SOCA (SDK ADC_TRIGGER_EPWM0_SOCA) */
+            assert_int_equal(ctl & 0x1FFu, 19u);            /* 20-cycle sample window */
+        }
+        assert_int_equal(rd(r, ADC_ADCSOCCTL(n_soc), 4), 0x5A5A5A5Au);   /* no further SOC touched */
+        assert_int_equal(rd(r, ADC_ADCCTL1, 2), 0x0084);    /* EOC pulse, powered */
+        assert_int_equal(rd(r, ADC_ADCCTL2, 2), 0x0006);    /* SYSCLK / 4, 12 bit, single-ended */
+        assert_int_equal(rd(r, ADC_ADCSOCPRICTL, 2), n_soc);   /* its SOCs in order */
+        assert_int_equal(rd(r, ADC_ADCINTSEL1N2, 2), m == 0 ? 1 : 0);   /* ADC0 INT1 <- SOC1, not yet enabled */
+        assert_int_equal(rd(r, ADC_ADCINTFLGCLR, 2), 0xF);
+        assert_int_equal(rd(r, ADC_ADCINTOVFCLR, 2), 0xF);
     }
-    assert_int_equal(rd(adc_ram, ADC_ADCCTL1, 2), 0x0084);    /* EOC pulse, powered */
-    assert_int_equal(rd(adc_ram, ADC_ADCCTL2, 2), 0x0006);    /* SYSCLK / 4, 12 bit, single-ended */
-    assert_int_equal(rd(adc_ram, ADC_ADCSOCPRICTL, 2), 4);    /* SOC0..3 in order */
-    assert_int_equal(rd(adc_ram, ADC_ADCINTSEL1N2, 2), 3);    /* INT1 <- SOC3, not yet enabled */
-    assert_int_equal(rd(adc_ram, ADC_ADCINTFLGCLR, 2), 0xF);
-    assert_int_equal(rd(adc_ram, ADC_ADCINTOVFCLR, 2), 0xF);
     am263x_adc_enable_irq(&adc);
-    assert_int_equal(rd(adc_ram, ADC_ADCINTSEL1N2, 2), 0x0023);   /* + INT1E, not continuous */
-    /* refused: a channel beyond CHSEL's 5 bits, the same channel twice */
-    const uint8_t bad1[4] = {0u, 1u, 2u, 32u}, bad2[4] = {3u, 1u, 3u, 4u};
-    assert_false(am263x_adc_init(&adc, bad1));
-    assert_false(am263x_adc_init(&adc, bad2));
+    assert_int_equal(rd(adc_ram, ADC_ADCINTSEL1N2, 2), 0x0021);   /* + INT1E, not continuous */
+    assert_int_equal(rd(adc_ram + 0x1000u, ADC_ADCINTSEL1N2, 2), 0);
+    /* refused: an input no module has (AIN0..5 only, although CHSEL has 5 bits), Vdc on ia's input */
+    const uint8_t bad[][4] = {{0u, 1u, 2u, 6u}, {6u, 1u, 2u, 3u}, {0u, 1u, 31u, 3u}, {3u, 1u, 2u, 3u}};
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+        assert_false(am263x_adc_init(&adc, bad[k]));
+    }
 }
 
 static void test_adc_sample_and_overrun(void **st)
 {
     (void)st;
     memset(adc_ram, 0, sizeof adc_ram);
-    hal_adc_t adc = {.adc = (uintptr_t)adc_ram, .result = (uintptr_t)res_ram};
-    const uint16_t v[6] = {1111u, 2222u, 3333u, 4000u, 7u, 8u};
-    for (uint32_t n = 0; n < 6; ++n) {
-        wr(res_ram, ADC_RESULT(n), 2, v[n]);
-    }
+    hal_adc_t adc = fake_adc();
+    /* ADC0: ia, Vdc; ADC1: ib; ADC2: ic; the other results are not ours */
+    wr(res_ram, ADC_RESULT(0), 2, 1111u);
+    wr(res_ram, ADC_RESULT(1), 2, 4000u);
+    wr(res_ram, ADC_RESULT(2), 2, 7u);
+    wr(res_ram + 0x1000u, ADC_RESULT(0), 2, 2222u);
+    wr(res_ram + 0x1000u, ADC_RESULT(1), 2, 8u);
+    wr(res_ram + 0x2000u, ADC_RESULT(0), 2, 3333u);
     hal_adc_sample_t s;
     hal_adc_read(&adc, &s);
     assert_int_equal(s.i[0], 1111);

@@ -385,6 +385,10 @@ TEST_F(Am263xPil, BringUpFromTheResetValues)
     EXPECT_EQ(pad(*model, AM263X_PAD_EQEP0_INDEX) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_EQEP);
     EXPECT_EQ(pad(*model, AM263X_PAD_MCAN0_RX) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_MCAN);
     EXPECT_EQ(pad(*model, AM263X_PAD_MCAN0_TX) & AM263X_PAD_FUNC_MASK, AM263X_PAD_FN_MCAN);
+    EXPECT_EQ(pad(*model, AM263X_PAD_EPWM4_A) & 0xFFu, AM263X_PAD_GPIO);   // STB: GPIO, no override
+    const uint32_t stb = 1u << (AM263X_CAN_STB_GPIO % 32u);
+    EXPECT_EQ(model->read(AM263X_GPIO0_BASE + AM263X_GPIO_DIR(1), 4) & stb, 0u);        // output
+    EXPECT_EQ(model->read(AM263X_GPIO0_BASE + AM263X_GPIO_OUT_DATA(1), 4) & stb, 0u);   // low
     // MCAN0: 400 MHz / 5; RTI0: the 25 MHz crystal / 1 (TI's soc_rcm.c source codes)
     EXPECT_EQ(rcm(*model, AM263X_RCM_MCAN0_CLK_SRC_SEL), 0x444u);
     EXPECT_EQ(rcm(*model, AM263X_RCM_MCAN0_CLK_DIV_VAL), 0x444u);
@@ -450,6 +454,18 @@ TEST_F(Am263xPil, McanAtTheResetClockMissesTheBitRate)
     EXPECT_TRUE(model->can_take(b));
     EXPECT_EQ(b.id, 0x181u);
     EXPECT_TRUE(model->can_deliver(b));
+    // the transceiver in standby (its STB pad at reset, or the GPIO high): off the bus
+    poke_pad(*model, AM263X_PAD_EPWM4_A, AM263X_PAD_RESET);
+    EXPECT_TRUE(hal_can_send(board.can, &f));
+    EXPECT_FALSE(model->can_take(b));
+    poke_pad(*model, AM263X_PAD_EPWM4_A, AM263X_PAD_GPIO | AM263X_PAD_NOPULL | AM263X_PAD_SLEW_LOW);
+    EXPECT_TRUE(model->can_take(b));
+    const uint32_t stb = 1u << (AM263X_CAN_STB_GPIO % 32u);
+    model->write(AM263X_GPIO0_BASE + AM263X_GPIO_CLR_DATA(1) - 4u, 4, stb);   // SET_DATA
+    EXPECT_TRUE(hal_can_send(board.can, &f));
+    EXPECT_FALSE(model->can_take(b));
+    model->write(AM263X_GPIO0_BASE + AM263X_GPIO_CLR_DATA(1), 4, stb);
+    EXPECT_TRUE(model->can_take(b));
     // the transceiver's pads back at reset: off the bus again
     poke_pad(*model, AM263X_PAD_MCAN0_TX, AM263X_PAD_RESET);
     EXPECT_TRUE(hal_can_send(board.can, &f));

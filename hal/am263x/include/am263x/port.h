@@ -12,9 +12,9 @@
  *    zero (the period boundary, where the ADC samples) every phase is low: the centre of the zero
  *    vector V0, all low-side switches on. B = complement of A with the dead band on both edges
  *    (active-high complementary); the trip zone drives A and B low.
- *  - ADC: ADC0, SOC0..2 = phase a..c current, SOC3 = Vdc (channels from hal_board_cfg_t), all
- *    triggered by ePWM0 SOCA, converted in SOC order; ADCINT1 = end of SOC3 -> INTXBAR output 0 ->
- *    VIM interrupt 146.
+ *  - ADC: phase a, b, c current on ADC0, ADC1, ADC2 (SOC0 of each: sampled at the same instant),
+ *    Vdc on ADC0 SOC1 (inputs from hal_board_cfg_t), all triggered by ePWM0 SOCA at counter zero;
+ *    ADCINT1 of ADC0 = end of its SOC1 -> INTXBAR output 0 -> VIM interrupt 146.
  *  - eQEP0 in quadrature count mode, MCAN0, RTI0 counter 0 (1 MHz), QSPI0 + its flash window. */
 #ifndef AM263X_PORT_H
 #define AM263X_PORT_H
@@ -53,14 +53,16 @@ void am263x_pwm_start(hal_pwm_t *pwm);
 
 /* ---------------------------------------------------------------- ADC (adc.c) */
 struct hal_adc {
-    uintptr_t adc;          /* ADC0 control block                                          */
-    uintptr_t result;       /* ADC0 result block                                           */
+    uintptr_t adc[3];       /* ADC0..2 control blocks (ADC0: Vdc too, and the interrupt)   */
+    uintptr_t result[3];    /* ADC0..2 result blocks                                       */
     uint32_t overruns;      /* samples read with the overflow flag set                     */
 };
 #define AM263X_ADC_ACQ_CYCLES 20u   /* sample window [SYSCLK cycles] = 100 ns                  */
-/* Powered up (the caller waits the power-up time), SOC0..3 on channels ch[0..3] triggered by
- * ePWM0 SOCA, ADCINT1 at the end of SOC3 (not yet enabled), flags cleared. Channels are 0..31
- * (CHSEL is 5 bits); false for a channel out of range or a repeated one. */
+#define AM263X_ADC_LAST_SOC   1u    /* ADC0's last SOC (Vdc): its EOC raises ADCINT1           */
+/* ADC0..2 powered up (the caller waits the power-up time): ADCm SOC0 on input ch[m] (phase m),
+ * ADC0 SOC1 on ch[3] (Vdc), all triggered by ePWM0 SOCA; ADC0's ADCINT1 at the end of SOC1 (not
+ * yet enabled); flags cleared. false for an input a module does not have (each has AIN0..5:
+ * AM263X_ADC_INPUTS) or Vdc on ia's input. */
 bool am263x_adc_init(hal_adc_t *adc, const uint8_t ch[4]);
 void am263x_adc_enable_irq(hal_adc_t *adc);
 /* End of the control ISR: ADCINT1 cleared, so that the next EOC is not an overflow. */

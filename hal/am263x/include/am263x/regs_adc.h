@@ -36,6 +36,10 @@
 /* ADCSOCxCTL: ACQPS (8:0) sample window - 1 [SYSCLK cycles], CHSEL (19:15), TRIGSEL (26:20) */
 #define ADC_SOCCTL_CHSEL_SHIFT    15u
 #define ADC_SOCCTL_CHSEL_MASK     0x1Fu
+/* Inputs of each AM263x ADC module (ADC0..4): AIN0..AIN5 single-ended (SDK adc.h ADC_Channel:
+ * ADC_CH_ADCIN0..5, 6/7 are the internal CAL0/CAL1; the am263x-lp examples' SysConfig lists
+ * ADCn_AIN0..5 for ADC0, ADC1 and ADC2). CHSEL's 5 bits allow more than exist. */
+#define AM263X_ADC_INPUTS         6u
 #define ADC_SOCCTL_TRIGSEL_SHIFT  20u
 #define ADC_SOCCTL_TRIGSEL_MASK   0x7Fu
 #define ADC_SOCCTL_ACQPS_MASK     0x1FFu

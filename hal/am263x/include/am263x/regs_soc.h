@@ -40,6 +40,7 @@
 #define AM263X_MCAN_CFG_BASE(n) (0x52608000u + 0x10000u * (uint32_t)(n))  /* MCANn MCANSS wrapper;
                                                                               M_CAN core at +0x200 */
 #define AM263X_QSPI_BASE        0x48200000u   /* QSPI0 controller (TI QSPI, config port)       */
+#define AM263X_GPIO0_BASE       0x52000000u   /* GPIO0 (CSL_GPIO0_U_BASE), gpio v0 layout      */
 #define AM263X_IOMUX_BASE       0x53100000u   /* IOMUX: pad configuration (CSL_IOMUX_U_BASE)   */
 #define AM263X_MSS_RCM_BASE     0x53208000u   /* MSS_RCM: module clock source/divider          */
 
@@ -122,6 +123,16 @@
 #define AM263X_PAD_EQEP0_A            0x208u
 #define AM263X_PAD_EQEP0_B            0x20Cu
 #define AM263X_PAD_EQEP0_INDEX        0x214u
+/* The MCAN transceiver's standby input: GPIO51 on pad EPWM4_A (ball D1; "GPIO51 -> EPWM4_A"
+ * in SysConfig-generated ti_pinmux_config.c, mode 7), driven low to leave standby
+ * (canfd_external_read_write/am263x-lp/canfd_transceiver.c: GPIO_setDirMode output,
+ * GPIO_pinWriteLow). gpio v0 registers (source/drivers/gpio/v0/cslr_gpio.h, gpio.h): 32 pins per
+ * register set n = pin / 32 at 0x28 n; DIR bit 0 = output (GPIO_DIRECTION_OUTPUT 0). */
+#define AM263X_PAD_EPWM4_A            0x0CCu
+#define AM263X_CAN_STB_GPIO           51u
+#define AM263X_GPIO_DIR(n)            (0x10u + 0x28u * (uint32_t)(n))
+#define AM263X_GPIO_OUT_DATA(n)       (0x14u + 0x28u * (uint32_t)(n))
+#define AM263X_GPIO_CLR_DATA(n)       (0x1Cu + 0x28u * (uint32_t)(n))
 #define AM263X_PAD_FN_EPWM            0u
 #define AM263X_PAD_FN_EQEP            8u
 #define AM263X_PAD_FN_MCAN            0u
