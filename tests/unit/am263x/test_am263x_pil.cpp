@@ -17,6 +17,7 @@
 extern "C" {
 #include "hal/board.h"
 #include "am263x/port.h"
+#include "am263x/regs_adc.h"
 #include "am263x/regs_mcan.h"
 #include "am263x/regs_soc.h"
 #include "am263x/regs_vim.h"
@@ -470,6 +471,53 @@ TEST_F(Am263xPil, McanAtTheResetClockMissesTheBitRate)
     poke_pad(*model, AM263X_PAD_MCAN0_TX, AM263X_PAD_RESET);
     EXPECT_TRUE(hal_can_send(board.can, &f));
     EXPECT_FALSE(model->can_take(b));
+}
+
+// The RTI counts at the clock MSS_RCM selects: the port's 25 MHz crystal gives microseconds; the
+// same prescaler at SYS_CLK (200 MHz, source code 0x222) would run the time base 8 times fast.
+TEST_F(Am263xPil, TimeBaseFollowsTheRtiClock)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    am263x_time_init(board.time, AM263X_RTI_CLK_HZ);   // board.c starts the RTI once per process
+    mcsim::pil::PeriphInputs in;
+    in.time_us = 1000;
+    model->period_boundary(in);
+    EXPECT_EQ(hal_time_us(board.time), 1000u);
+    poke_rcm(*model, AM263X_RCM_RTI0_CLK_SRC_SEL, 0x222u);
+    EXPECT_EQ(hal_time_us(board.time), 8000u);
+}
+
+// Each phase current comes from its own module: a module left unpowered or a SOC on an input the
+// module does not have shows at once.
+TEST_F(Am263xPil, PhaseCurrentsFromThreeModules)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    IsrLog log;
+    log.board = &board;
+    hal_board_attach_isr(control_isr, &log);
+    hal_board_start();
+    mcsim::pil::PeriphInputs in;
+    in.adc_i[0] = 101;
+    in.adc_i[1] = 202;
+    in.adc_i[2] = 303;
+    in.adc_vdc = 404;
+    in.time_us = 50;
+    model->period_boundary(in);
+    take_irq(*model);
+    EXPECT_EQ(log.adc.i[0], 101);
+    EXPECT_EQ(log.adc.i[1], 202);
+    EXPECT_EQ(log.adc.i[2], 303);
+    EXPECT_EQ(log.adc.vdc, 404);
+    model->write(AM263X_ADC_BASE(1) + ADC_ADCCTL1, 2, 0);   // ADC1 powered down: ib stale
+    model->write(AM263X_ADC_BASE(2) + ADC_ADCSOCCTL(0), 4,
+                 static_cast<uint32_t>(model->read(AM263X_ADC_BASE(2) + ADC_ADCSOCCTL(0), 4)) | (7u << ADC_SOCCTL_CHSEL_SHIFT));
+    in.adc_i[1] = 222;
+    in.adc_i[2] = 333;
+    in.time_us = 100;
+    model->period_boundary(in);
+    take_irq(*model);
+    EXPECT_EQ(log.adc.i[1], 202);
+    EXPECT_EQ(log.adc.i[2], 0);
 }
 
 TEST_F(Am263xPil, EncoderPadsWithoutTheirMuxDoNotCount)
