@@ -8,8 +8,9 @@
  *
  * Set here (the SBL leaves them at reset): the MCAN0 functional clock (80 MHz) and the RTI0 clock
  * (25 MHz crystal) in MSS_RCM, the pads of ePWM0-2 A/B, eQEP0 A/B/INDEX and MCAN0 RX/TX, and
- * the CAN transceiver's standby GPIO driven low (LP-AM263 wiring and mux modes: am263x/regs_soc.h). The ePWM pads keep a pull-down GPIO input
- * until am263x_pwm_init has forced the trip, and get the ePWM function only then (outputs low).
+ * the CAN transceiver's standby GPIO driven low (LP-AM263 wiring and mux modes: am263x/regs_soc.h).
+ * The ePWM pads are pulled-down GPIOs until am263x_pwm_init has forced the trip, and get the ePWM
+ * function only then (outputs low).
  * The ADC inputs are dedicated analog pins (no IOMUX register). ePWM/eQEP/ADC run from SYSCLK
  * (200 MHz) with their own dividers (epwm.c TBCTL, adc.c ADCCTL2, eqep.c).
  * Left as TI's SBL configured them: the PLLs, SYSCLK and the R5F clock (Bootloader_socConfigurePll),
@@ -58,8 +59,9 @@ static const uint16_t pads[][2] = {
     {AM263X_PAD_MCAN0_TX, PAD_FN(AM263X_PAD_FN_MCAN)},   {AM263X_PAD_EPWM4_A, PAD_FN(AM263X_PAD_GPIO)},
 };
 
-/* pads[first..end-1]: their function, or (safe) a GPIO input with the pull-down on (PI = 0,
- * PUPDSEL = 0): a gate input held low whatever the GPIO module does */
+/* pads[first..end-1]: their function, or (safe) a GPIO with the pull-down on (PI = 0, PUPDSEL =
+ * 0) and no override: a gate input held low, pulled down as an input, driven low as an output
+ * (OUT_DATA resets to 0, cslr_gpio.h) */
 static void pads_set(uint32_t first, uint32_t end, bool safe)
 {
     const uintptr_t io = AM263X_IOMUX_BASE;
