@@ -10,7 +10,8 @@ format (nothing of TI's code); the facts and where they come from (TexasInstrume
     file header, 5 little-endian u32: magic 0x43525052 ("RPRC"), entry (e_entry), reserved 0,
       section count, version 1
     per section, 5 u32: address (the section's sh_addr: its RUN address), reserved 0, size,
-      reserved CRC 0, reserved 0; then the section's bytes
+      reserved CRC 0, reserved 0; then the section's bytes (sizes 8-aligned, so the RPRC image is
+      whole words: the C MulticoreImageGen copies size/4 words)
     which sections: SHF_ALLOC, not NOBITS (elf2rprc keeps sh_flags & 2, drops sh_type & 8), sorted
       by address; "RPRC mandates that the sections ... be 8-byte aligned" (tools_boot.md)
   Multicore image (tools_boot.md "Multi-core Image Gen"; bootloader_priv.h Bootloader_MetaHeader*;
@@ -42,7 +43,7 @@ META_START = 0x5254534D          # "MSTR"
 META_END = 0x444E454D            # "MEND"
 DEV_ID_AM263X = 55
 SBL_RESERVED = (0x70002000, 0x70040000)   # soc/am263x/bootloader_soc.c gResMemSection
-QSPI_XIP = (0x60000000, 0x68000000)       # the QSPI flash's memory-mapped window
+QSPI_XIP = (0x60000000, 0x68000000)       # EXT_FLASH0/1 up to GPMC0 (am263x cslr_soc_baseaddress.h)
 SHF_ALLOC, SHT_NOBITS, PT_LOAD = 0x2, 8, 1
 
 
