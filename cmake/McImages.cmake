@@ -29,5 +29,8 @@ foreach(img arm-cm4f am263x)
     INSTALL_COMMAND ""
     USES_TERMINAL_BUILD ON)
   set(MC_IMAGE_${img} ${MC_IMAGE_DIR}/${img}/firmware/image/mc_image_${port}.elf)
+  if(img STREQUAL "am263x")   # and its boot image for TI's SBL (firmware/image/CMakeLists.txt)
+    set(MC_BOOTIMAGE_${img} ${MC_IMAGE_DIR}/${img}/firmware/image/mc_image_${port}.appimage)
+  endif()
   list(APPEND MC_IMAGES ${img})
 endforeach()

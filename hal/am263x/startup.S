@@ -6,8 +6,9 @@
  * (IRQs through the vector at 0x18, the VIM in non-VIC mode), V = 0 (vectors at 0), TE = 0
  * (exceptions in ARM state); VFP on (CPACR cp10/cp11 full access, FPEXC.EN); MPU regions (below)
  * and the I-cache on (the D-cache stays off: no maintenance needed for the flash window the NVM
- * driver programs); a stack per mode; .data copied from its load address, .bss zeroed; main in
- * SYS mode, IRQs still masked (hal_board_start unmasks them).
+ * driver programs); a stack per mode; .bss zeroed (.data needs no copy: the loader, TI's SBL or
+ * CCS, writes it at its run address, see am263x.ld); main in SYS mode, IRQs still masked
+ * (hal_board_start unmasks them).
  *
  * MPU (ARMv7-R PMSA; DRACR: XN 12, AP 10:8 = 011 full access, TEX 5:3, C 1, B 0; DRSR size
  * field N = log2(size) - 1), higher region wins:
@@ -138,14 +139,7 @@ am263x_reset:
         ldr     sp, =__exc_stack_top
         cps     #MODE_SYS
         ldr     sp, =__sys_stack_top
-        /* .data from its load address, .bss zeroed (both 8-aligned by the linker script) */
-        ldr     r0, =__data_load
-        ldr     r1, =__data_start
-        ldr     r2, =__data_end
-1:      cmp     r1, r2
-        ldrlo   r3, [r0], #4
-        strlo   r3, [r1], #4
-        blo     1b
+        /* .bss zeroed (8-aligned by the linker script); .data is already in place (am263x.ld) */
         ldr     r1, =__bss_start
         ldr     r2, =__bss_end
         mov     r3, #0

@@ -56,6 +56,8 @@ const char* kUsage =
     "                     with the set stored there\n"
     "         --pil: run a cross-built firmware image (presets arm-cm4f, am263x) on an emulated core\n"
     "                against the plant instead of the host build; adds estimated ISR cycles to metrics.json\n"
+    "                --pil IMAGE.appimage: boot mode, the AM263x boot image loaded as TI's SBL loads it (its\n"
+    "                sections at their run addresses, nothing else); symbols from IMAGE.elf beside it\n"
     "       mcsim check SCENARIO.toml [--set key=value]...\n"
     "       mcsim image-config SCENARIO.toml --image IN.elf --out OUT.elf [--set key=value]...\n"
     "                (the scenario's drive configuration written into a firmware image, for flashing)\n"

@@ -38,12 +38,14 @@
 #include <cctype>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <set>
 #include <sstream>
 #include <unordered_map>
 #include <unordered_set>
 
+#include "bootimage.hpp"
 #include "cycle_model.hpp"
 #include "elf.hpp"
 
@@ -1107,11 +1109,41 @@ std::string ram_list(const std::vector<MmioWindow>& mems)
     return describe_memories(r.empty() ? mems : r);
 }
 
+// Boot mode (a TI multicore boot image instead of the ELF): the memory holds what TI's SBL writes,
+// each RPRC section at its address and nothing else (no .bss zeroing, no load image); the SBL's
+// TCM initialisation leaves the TCMs zero (soc/am263x/bootloader_soc.c Bootloader_socMemInitCpu),
+// as the emulator's memories start. The ELF beside it (same name, .elf) gives only the symbols,
+// the build attributes and the port's name. One core, R5FSS0-0 (RPRC core id 0), device id 55 (the AM263x SBL's).
+std::string boot_image_elf(const std::string& path)
+{
+    const std::string elf = std::filesystem::path(path).replace_extension(".elf").string();
+    if (!std::filesystem::exists(elf))
+        load_fail(path, "a boot image: its symbols come from the ELF beside it, " + elf + ", which does not exist");
+    return elf;
+}
+
+std::vector<Segment> boot_image_contents(const BootImage& b, const std::string& port, const std::vector<MmioWindow>& mems)
+{
+    if (port != "am263x")
+        load_fail(b.path, "a TI multicore boot image, but the ELF's port is '" + port + "' (the SBL boots the am263x port)");
+    if (b.dev_id != 55) load_fail(b.path, "device id " + std::to_string(b.dev_id) + ", not 55 (AM263x)");
+    if (b.cores.size() != 1 || b.cores[0].core_id != 0)
+        load_fail(b.path, "the PIL boots one core, R5FSS0-0 (RPRC core id 0); the image has " + std::to_string(b.cores.size()) +
+                              " core(s), the first with id " + (b.cores.empty() ? std::string("-") : std::to_string(b.cores[0].core_id)));
+    for (const auto& s : b.cores[0].sections)
+        if (!s.bytes.empty() && !memory_of(mems, s.addr, s.bytes.size()))
+            load_fail(b.path, "section at " + hex(s.addr) + "+" + hex(static_cast<uint32_t>(s.bytes.size())) +
+                                  " lies outside the memories of port '" + port + "' (" + describe_memories(mems) + ")");
+    return b.cores[0].sections;
+}
+
 }  // namespace
 
 std::unique_ptr<Target> Target::load(const std::string& path)
 {
-    ElfImage img = read_elf(path);
+    std::unique_ptr<BootImage> boot;
+    if (is_boot_image(path)) boot = std::make_unique<BootImage>(read_boot_image(path));
+    ElfImage img = read_elf(boot ? boot_image_elf(path) : path);
     if (img.segments.empty()) load_fail(path, "no loadable segment (PT_LOAD): nothing to put into the target's memory");
 
     // The port: the image names it (hal_port_name), the engine maps its peripheral model.
@@ -1161,6 +1193,7 @@ std::unique_ptr<Target> Target::load(const std::string& path)
         if (s.filesz > 0) contents.push_back({s.paddr, s.data});
         if (s.memsz > s.filesz) contents.push_back({s.vaddr + s.filesz, std::vector<uint8_t>(s.memsz - s.filesz, 0)});
     }
+    if (boot) contents = boot_image_contents(*boot, port, mems);
 
     // The core: the build attributes, else the vector table.
     std::vector<std::string> notes;

@@ -63,6 +63,8 @@ public:
     // Loads the ELF (PT_LOAD segments into the core's memory map), detects the core from the ELF
     // attributes (Tag_CPU_arch_profile 'M' -> Cortex-M4F, 'R' -> Cortex-R5F), picks the port's
     // peripherals from the image (symbol hal_port_name: "generic" or "am263x") and maps them.
+    // A TI multicore boot image (.appimage, bootimage.hpp) instead: boot mode, the memory holds its
+    // sections only (as TI's SBL loads them), the rest from the ELF of the same name beside it.
     static std::unique_ptr<Target> load(const std::string& elf_path);
     virtual ~Target() = default;
 
