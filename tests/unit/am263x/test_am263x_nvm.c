@@ -199,7 +199,10 @@ static void test_geometry(void **st)
     assert_int_equal(g->region[1].start + g->region[1].sector_size * g->region[1].count, g->size);
     assert_int_equal(g->size, 16u << 20);
     assert_int_equal(g->page_size, 256);
+    assert_int_equal(g->region[0].sector_size, 4096);   /* the same facts as hal_host_nvm_s25fl128s */
+    assert_int_equal(g->region[0].count, 32);
     assert_int_equal(g->region[0].erase_cmd, 0x20);
+    assert_int_equal(g->region[1].sector_size, 65536);
     assert_int_equal(g->region[1].erase_cmd, 0xD8);
     /* ranges that are not whole sectors of one region: no blocks, every call refused */
     const uint32_t bad[][2] = {{0x7F8000u, 0x8000u}, {0x10000u, 0x20000u}, {0x7E0000u, 0x11000u}, {0x7E0000u, 0u}};

@@ -126,7 +126,24 @@ static void test_geometry(void **state)
         assert_int_equal(g.slot_blocks, 1u);
         assert_int_equal(g.payload_max, 65536u - 40u);
         assert_int_equal(g.map_cells_max, MC_FLUX_MAP_MAX * MC_FLUX_MAP_MAX);
-        assert_ptr_equal(hal_nvm_geometry(&nvm), &hal_host_nvm_s25fl128s);
+        /* the map as hal/am263x has it (am263x_s25fl128s, checked the same way in am263x_nvm) */
+        const hal_nvm_geometry_t *m = hal_nvm_geometry(&nvm);
+        assert_ptr_equal(m, &hal_host_nvm_s25fl128s);
+        assert_int_equal(m->size, 16u << 20);
+        assert_int_equal(m->n_regions, 2);
+        assert_int_equal(m->region[0].start, 0u);
+        assert_int_equal(m->region[0].sector_size, 4096);
+        assert_int_equal(m->region[0].count, 32);
+        assert_int_equal(m->region[0].erase_cmd, 0x20);
+        assert_int_equal(m->region[1].start, 0x20000u);
+        assert_int_equal(m->region[1].sector_size, 65536);
+        assert_int_equal(m->region[1].count, 254);
+        assert_int_equal(m->region[1].erase_cmd, 0xD8);
+        /* a range that is not whole sectors of one region is refused */
+        static hal_nvm_t bad;
+        assert_false(hal_host_nvm_init_geom(&bad, m, 0x7F8000u, 1u));
+        assert_false(hal_host_nvm_init_geom(&bad, m, 0x10000u, 17u));
+        assert_false(hal_host_nvm_init_geom(&bad, m, 0x7E0000u, 3u));   /* above the model's capacity */
         return;
     }
     /* 2 blocks a slot: 8192 - 40 bytes of records; 780 of parameters, 56 + 8 per map point */
