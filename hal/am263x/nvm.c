@@ -36,6 +36,7 @@ void am263x_nvm_init(hal_nvm_t *nvm, uintptr_t qspi, uintptr_t window, const hal
     nvm->geom = geom;
     nvm->base = flash_offset;
     nvm->blocks = 0u;
+    nvm->block_size = 0u;
     const hal_nvm_region_t *r = hal_nvm_region_at(geom, flash_offset);
     if (r != NULL && bytes != 0u && bytes <= geom->size && flash_offset % r->sector_size == 0u &&
         bytes % r->sector_size == 0u && hal_nvm_region_at(geom, flash_offset + bytes - 1u) == r) {

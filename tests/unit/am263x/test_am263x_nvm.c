@@ -210,6 +210,7 @@ static void test_geometry(void **st)
         hal_nvm_t n;
         am263x_nvm_init(&n, (uintptr_t)qspi_ram, (uintptr_t)flash, &am263x_s25fl128s, bad[k][0], bad[k][1]);
         assert_int_equal(hal_nvm_blocks(&n), 0);
+        assert_int_equal(hal_nvm_block_size(&n), 0);
         assert_false(hal_nvm_erase(&n, 0u));
     }
     assert_int_equal(q.nlog, 0);

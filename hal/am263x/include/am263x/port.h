@@ -163,7 +163,6 @@ extern const hal_nvm_geometry_t am263x_s25fl128s;
  * 0x7E0000..0x7FFFFF: the last 128 KiB of the first 8 MiB, far above the SBL (0x0) and the
  * application image (0x80000) that TI's flashing tools write, and in the 64 KiB region whichever
  * end TBPARM put the parameter sectors at (the bottom ones hold the SBL). */
-#define AM263X_NVM_BLOCKS      2u
 #define AM263X_NVM_UNIT        8u
 #define AM263X_NVM_FLASH_OFF   0x007E0000u
 #define AM263X_NVM_BYTES       0x00020000u
