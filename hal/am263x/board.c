@@ -151,7 +151,8 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
     (void)am263x_qep_init(&qep0, cfg->qep_counts_per_rev, QEP_UNIT_CLK);
     /* a controller that does not come up leaves can0 refusing (bus-off); the drive runs on */
     (void)am263x_can_init(&can0, cfg->can_bitrate, AM263X_MCAN_FCLK_HZ);
-    am263x_nvm_init(&nvm0, AM263X_QSPI_BASE, AM263X_FLASH_WIN_BASE, AM263X_NVM_FLASH_OFF);
+    am263x_nvm_init(&nvm0, AM263X_QSPI_BASE, AM263X_FLASH_WIN_BASE, &am263x_s25fl128s, AM263X_NVM_FLASH_OFF,
+                    AM263X_NVM_BYTES);
     out->adc = &adc0;
     out->pwm = &pwm0;
     out->qep = &qep0;

@@ -196,7 +196,18 @@ void hal_can_recover(hal_can_t *can)
     (void)can;
 }
 
-/* ---- NVM through the flash controller; reads are memory-mapped. */
+/* ---- NVM through the flash controller; reads are memory-mapped. The part's map: its whole
+ * flash in 16 KiB blocks, each erased by the controller's erase command, programmed in 8-byte units. */
+static const hal_nvm_region_t gen_flash_regions[1] = {
+    {0u, GEN_NVM_BLOCK, GEN_FLASH_SIZE / GEN_NVM_BLOCK, (uint8_t)GEN_FLC_CMD_ERASE}};
+static const hal_nvm_geometry_t gen_flash_map = {GEN_FLASH_SIZE, GEN_NVM_UNIT, 1u, gen_flash_regions};
+
+const hal_nvm_geometry_t *hal_nvm_geometry(const hal_nvm_t *nvm)
+{
+    (void)nvm;
+    return &gen_flash_map;
+}
+
 uint32_t hal_nvm_blocks(const hal_nvm_t *nvm)
 {
     (void)nvm;
@@ -234,9 +245,15 @@ bool hal_nvm_erase(hal_nvm_t *nvm, uint32_t block)
     if (block >= GEN_NVM_BLOCKS) {
         return false;
     }
-    REG(nvm->flc, GEN_FLC_ADDR) = nvm->base + block * GEN_NVM_BLOCK;
+    const uint32_t a = nvm->base + block * GEN_NVM_BLOCK;
+    REG(nvm->flc, GEN_FLC_ADDR) = a;
     REG(nvm->flc, GEN_FLC_CMD) = GEN_FLC_CMD_ERASE;
-    return flc_done(nvm);
+    bool ok = flc_done(nvm);
+    /* erased is all 0xFF (hal/nvm.h): an erase that did not happen is an error, not a success */
+    for (uint32_t k = 0u; ok && k < GEN_NVM_BLOCK; k += 4u) {
+        ok = *(const volatile uint32_t *)(uintptr_t)(a + k) == 0xFFFFFFFFu;
+    }
+    return ok;
 }
 
 bool hal_nvm_write(hal_nvm_t *nvm, uint32_t block, uint32_t offset, const void *data, uint32_t len)

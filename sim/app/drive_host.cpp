@@ -128,9 +128,9 @@ private:
         std::ifstream f(nvm_file_, std::ios::binary);
         if (!f) return;   // none yet: an erased NVM
         std::vector<char> b((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-        if (b.size() != sizeof nvm_->mem)
+        if (b.size() != hal_host_nvm_bytes(nvm_.get()))
             throw ScenarioError("--nvm " + nvm_file_ + ": " + std::to_string(b.size()) + " bytes, expected " +
-                                std::to_string(sizeof nvm_->mem) + " (not an NVM image of this drive)");
+                                std::to_string(hal_host_nvm_bytes(nvm_.get())) + " (not an NVM image of this drive)");
         std::memcpy(nvm_->mem, b.data(), b.size());
     }
     void save_nvm()
@@ -140,7 +140,7 @@ private:
         const std::string tmp = nvm_file_ + ".tmp";
         {
             std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-            f.write(reinterpret_cast<const char*>(nvm_->mem), sizeof nvm_->mem);
+            f.write(reinterpret_cast<const char*>(nvm_->mem), hal_host_nvm_bytes(nvm_.get()));
             if (!f) throw std::runtime_error("--nvm: cannot write " + tmp);
         }
         std::filesystem::rename(tmp, nvm_file_);   // whole or not at all

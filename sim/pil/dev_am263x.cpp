@@ -29,8 +29,10 @@
 //    can_take), RX FIFO 0 in the message RAM as RXF0C places it, filled by can_deliver (fill
 //    level, get and put indices in RXF0S, RXF0A frees the element; full: the frame is lost and
 //    IR.RF0L set).
-//  - QSPI0: configuration-port frames of 8-bit words (WREN, RDSR, PP, SE4K) applied to the flash
-//    window through bind_memory (program = AND, erase = 0xFF over 4 KiB), never busy.
+//  - QSPI0: configuration-port frames of 8-bit words (WREN, RDSR, PP, P4E, SE) applied to the flash
+//    window through bind_memory (program = AND, never busy), erases as the LaunchPad's S25FL128S
+//    has them (am263x_s25fl128s, am263x/port.h): P4E = 0xFF over a 4 KiB parameter sector
+//    (0x000000-0x01FFFF) and nothing elsewhere, SE = 0xFF over a 64 KiB sector above them.
 //  - SoC bring-up, from the SoC's reset values (am263x/regs_soc.h): IOMUX pads (0x5F7: GPIO,
 //    behind the IO_CFG_KICK lock) and MSS_RCM module clocks (source 0 = 25 MHz, divider 1, behind
 //    its KICK lock). Only pads with their function carry the signal: the ePWM0-2 A/B pads or the
@@ -723,13 +725,22 @@ private:
                 mem_write_(AM263X_FLASH_WIN_BASE + x, &nw, 1);
             }
             wel_ = false;
-        } else if (c == NOR_CMD_SE4K && frame_.size() == 4 && wel_) {
-            const uint32_t a = addr() & ~0xFFFu;
-            if (a < AM263X_FLASH_WIN_SIZE && mem_write_) {
-                std::vector<uint8_t> ff(0x1000, 0xFF);
-                mem_write_(AM263X_FLASH_WIN_BASE + a, ff.data(), ff.size());
-            }
+        } else if ((c == NOR_CMD_P4E || c == NOR_CMD_SE) && frame_.size() == 4 && wel_) {
+            flash_erase(c, addr());
             wel_ = false;
+        }
+    }
+    // S25FL128S (TBPARM = 0): a P4E erases only inside the 32 parameter sectors, an SE the 64 KiB
+    // sectors above them; any other erase the part does not carry out (the driver's verify sees it).
+    void flash_erase(uint8_t c, uint32_t a)
+    {
+        constexpr uint32_t kParamEnd = 0x20000;
+        const uint32_t n = c == NOR_CMD_P4E ? 0x1000u : 0x10000u;
+        if ((c == NOR_CMD_P4E) != (a < kParamEnd)) return;
+        a &= ~(n - 1u);
+        if (a < AM263X_FLASH_WIN_SIZE && mem_write_) {
+            std::vector<uint8_t> ff(n, 0xFF);
+            mem_write_(AM263X_FLASH_WIN_BASE + a, ff.data(), ff.size());
         }
     }
 

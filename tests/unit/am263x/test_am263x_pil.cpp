@@ -268,18 +268,34 @@ TEST_F(Am263xPil, EncoderSpeedFromTheModel)
 TEST_F(Am263xPil, NvmThroughTheQspiModel)
 {
     ASSERT_TRUE(hal_board_init(&cfg, &board));
-    ASSERT_TRUE(hal_nvm_erase(board.nvm, 5));
-    const uint32_t base = AM263X_NVM_FLASH_OFF + 5u * 4096u;
-    for (uint32_t k = 0; k < 4096; ++k) ASSERT_EQ(g_flash[base + k], 0xFF);
+    ASSERT_TRUE(hal_nvm_erase(board.nvm, 1));
+    const uint32_t base = AM263X_NVM_FLASH_OFF + 65536u;   // block 1: the S25FL128S sector at 0x7F0000
+    for (uint32_t k = 0; k < 65536; ++k) ASSERT_EQ(g_flash[base + k], 0xFF);
     EXPECT_EQ(g_flash[base - 1], 0x5A);
     uint8_t d[16];
     for (int k = 0; k < 16; ++k) d[k] = static_cast<uint8_t>(0xA0 + k);
-    ASSERT_TRUE(hal_nvm_write(board.nvm, 5, 32, d, 16));
+    ASSERT_TRUE(hal_nvm_write(board.nvm, 1, 32, d, 16));
     uint8_t e[8] = {0x0F, 0x0F, 0x0F, 0x0F, 0xFF, 0xFF, 0xFF, 0xFF};
-    ASSERT_TRUE(hal_nvm_write(board.nvm, 5, 32, e, 8));   // AND: only clears bits
+    ASSERT_TRUE(hal_nvm_write(board.nvm, 1, 32, e, 8));   // AND: only clears bits
     uint8_t back[16];
-    ASSERT_TRUE(hal_nvm_read(board.nvm, 5, 32, back, 16));
+    ASSERT_TRUE(hal_nvm_read(board.nvm, 1, 32, back, 16));
     for (int k = 0; k < 16; ++k) EXPECT_EQ(back[k], k < 4 ? (d[k] & 0x0F) : d[k]) << k;
+}
+
+// The emulator erases as the S25FL128S does: a 4 KiB P4E into a 64 KiB sector (a driver given
+// a uniform 4 KiB map) erases nothing there, and the driver's verify refuses it.
+TEST_F(Am263xPil, NvmEraseThePartDoesNotHaveIsRefused)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    static const hal_nvm_region_t uniform[1] = {{0u, 0x1000u, 4096u, 0x20u}};
+    static const hal_nvm_geometry_t wrong = {0x1000000u, 256u, 1u, uniform};
+    hal_nvm_t n;
+    am263x_nvm_init(&n, AM263X_QSPI_BASE, AM263X_FLASH_WIN_BASE, &wrong, AM263X_NVM_FLASH_OFF, 0x8000u);
+    ASSERT_EQ(hal_nvm_blocks(&n), 8u);
+    EXPECT_FALSE(hal_nvm_erase(&n, 0));
+    EXPECT_EQ(g_flash[AM263X_NVM_FLASH_OFF], 0x5A);
+    EXPECT_TRUE(hal_nvm_erase(board.nvm, 0));   // the right map: SE
+    EXPECT_EQ(g_flash[AM263X_NVM_FLASH_OFF], 0xFF);
 }
 
 TEST_F(Am263xPil, CanFrameQueued)

@@ -32,7 +32,7 @@ int main(int argc, char **argv)
         return 1;
     }
     FILE *f = fopen(argv[1], "wb");
-    if (f == NULL || fwrite(nvm.mem, sizeof nvm.mem, 1u, f) != 1u || fclose(f) != 0) {
+    if (f == NULL || fwrite(nvm.mem, hal_host_nvm_bytes(&nvm), 1u, f) != 1u || fclose(f) != 0) {
         fprintf(stderr, "store_tables_write: cannot write %s\n", argv[1]);
         return 1;
     }

@@ -1,9 +1,12 @@
-/* The power-cut-safe configuration store (mc/param_store.h) on the host NVM (4 x 4 KiB, unit 8:
- * two slots of 2 blocks, maps up to 915 points; the largest 41 x 41 map is dropped there and
- * that path is tested too): the records on flash are mc/store.h's, bit for bit; round trip;
+/* The power-cut-safe configuration store (mc/param_store.h) on the host NVM, every test with two
+ * flash maps: the host's 4 x 4 KiB (unit 8: two slots of 2 blocks, maps up to 914 points; the
+ * largest 41 x 41 map is dropped there and that path is tested too) and the LaunchPad's
+ * S25FL128S as the AM263x port places the store (2 x 64 KiB sectors at 0x7E0000: a slot of one
+ * sector, every map fits): the records on flash are mc/store.h's, bit for bit; round trip;
  * erased NVM; fall-back; and the power-cut sweeps: from a committed set, a cut at EVERY step of
  * a save (and of an erase) leaves exactly the old set or the new one, never a mix, never
- * "corrupt" or "empty", and a later save still works. */
+ * "corrupt" or "empty", and a later save still works. Last, an erase the flash did not carry
+ * out (skipped, or a 4 KiB erase in a 64 KiB sector) fails the save and keeps the old set. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -18,6 +21,23 @@
 static hal_nvm_t nvm, snap;
 static uint8_t work[MC_PSTORE_WORK_MIN];   /* the smallest work buffer: the sweeps use it */
 enum { NSETS = 10 };
+static bool s25fl;   /* the group's map: false the host's 4 x 4 KiB, true the S25FL128S */
+static uint32_t s1;  /* slot 1's first block */
+
+static void nvm_init(hal_nvm_t *n)
+{
+    if (s25fl) {
+        assert_true(hal_host_nvm_init_geom(n, &hal_host_nvm_s25fl128s, 0x7E0000u, 2u));
+    } else {
+        hal_host_nvm_init(n);
+    }
+    s1 = hal_nvm_blocks(n) / 2u;
+}
+
+static uint8_t *blk(hal_nvm_t *n, uint32_t b)
+{
+    return &n->mem[b * n->block_size];
+}
 static mc_flux_map_t maps[NSETS];
 static mc_drive_cfg_t sets[NSETS];
 static mc_flux_map_t got_map;
@@ -97,8 +117,35 @@ static mc_pstore_status_t load(mc_drive_cfg_t *got, mc_pstore_info_t *info)
 static void test_geometry(void **state)
 {
     (void)state;
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     mc_pstore_geom_t g;
+    if (s25fl) {
+        /* one 64 KiB sector a slot: every map fits */
+        assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_OK);
+        assert_int_equal(g.slot_first[1], 1u);
+        assert_int_equal(g.slot_blocks, 1u);
+        assert_int_equal(g.payload_max, 65536u - 40u);
+        assert_int_equal(g.map_cells_max, MC_FLUX_MAP_MAX * MC_FLUX_MAP_MAX);
+        /* the map as hal/am263x has it (am263x_s25fl128s, checked the same way in am263x_nvm) */
+        const hal_nvm_geometry_t *m = hal_nvm_geometry(&nvm);
+        assert_ptr_equal(m, &hal_host_nvm_s25fl128s);
+        assert_int_equal(m->size, 16u << 20);
+        assert_int_equal(m->n_regions, 2);
+        assert_int_equal(m->region[0].start, 0u);
+        assert_int_equal(m->region[0].sector_size, 4096);
+        assert_int_equal(m->region[0].count, 32);
+        assert_int_equal(m->region[0].erase_cmd, 0x20);
+        assert_int_equal(m->region[1].start, 0x20000u);
+        assert_int_equal(m->region[1].sector_size, 65536);
+        assert_int_equal(m->region[1].count, 254);
+        assert_int_equal(m->region[1].erase_cmd, 0xD8);
+        /* a range that is not whole sectors of one region is refused */
+        static hal_nvm_t bad;
+        assert_false(hal_host_nvm_init_geom(&bad, m, 0x7F8000u, 1u));
+        assert_false(hal_host_nvm_init_geom(&bad, m, 0x10000u, 17u));
+        assert_false(hal_host_nvm_init_geom(&bad, m, 0x7E0000u, 3u));   /* above the model's capacity */
+        return;
+    }
     /* 2 blocks a slot: 8192 - 40 bytes of records; 780 of parameters, 56 + 8 per map point */
     assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);
     assert_int_equal(g.slot_first[0], 0u);
@@ -116,7 +163,7 @@ static void test_geometry(void **state)
 static void test_empty_and_bad_args(void **state)
 {
     (void)state;
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     mc_drive_cfg_t got;
     mc_pstore_info_t info;
     assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
@@ -125,14 +172,12 @@ static void test_empty_and_bad_args(void **state)
     mc_params_default(&def);
     assert_memory_equal(&got.p, &def, sizeof def);   /* untouched */
     /* garbage everywhere, no marker: still nothing committed */
-    for (uint32_t b = 0; b < HAL_HOST_NVM_BLOCKS; ++b) {
-        for (uint32_t k = 0; k < HAL_HOST_NVM_BLOCK_SIZE; ++k) {
-            nvm.mem[b][k] = (uint8_t)(k * 37u + b);
-        }
+    for (uint32_t k = 0; k < hal_host_nvm_bytes(&nvm); ++k) {
+        nvm.mem[k] = (uint8_t)(k * 37u + k / 4096u);
     }
     assert_int_equal(load(&got, NULL), MC_PSTORE_EMPTY);
 
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     const mc_drive_cfg_t *a = make_cfg(0, 4, 3);
     assert_int_equal(mc_pstore_save(NULL, a, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
     assert_int_equal(mc_pstore_save(&nvm, NULL, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
@@ -145,7 +190,7 @@ static void test_empty_and_bad_args(void **state)
     assert_int_equal(mc_pstore_load(&nvm, &got, NULL, work, sizeof work, NULL), MC_PSTORE_OK);
     assert_null(got.est.map);
     assert_memory_equal(&got.p, &a->p, sizeof got.p);
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     /* a map no encoder takes, a value no load takes: refused before anything is erased */
     mc_drive_cfg_t bad = *a;
     mc_flux_map_t *m = &maps[NSETS - 1];
@@ -164,7 +209,7 @@ static void test_empty_and_bad_args(void **state)
 static void test_round_trip_records_bit_exact(void **state)
 {
     (void)state;
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     const mc_drive_cfg_t *a = make_cfg(1, 5, 7);
     mc_pstore_info_t info;
     assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, &info), MC_PSTORE_OK);
@@ -177,7 +222,7 @@ static void test_round_trip_records_bit_exact(void **state)
     assert_false(info.fell_back || info.defaults || info.map_dropped);
 
     /* on flash: header "MCPS", marker at 32, then exactly mc/store.h's two records */
-    const uint8_t *s0 = nvm.mem[0];
+    const uint8_t *s0 = blk(&nvm, 0);
     assert_int_equal(s0[0], 'M');
     assert_int_equal(s0[3], 'S');
     assert_int_equal(s0[32], 0x5A);
@@ -193,41 +238,44 @@ static void test_round_trip_records_bit_exact(void **state)
     assert_int_equal(mc_store_model_decode(s0 + 40 + pl, ml, &m, &got_map), MC_STORE_OK);
 
     /* the second copy goes to the other slot; the first stays as it was */
-    uint8_t before[HAL_HOST_NVM_BLOCK_SIZE];
-    memcpy(before, nvm.mem[0], sizeof before);
+    static uint8_t before[HAL_HOST_NVM_CAP];
+    memcpy(before, blk(&nvm, 0), nvm.block_size);
     const mc_drive_cfg_t *b = make_cfg(2, 0, 0);
     assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, &info), MC_PSTORE_OK);
     assert_int_equal(info.slot, 1);
     assert_int_equal(info.seq, 2u);
-    assert_memory_equal(nvm.mem[0], before, sizeof before);
+    assert_memory_equal(blk(&nvm, 0), before, nvm.block_size);
     assert_int_equal(load(&got, &info), MC_PSTORE_OK);
     assert_true(same_cfg(&got, b, false));
     assert_int_equal(info.seq, 2u);
 
-    /* the largest map that fits (30 x 30, over both blocks of a slot); one row more is dropped */
+    /* the largest map that fits on 4 x 4 KiB (30 x 30, over both blocks of a slot); one row more
+     * is dropped there; a 64 KiB sector takes every map */
+    const bool drop = !s25fl;
+    const mc_pstore_status_t big_st = drop ? MC_PSTORE_MAP_DROPPED : MC_PSTORE_OK;
     const mc_drive_cfg_t *c = make_cfg(3, 30, 30);
     assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, &info), MC_PSTORE_OK);
     assert_int_equal(load(&got, &info), MC_PSTORE_OK);
     assert_true(same_cfg(&got, c, false));
     const mc_drive_cfg_t *d = make_cfg(4, 31, 30);
-    assert_int_equal(mc_pstore_save(&nvm, d, work, sizeof work, &info), MC_PSTORE_MAP_DROPPED);
-    assert_true(info.map_dropped);
+    assert_int_equal(mc_pstore_save(&nvm, d, work, sizeof work, &info), big_st);
+    assert_true(info.map_dropped == drop);
     assert_int_equal(load(&got, &info), MC_PSTORE_OK);
-    assert_true(same_cfg(&got, d, true));
-    assert_true(info.map_dropped);
+    assert_true(same_cfg(&got, d, drop));
+    assert_true(info.map_dropped == drop);
     const mc_drive_cfg_t *e = make_cfg(5, MC_FLUX_MAP_MAX, MC_FLUX_MAP_MAX);
-    assert_int_equal(mc_pstore_save(&nvm, e, work, sizeof work, NULL), MC_PSTORE_MAP_DROPPED);
+    assert_int_equal(mc_pstore_save(&nvm, e, work, sizeof work, NULL), big_st);
     assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
-    assert_true(same_cfg(&got, e, true));
+    assert_true(same_cfg(&got, e, drop));
 
     /* the work buffer's size changes the number of calls, not one byte on flash */
     static hal_nvm_t ref;
-    hal_host_nvm_init(&ref);
+    nvm_init(&ref);
     assert_int_equal(mc_pstore_save(&ref, c, work, sizeof work, NULL), MC_PSTORE_OK);
     static uint8_t big[4099];
     const size_t lens[] = {72u, 100u, 1000u, sizeof big};
     for (size_t k = 0; k < sizeof lens / sizeof lens[0]; ++k) {
-        hal_host_nvm_init(&nvm);
+        nvm_init(&nvm);
         assert_int_equal(mc_pstore_save(&nvm, c, big, lens[k], NULL), MC_PSTORE_OK);
         assert_memory_equal(nvm.mem, ref.mem, sizeof ref.mem);
         memset(&got, 0, sizeof got);
@@ -239,7 +287,7 @@ static void test_round_trip_records_bit_exact(void **state)
 static void test_corrupt_newest_falls_back(void **state)
 {
     (void)state;
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     const mc_drive_cfg_t *a = make_cfg(1, 6, 6), *b = make_cfg(2, 8, 5), *c = make_cfg(3, 0, 0);
     mc_drive_cfg_t got;
     mc_pstore_info_t info;
@@ -247,7 +295,7 @@ static void test_corrupt_newest_falls_back(void **state)
     assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 1 */
     snap = nvm;
     /* a bit of b's map flips: the older a, and the status says so */
-    nvm.mem[2][40 + MC_STORE_PARAMS_MAX + 100u] ^= 0x04u;
+    blk(&nvm, s1)[40 + MC_STORE_PARAMS_MAX + 100u] ^= 0x04u;
     assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
     assert_true(same_cfg(&got, a, false));
     assert_true(info.fell_back);
@@ -259,8 +307,8 @@ static void test_corrupt_newest_falls_back(void **state)
     assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
     assert_true(same_cfg(&got, c, false));
     /* both copies damaged: corrupt, nothing applied */
-    nvm.mem[0][300] ^= 0x10u;
-    nvm.mem[2][300] ^= 0x10u;
+    blk(&nvm, 0)[300] ^= 0x10u;
+    blk(&nvm, s1)[300] ^= 0x10u;
     assert_int_equal(load(&got, NULL), MC_PSTORE_CORRUPT);
     mc_params_t def;
     mc_params_default(&def);
@@ -268,12 +316,12 @@ static void test_corrupt_newest_falls_back(void **state)
 
     /* a flipped bit in the newest's header (its sequence): marked, so possibly the newest */
     nvm = snap;
-    nvm.mem[2][8] ^= 0x01u;
+    blk(&nvm, s1)[8] ^= 0x01u;
     assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
     assert_true(same_cfg(&got, a, false));
     /* a damaged older copy does not matter */
     nvm = snap;
-    nvm.mem[0][1000] ^= 0x80u;
+    blk(&nvm, 0)[1000] ^= 0x80u;
     assert_int_equal(load(&got, &info), MC_PSTORE_OK);
     assert_true(same_cfg(&got, b, false));
 }
@@ -281,7 +329,7 @@ static void test_corrupt_newest_falls_back(void **state)
 static void test_erase_restores_defaults(void **state)
 {
     (void)state;
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     mc_drive_cfg_t got;
     mc_pstore_info_t info;
     assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_OK);   /* empty: stays empty */
@@ -297,7 +345,7 @@ static void test_erase_restores_defaults(void **state)
     assert_memory_equal(&got.p, &def, sizeof def);
     /* the defaults copy damaged: no older set comes back (the other slot was erased) */
     snap = nvm;
-    nvm.mem[info.slot == 0 ? 0 : 2][4] ^= 0x01u;
+    blk(&nvm, info.slot == 0 ? 0u : s1)[4] ^= 0x01u;
     assert_int_equal(load(&got, NULL), MC_PSTORE_CORRUPT);
     nvm = snap;
     assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, NULL), MC_PSTORE_OK);
@@ -309,7 +357,7 @@ static void test_erase_restores_defaults(void **state)
 static void test_failing_device(void **state)
 {
     (void)state;
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     const mc_drive_cfg_t *a = make_cfg(1, 10, 10);
     assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
     hal_host_nvm_cut_at(&nvm, nvm.steps + 1u);
@@ -393,13 +441,13 @@ static unsigned sweep(expect_t old, expect_t next, unsigned *recoveries)
 static void test_power_cut_at_every_step(void **state)
 {
     (void)state;
-    hal_host_nvm_init(&snap);
+    nvm_init(&snap);
     const expect_t none = {NULL, false};
     /* maps of every size class: the largest that fits (over both blocks of a slot), small, none,
      * dropped (41 x 41); erases over a one-block and a two-block copy */
     const expect_t s0 = {make_cfg(0, 30, 30), false}, s1 = {make_cfg(1, 12, 9), false};
     const expect_t s2 = {make_cfg(2, 29, 31), false}, s3 = {make_cfg(3, 0, 0), false};
-    const expect_t s4 = {make_cfg(4, MC_FLUX_MAP_MAX, MC_FLUX_MAP_MAX), true};
+    const expect_t s4 = {make_cfg(4, MC_FLUX_MAP_MAX, MC_FLUX_MAP_MAX), !s25fl};
     const expect_t s5 = {make_cfg(5, 25, 28), false}, s6 = {make_cfg(6, 2, 2), false};
     const expect_t s7 = {make_cfg(7, 30, 30), false};
     const expect_t chain[][2] = {
@@ -408,7 +456,7 @@ static void test_power_cut_at_every_step(void **state)
         {s1, s2},     /* slot 0 over s0: a long copy over a long one      */
         {s2, none},   /* 0x1011 over a two-block copy: s2 or defaults     */
         {none, s3},   /* after a restore: defaults or s3                  */
-        {s3, s4},     /* saved without its map                            */
+        {s3, s4},     /* saved without its map (4 x 4 KiB)                */
         {s4, s5},
         {s5, s6},     /* a short copy over a long one                     */
         {s6, none},   /* 0x1011 over a one-block copy                     */
@@ -432,7 +480,7 @@ static void test_double_cuts(void **state)
 {
     (void)state;
     const mc_drive_cfg_t *a = make_cfg(0, 20, 20), *b = make_cfg(1, 15, 15), *c = make_cfg(2, 0, 0);
-    hal_host_nvm_init(&nvm);
+    nvm_init(&nvm);
     assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
     assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);   /* both slots */
     snap = nvm;
@@ -465,6 +513,49 @@ static void test_double_cuts(void **state)
     }
 }
 
+/* An erase the flash did not carry out is an error, never a silent success: the layer sends a
+ * 4 KiB erase (the uniform map TI's SDK config suggests) into the S25FL128S's 64 KiB sectors, or
+ * no erase at all; the part ignores it, the verify sees the old copy, the save fails and the set
+ * committed before still loads. On the host's own map a skipped erase is caught the same way. */
+static void test_missed_erase_fails_the_save(void **state)
+{
+    (void)state;
+    const mc_drive_cfg_t *a = make_cfg(0, 10, 10), *b = make_cfg(1, 12, 12), *c = make_cfg(2, 3, 3);
+    const uint32_t wrong[] = {4096u, 0u};
+    for (size_t w = 0; w < sizeof wrong / sizeof wrong[0]; ++w) {
+        nvm_init(&nvm);
+        assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 0 */
+        assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 1 */
+        if (wrong[w] == nvm.block_size) {
+            continue;   /* the host's map: 4 KiB is right there */
+        }
+        nvm.erase_size = wrong[w];
+        assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, NULL), MC_PSTORE_NVM_ERROR);   /* over a */
+        assert_false(hal_nvm_erase(&nvm, 0u));
+        mc_drive_cfg_t got;
+        assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
+        assert_true(same_cfg(&got, b, false));
+        nvm.erase_size = nvm.block_size;   /* the right erase: the store goes on */
+        assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, NULL), MC_PSTORE_OK);
+        assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
+        assert_true(same_cfg(&got, c, false));
+    }
+}
+
+static int group_uniform4k(void **state)
+{
+    (void)state;
+    s25fl = false;
+    return 0;
+}
+
+static int group_s25fl128s(void **state)
+{
+    (void)state;
+    s25fl = true;
+    return 0;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -476,6 +567,8 @@ int main(void)
         cmocka_unit_test(test_failing_device),
         cmocka_unit_test(test_power_cut_at_every_step),
         cmocka_unit_test(test_double_cuts),
+        cmocka_unit_test(test_missed_erase_fails_the_save),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    const int r = cmocka_run_group_tests_name("host_4x4KiB", tests, group_uniform4k, NULL);
+    return r + cmocka_run_group_tests_name("s25fl128s_2x64KiB", tests, group_s25fl128s, NULL);
 }

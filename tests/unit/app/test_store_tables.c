@@ -30,7 +30,7 @@ static void read_nvm(const char *path)
     hal_host_nvm_init(&nvm);
     FILE *f = fopen(path, "rb");
     assert_non_null(f);
-    assert_int_equal(fread(nvm.mem, sizeof nvm.mem, 1u, f), 1u);
+    assert_int_equal(fread(nvm.mem, hal_host_nvm_bytes(&nvm), 1u, f), 1u);
     fclose(f);
 }
 

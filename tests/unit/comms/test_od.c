@@ -120,7 +120,7 @@ static void test_store_restore(void **state)
     nvm = rig.nvm;
     for (uint32_t b = 0; b < HAL_HOST_NVM_BLOCKS; ++b) {
         for (uint32_t k = 8; k < 32; ++k) {   /* both copies' headers (the markers stay) */
-            nvm.mem[b][k] ^= 0x5Au;
+            nvm.mem[b * HAL_HOST_NVM_BLOCK_SIZE + k] ^= 0x5Au;
         }
     }
     memset(&rig, 0, sizeof rig);

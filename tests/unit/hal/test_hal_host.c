@@ -140,12 +140,52 @@ static void test_nvm_power_cut_every_step(void **st)
     }
 }
 
+/* The model with the S25FL128S's map: blocks are the sectors of the region at base (4 KiB in the
+ * parameter sectors, 64 KiB above), an erase of another size is not carried out and is refused by
+ * the verify, a cut in an erase scrambles that sector only. */
+static void test_nvm_s25fl128s_map(void **st)
+{
+    (void)st;
+    static hal_nvm_t nvm;
+    uint8_t d[8] = {0, 1, 2, 3, 4, 5, 6, 7}, out[8];
+    assert_true(hal_host_nvm_init_geom(&nvm, &hal_host_nvm_s25fl128s, 0x1000u, 3u));
+    assert_int_equal(hal_nvm_block_size(&nvm), 4096);
+    assert_int_equal(hal_nvm_blocks(&nvm), 3);
+    assert_true(hal_nvm_write(&nvm, 1, 0, d, 8));
+    assert_true(hal_nvm_write(&nvm, 2, 0, d, 8));
+    assert_true(hal_nvm_erase(&nvm, 1));
+    assert_true(hal_nvm_read(&nvm, 2, 0, out, 8));
+    assert_memory_equal(out, d, 8);                 /* the next 4 KiB sector kept */
+    assert_true(hal_host_nvm_init_geom(&nvm, &hal_host_nvm_s25fl128s, 0x7E0000u, 2u));
+    assert_int_equal(hal_nvm_block_size(&nvm), 65536);
+    assert_true(hal_nvm_write(&nvm, 0, 65528, d, 8));
+    assert_true(hal_nvm_write(&nvm, 1, 0, d, 8));
+    nvm.erase_size = 4096u;                          /* P4E into a 64 KiB sector: nothing */
+    assert_false(hal_nvm_erase(&nvm, 0));
+    assert_true(hal_nvm_read(&nvm, 0, 65528, out, 8));
+    assert_memory_equal(out, d, 8);
+    nvm.erase_size = 65536u;
+    assert_true(hal_nvm_erase(&nvm, 0));
+    assert_true(hal_nvm_read(&nvm, 0, 65528, out, 8));
+    for (int k = 0; k < 8; ++k) assert_int_equal(out[k], 0xFF);
+    assert_true(hal_nvm_read(&nvm, 1, 0, out, 8));
+    assert_memory_equal(out, d, 8);                 /* the other sector kept */
+    /* a cut in the erase: that sector scrambled, the other intact */
+    assert_true(hal_nvm_write(&nvm, 0, 0, d, 8));
+    hal_host_nvm_cut_at(&nvm, nvm.steps + 1u);
+    assert_false(hal_nvm_erase(&nvm, 0));
+    hal_host_nvm_power_on(&nvm);
+    assert_true(hal_nvm_read(&nvm, 1, 0, out, 8));
+    assert_memory_equal(out, d, 8);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_can_queues_and_checks),
         cmocka_unit_test(test_nvm_flash_semantics),
         cmocka_unit_test(test_nvm_power_cut_every_step),
+        cmocka_unit_test(test_nvm_s25fl128s_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -142,19 +142,36 @@ bool am263x_can_init(hal_can_t *can, uint32_t bitrate, uint32_t fclk_hz);
 struct hal_nvm {
     uintptr_t qspi;         /* QSPI0 controller                                            */
     uintptr_t window;       /* memory-mapped flash window (flash offset 0)                 */
+    const hal_nvm_geometry_t *geom;   /* the flash's erase map                             */
     uint32_t base;          /* flash offset of block 0                                     */
+    uint32_t block_size;    /* the sector size of the region holding the blocks            */
+    uint32_t blocks;        /* 0: the range did not fit the map (every call fails)         */
+    uint8_t erase_cmd;      /* that region's erase command                                 */
     uint32_t busy_polls;    /* QSPI word-complete polls before a transfer counts as failed */
     uint32_t erase_polls;   /* status reads while an erase runs                            */
     uint32_t program_polls; /* status reads while a page program runs                      */
 };
-/* 8 blocks of 4 KiB (the flash's sector), written in units of 8 bytes, at flash offset
- * 0x7F8000..0x7FFFFF: the last 32 KiB of the first 8 MiB, far above the SBL (0x0) and the
- * application image (0x80000) that TI's flashing tools write. */
-#define AM263X_NVM_BLOCKS      8u
-#define AM263X_NVM_BLOCK_SIZE  4096u
+/* The LaunchPad's flash, Infineon (Spansion) S25FL128S with 64 KiB sectors (the part TI's SDK
+ * configures for the LP-AM263, mcupsdk-core source/board/.meta/flash/S25FL128SA.json: 16 MiB,
+ * 256-byte pages, 64 KiB blocks erased with 0xD8; its "sector" of 4 KiB / 0x20 exists only as
+ * the parameter sectors). S25FL128S datasheet (Infineon 001-98283), "Sector address map": 32 x
+ * 4 KiB parameter sectors at 0x000000-0x01FFFF (CR1.TBPARM = 0, the factory state; TBPARM is OTP)
+ * erased by P4E (0x20), then 254 x 64 KiB sectors erased by SE (0xD8). A P4E outside the
+ * parameter sectors does not erase (Infineon community, "S25FL256S - 4K sector erase/write
+ * issue": P4E at 0x10000 left the data): the verify after every erase catches it. Offsets
+ * below 16 MiB: 3-byte addresses. */
+extern const hal_nvm_geometry_t am263x_s25fl128s;
+/* 2 blocks of 64 KiB (two whole SE sectors), written in units of 8 bytes, at flash offset
+ * 0x7E0000..0x7FFFFF: the last 128 KiB of the first 8 MiB, far above the SBL (0x0) and the
+ * application image (0x80000) that TI's flashing tools write, and in the 64 KiB region whichever
+ * end TBPARM put the parameter sectors at (the bottom ones hold the SBL). */
 #define AM263X_NVM_UNIT        8u
-#define AM263X_NVM_FLASH_OFF   0x007F8000u
-void am263x_nvm_init(hal_nvm_t *nvm, uintptr_t qspi, uintptr_t window, uint32_t flash_offset);
+#define AM263X_NVM_FLASH_OFF   0x007E0000u
+#define AM263X_NVM_BYTES       0x00020000u
+/* Blocks = [flash_offset, + bytes) in sectors of geom; blocks 0 (every call fails) unless that
+ * range is whole sectors of one region. */
+void am263x_nvm_init(hal_nvm_t *nvm, uintptr_t qspi, uintptr_t window, const hal_nvm_geometry_t *geom,
+                     uint32_t flash_offset, uint32_t bytes);
 
 /* ---------------------------------------------------------------- VIM + crossbar (vim.c) */
 /* Interrupt `line` as an IRQ (not FIQ), level type, priority prio (0 highest), vector `handler`

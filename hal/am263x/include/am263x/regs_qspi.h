@@ -41,7 +41,8 @@
 #define NOR_CMD_WREN   0x06u
 #define NOR_CMD_RDSR   0x05u
 #define NOR_CMD_PP     0x02u    /* page program (256-byte pages)                            */
-#define NOR_CMD_SE4K   0x20u    /* 4 KiB sector erase                                       */
+#define NOR_CMD_P4E    0x20u    /* S25FL128S: 4 KiB parameter-sector erase (only there)     */
+#define NOR_CMD_SE     0xD8u    /* S25FL128S: 64 KiB sector erase                           */
 #define NOR_SR_WIP     0x01u
 #define NOR_SR_WEL     0x02u
 

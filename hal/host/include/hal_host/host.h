@@ -49,20 +49,37 @@ struct hal_can {
     uint32_t recoveries;               /* bus-off recoveries asked for */
 };
 
-/* NVM: 4 blocks of 4 KB, written in units of 8 bytes, with flash semantics. A power cut can be
- * scheduled at any step (an erase is one step, every write unit one): that step is left half
- * done (an erase: the block scrambled; a write: the unit with a random part of its bits cleared)
- * and every later call fails until hal_host_nvm_power_on(). */
-#define HAL_HOST_NVM_BLOCKS 4u
+/* NVM: a flash device with an erase map (hal_nvm_geometry_t) and the blocks a port would place
+ * in it: blocks of the sector size of the region at base (as hal/am263x does), erased with that
+ * region's sector erase, which the device carries out only where the size matches its map (a
+ * 4 KiB erase in a 64 KiB region erases nothing, as the S25FL128S ignores a P4E outside its
+ * parameter sectors); every erase is verified (all 0xFF) like the target's. Written in units of 8
+ * bytes, with flash semantics. A power cut can be scheduled at any step (an erase is one step,
+ * every write unit one): that step is left half done (an erase: the sector scrambled; a write:
+ * the unit with a random part of its bits cleared) and every later call fails until
+ * hal_host_nvm_power_on(). hal_host_nvm_init: the host map, 4 blocks of 4 KiB (16 KiB: mcsim's
+ * --nvm file); hal_host_nvm_init_geom: any map, e.g. the LaunchPad's S25FL128S. */
+#define HAL_HOST_NVM_BLOCKS 4u          /* hal_host_nvm_init's map */
 #define HAL_HOST_NVM_BLOCK_SIZE 4096u
 #define HAL_HOST_NVM_WRITE_UNIT 8u
+#define HAL_HOST_NVM_CAP (2u * 65536u)  /* bytes of the device the model holds (from base) */
+extern const hal_nvm_geometry_t hal_host_nvm_uniform4k;   /* 4 x 4 KiB sectors, no commands */
+extern const hal_nvm_geometry_t hal_host_nvm_s25fl128s;   /* = am263x_s25fl128s (am263x/port.h) */
 struct hal_nvm {
-    uint8_t mem[HAL_HOST_NVM_BLOCKS][HAL_HOST_NVM_BLOCK_SIZE];
+    uint8_t mem[HAL_HOST_NVM_CAP];  /* device bytes base.. ; blocks x block_size of them used */
+    const hal_nvm_geometry_t *geom;
+    uint32_t base, block_size, blocks;
+    uint32_t erase_size;  /* the erase the layer sends (block_size; a test sets another, 0: none,
+                             to model a layer that got the map wrong) */
     uint32_t steps;     /* erase and write-unit steps since init */
     uint32_t cut_at;    /* the step the power fails in (0: never) */
     bool dead;          /* after the cut */
     uint32_t rng;       /* for the scramble */
 };
+/* Blocks = blocks whole sectors of the region holding base; false (nothing set up) when they do
+ * not fit that region or the model's capacity. */
+bool hal_host_nvm_init_geom(hal_nvm_t *nvm, const hal_nvm_geometry_t *geom, uint32_t base, uint32_t blocks);
+uint32_t hal_host_nvm_bytes(const hal_nvm_t *nvm);      /* blocks x block_size: mem's used part */
 
 void hal_host_pwm_init(hal_pwm_t *pwm, float period_s, float dead_time_s);
 /* Quantise duties as a timer's compare register does (counts = 0: ideal), computed in float as
