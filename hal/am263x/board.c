@@ -9,12 +9,13 @@
  * Left as TI's SBL / SOC-init GEL configured them (not written by this port): PLLs and module
  * clocks and their gates (SYSCLK 200 MHz, MCAN0 80 MHz, RTI0 25 MHz: am263x/regs_soc.h), the pin
  * multiplexing of ePWM0-2 A/B, eQEP0 A/B/I and MCAN0 TX/RX (board-specific IOMUX pads not
- * verified here), the QSPI clock and its memory-mapped read setup (SPI_SETUP0), and any hardware
- * trip input of the trip zone (TZSEL stays 0: only the forced one-shot trip). */
+ * verified here), the QSPI clock and its memory-mapped read setup (SPI_SETUP0). */
 #include "hal/board.h"
 #include "am263x/mmio.h"
 #include "am263x/port.h"
 #include "am263x/regs_adc.h"
+#include "am263x/regs_epwm.h"
+#include "am263x/regs_rti.h"
 #include "am263x/regs_soc.h"
 
 #define QEP_UNIT_CLK (AM263X_SYSCLK_HZ / 1000u)   /* eQEP unit timer: 1 ms                    */
@@ -35,6 +36,7 @@ static hal_can_t can0 = {
     .ram = AM263X_MCAN_MSGRAM_BASE(0u),
 };
 static hal_nvm_t nvm0;
+static hal_wdg_t wdg0 = {.wdt = AM263X_WDT0_BASE};
 static const struct {
     uintptr_t vim, xbar, top;
 } soc = {AM263X_VIM_BASE, AM263X_INTXBAR_BASE, AM263X_TOP_CTRL_BASE};
@@ -84,6 +86,9 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
         spin(ADC_POWERUP_LOOPS);   /* analog power-up before the first conversion */
     }
     am263x_intxbar_route(soc.xbar, AM263X_INTXBAR_OUT_ADC, AM263X_INTXBAR_GROUP_ADC, AM263X_INTXBAR_ADC0_INT1);
+    /* the hardware trip: GPIO11 (the gate driver's nFAULT) -> INPUT XBAR 0 -> TZ1 (epwm.c) */
+    am263x_wr32(AM263X_INPUTXBAR_BASE + AM263X_INPUTXBAR_GSEL(0u), 0u);
+    am263x_wr32(AM263X_INPUTXBAR_BASE + AM263X_INPUTXBAR_G0(0u), AM263X_TRIP_GPIO);
     (void)am263x_qep_init(&qep0, cfg->qep_counts_per_rev, QEP_UNIT_CLK);
     /* a controller that does not come up leaves can0 refusing (bus-off); the drive runs on */
     (void)am263x_can_init(&can0, cfg->can_bitrate, AM263X_MCAN_FCLK_HZ);
@@ -94,6 +99,7 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
     out->can = &can0;
     out->nvm = &nvm0;
     out->time = &tim0;
+    out->wdg = &wdg0;
     return true;
 }
 
@@ -108,9 +114,20 @@ void hal_board_start(void)
     am263x_vim_route(soc.vim, AM263X_IRQ_ADC_EOC, 0u, (uintptr_t)&am263x_adc_eoc_isr);
     am263x_adc_enable_irq(&adc0);
     am263x_pwm_start(&pwm0);   /* counters run, SOCA at each counter zero; outputs still tripped */
+    am263x_wdt_start(wdg0.wdt, AM263X_WDT_PRLD);   /* from here the loop must progress */
 #if defined(__arm__)
     __asm volatile("cpsie i" ::: "memory");
 #endif
+}
+
+void hal_wdg_kick(hal_wdg_t *wdg)
+{
+    am263x_wdt_kick(wdg->wdt);
+}
+
+float hal_board_min_dead_time_s(void)
+{
+    return (float)AM263X_PWM_DB_MIN / (float)AM263X_EPWMCLK_HZ;
 }
 
 void hal_board_idle(void)

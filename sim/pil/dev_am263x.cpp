@@ -28,6 +28,12 @@
 //    can_take), RX FIFO 0 in the message RAM as RXF0C places it, filled by can_deliver (fill
 //    level, get and put indices in RXF0S, RXF0A frees the element; full: the frame is lost and
 //    IR.RF0L set).
+//  - WDT0 (an RTI module's DWWD): RTIDWDCTRL enable key starts the down counter at (DWDPRLD + 1)
+//    x 2^13 ticks of AM263X_WDT_CLK_HZ, the key pair E51A/A35C on RTIWDKEY reloads it, RTIDWDCNTR
+//    reads it; it runs in the plant's microseconds, checked at each period boundary. At zero:
+//    RTIWDSTATUS DWDST and DWWD_ST, and the reaction's effect on the bridge: the warm reset's
+//    (RTIWWDRXNCTRL 0x5) pads off stand as a one-shot trip of ePWM0-2 (outputs().enabled false),
+//    the core is not reset. CONTROLSS_INPUTXBAR: stored only (no trip input is driven).
 //  - QSPI0: configuration-port frames of 8-bit words (WREN, RDSR, PP, SE4K) applied to the flash
 //    window through bind_memory (program = AND, erase = 0xFF over 4 KiB), never busy.
 #include <algorithm>
@@ -52,7 +58,7 @@
 namespace mcsim::pil {
 namespace {
 
-enum Win : int { kEpwm, kAdcRes, kEqep, kAdc, kXbar, kCtrlss, kTop, kVim, kRti, kMcanRam, kMcanCfg, kQspi, kNumWin };
+enum Win : int { kEpwm, kAdcRes, kEqep, kAdc, kXbar, kCtrlss, kTop, kVim, kRti, kMcanRam, kMcanCfg, kQspi, kWdt, kInXbar, kNumWin };
 
 struct WinDef {
     uint32_t base, size;
@@ -72,6 +78,8 @@ constexpr WinDef kWins[kNumWin] = {
     {AM263X_MCAN_MSGRAM_BASE(0), 0x8000, "MCAN0_MSG_RAM"},
     {AM263X_MCAN_CFG_BASE(0), 0x1000, "MCAN0_CFG"},
     {AM263X_QSPI_BASE, 0x1000, "QSPI0"},
+    {AM263X_WDT0_BASE, 0x1000, "WDT0"},
+    {AM263X_INPUTXBAR_BASE, 0x1000, "CONTROLSS_INPUTXBAR"},
 };
 
 constexpr uint32_t kAdcLine = AM263X_IRQ_ADC_EOC;
@@ -136,6 +144,10 @@ public:
             break;
         case kMcanCfg:
             return mcan_read(off, size);
+        case kWdt:
+            if (off == RTI_RTIDWDCNTR) return static_cast<uint32_t>(wdt_left_);
+            if (off == RTI_RTIWDKEY) return 0;
+            break;
         case kQspi:
             if (off == QSPI_SPI_STATUS) return QSPI_STATUS_WC | QSPI_STATUS_FC;   // never busy
             break;
@@ -188,6 +200,9 @@ public:
                 return;
             }
             break;
+        case kWdt:
+            if (wdt_write(off, v)) return;
+            break;
         default:
             break;
         }
@@ -199,6 +214,7 @@ public:
         const uint32_t dt_us = in.time_us - time_us_;
         time_us_ = in.time_us;
         eqep_advance(in, dt_us);   // the encoder counts whether or not the PWM runs
+        wdt_advance(dt_us);
         if (!running()) return;
         for (int m = 0; m < 3; ++m) {
             const uint32_t b = 0x1000u * static_cast<uint32_t>(m);
@@ -299,6 +315,44 @@ private:
         }
         return true;
     }
+    // ---- WDT0's DWWD (true: handled)
+    bool wdt_write(uint32_t off, uint32_t v)
+    {
+        if (off == RTI_RTIDWDCTRL) {
+            if (v == RTI_DWDCTRL_ENABLE && !wdt_en_) {
+                wdt_en_ = true;
+                wdt_reload();
+            }
+            put(kWdt, off, 4, wdt_en_ ? RTI_DWDCTRL_ENABLE : v);
+            return true;
+        }
+        if (off == RTI_RTIWDKEY) {
+            if (v == RTI_WDKEY_2 && wdt_key1_ && wdt_en_ && !wdt_expired_) wdt_reload();
+            wdt_key1_ = v == RTI_WDKEY_1;
+            return true;
+        }
+        if (off == RTI_RTIWDSTATUS) {
+            put(kWdt, off, 4, get(kWdt, off, 4) & ~v);
+            return true;
+        }
+        return false;
+    }
+    void wdt_reload() { wdt_left_ = (uint64_t{get(kWdt, RTI_RTIDWDPRLD, 4) & 0xFFFu} + 1u) << RTI_DWD_PRLD_SHIFT; }
+    void wdt_advance(uint32_t dt_us)
+    {
+        if (!wdt_en_ || wdt_expired_) return;
+        const uint64_t ticks = uint64_t{dt_us} * (AM263X_WDT_CLK_HZ / 1000000u);
+        if (ticks < wdt_left_) {
+            wdt_left_ -= ticks;
+            return;
+        }
+        wdt_left_ = 0;
+        wdt_expired_ = true;
+        put(kWdt, RTI_RTIWDSTATUS, 4, get(kWdt, RTI_RTIWDSTATUS, 4) | RTI_WDSTATUS_DWDST | 0x20u);
+        for (uint32_t m = 0; m < 3; ++m)   // the reset's effect on the bridge: all outputs off
+            put(kEpwm, 0x1000u * m + EPWM_TZFLG, 2, get(kEpwm, 0x1000u * m + EPWM_TZFLG, 2) | EPWM_TZ_OST | EPWM_TZ_INT);
+    }
+
     bool tripped() const
     {
         for (uint32_t m = 0; m < 3; ++m)
@@ -660,6 +714,8 @@ private:
     MemWrite mem_write_;
     MemRead mem_read_;
     uint32_t time_us_ = 0;
+    uint64_t wdt_left_ = 0;   // WDT0 down counter [watchdog-clock ticks]
+    bool wdt_en_ = false, wdt_key1_ = false, wdt_expired_ = false;
     uint16_t cmpa_active_[3] = {0, 0, 0};
     uint16_t prd_active_[3] = {0, 0, 0};
     uint32_t adc_flag_ = 0, adc_ovf_ = 0;
