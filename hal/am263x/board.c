@@ -7,7 +7,8 @@
  * handler (called from the IRQ entry in startup.S, no argument) must find.
  *
  * Left as TI's SBL / SOC-init GEL configured them (not written by this port): PLLs and module
- * clocks and their gates (SYSCLK 200 MHz, MCAN0 80 MHz, RTI0 25 MHz: am263x/regs_soc.h), the pin
+ * clocks and their gates (SYSCLK 200 MHz, MCAN0 80 MHz, RTI0 25 MHz: am263x/regs_soc.h; WDT0
+ * 25 MHz: am263x/regs_rti.h), the GPIO11 pad of the trip input (docs/porting.md), the pin
  * multiplexing of ePWM0-2 A/B, eQEP0 A/B/I and MCAN0 TX/RX (board-specific IOMUX pads not
  * verified here), the QSPI clock and its memory-mapped read setup (SPI_SETUP0). */
 #include "hal/board.h"
