@@ -9,7 +9,8 @@
  * frequency and dead time, the drive, the CANopen device, then the ISR. The ISR runs the drive
  * and the scope. The background loop sleeps until an interrupt; after each control ISR it runs
  * the drive's background work and the CANopen device every 10th period, publishes the telemetry
- * to the monitor block (mc/monitor.h) and hands the drive a command written there.
+ * to the monitor block (mc/monitor.h) and hands the drive a command written there. It kicks the
+ * watchdog (hal/watchdog.h) only when the ISR count advanced: a stalled ISR or a hung loop trips.
  * Two commanders: the monitor (a debugger, the PIL) and CiA 402 over CAN. The last one heard
  * wins: a monitor command takes the drive from CANopen, a controlword gives it to CANopen. */
 #include <math.h>
@@ -36,6 +37,7 @@ static mc_co_t co;
 static mc_scope_t scope;
 static float scope_buf[SCOPE_VALUES];
 static hal_time_t *clock;
+static hal_wdg_t *wdg;
 
 static void control_isr(void *ctx)
 {
@@ -72,6 +74,7 @@ static void service(uint32_t *seen_isr, uint32_t *seen_cmd, uint32_t *seen_cw)
     const uint32_t n = mc_monitor.isr_count;
     if (n != *seen_isr) {
         *seen_isr = n;
+        hal_wdg_kick(wdg);   /* progress: the ISR ran since the last kick and so did this loop */
         if ((n - 1u) % 10u == 0u) {
             mc_drive_background(&drive);
             mc_co_step(&co, hal_time_us(clock) / 1000u);
@@ -141,14 +144,17 @@ int main(void)
     }
     if (!drive_ok) {
         const mc_param_err_t *e = mc_drive_config_error(&drive);
-        mc_monitor.cfg_err_kind = board_ok ? (uint32_t)e->kind : 0xFFFFFFFFu;
-        mc_monitor.cfg_err_param = board_ok ? (uint32_t)e->param : 0xFFFFFFFFu;
+        /* the board refused: a dead time below the port's floor is named (0 is shoot-through) */
+        const bool dt = !board_ok && !(bcfg.dead_time_s >= hal_board_min_dead_time_s());
+        mc_monitor.cfg_err_kind = board_ok ? (uint32_t)e->kind : dt ? (uint32_t)MC_PERR_RANGE : 0xFFFFFFFFu;
+        mc_monitor.cfg_err_param = board_ok ? (uint32_t)e->param : dt ? (uint32_t)MC_PARAM_hw_dead_time_s : 0xFFFFFFFFu;
         mc_monitor.boot = 2u;
         for (;;) {
             hal_board_idle();   /* outputs off: the board came up with them off */
         }
     }
     clock = board.time;
+    wdg = board.wdg;
     mc_scope_init(&scope, scope_buf, SCOPE_VALUES, cfg.p.control_ts_s);
     const mc_co_cfg_t cc = {.node_id = 1u, .heartbeat_ms = 1000u, .step_s = 10.0f * cfg.p.control_ts_s, .vendor_id = 0u,
                             .product_code = 1u, .revision = 0x00020000u, .serial = 0u};

@@ -14,11 +14,15 @@
  * The ADC inputs are dedicated analog pins (no IOMUX register). ePWM/eQEP/ADC run from SYSCLK
  * (200 MHz) with their own dividers (epwm.c TBCTL, adc.c ADCCTL2, eqep.c).
  * Left as TI's SBL configured them: the PLLs, SYSCLK and the R5F clock (Bootloader_socConfigurePll),
- * the QSPI clock and its memory-mapped read setup (SPI_SETUP0). */
+ * the QSPI clock and its memory-mapped read setup (SPI_SETUP0). Not set yet (assumed at reset /
+ * as the SBL leaves them): the WDT0 clock (25 MHz, am263x/regs_rti.h) and the GPIO11 pad of the
+ * hardware trip input (docs/porting.md). */
 #include "hal/board.h"
 #include "am263x/mmio.h"
 #include "am263x/port.h"
 #include "am263x/regs_adc.h"
+#include "am263x/regs_epwm.h"
+#include "am263x/regs_rti.h"
 #include "am263x/regs_soc.h"
 
 #define QEP_UNIT_CLK (AM263X_SYSCLK_HZ / 1000u)   /* eQEP unit timer: 1 ms                    */
@@ -42,6 +46,7 @@ static hal_can_t can0 = {
     .ram = AM263X_MCAN_MSGRAM_BASE(0u),
 };
 static hal_nvm_t nvm0;
+static hal_wdg_t wdg0 = {.wdt = AM263X_WDT0_BASE};
 static const struct {
     uintptr_t vim, xbar, top;
 } soc = {AM263X_VIM_BASE, AM263X_INTXBAR_BASE, AM263X_TOP_CTRL_BASE};
@@ -148,6 +153,9 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
         spin(ADC_POWERUP_LOOPS);   /* analog power-up before the first conversion */
     }
     am263x_intxbar_route(soc.xbar, AM263X_INTXBAR_OUT_ADC, AM263X_INTXBAR_GROUP_ADC, AM263X_INTXBAR_ADC0_INT1);
+    /* the hardware trip: GPIO11 (the gate driver's nFAULT) -> INPUT XBAR 0 -> TZ1 (epwm.c) */
+    am263x_wr32(AM263X_INPUTXBAR_BASE + AM263X_INPUTXBAR_GSEL(0u), 0u);
+    am263x_wr32(AM263X_INPUTXBAR_BASE + AM263X_INPUTXBAR_G0(0u), AM263X_TRIP_GPIO);
     (void)am263x_qep_init(&qep0, cfg->qep_counts_per_rev, QEP_UNIT_CLK);
     /* a controller that does not come up leaves can0 refusing (bus-off); the drive runs on */
     (void)am263x_can_init(&can0, cfg->can_bitrate, AM263X_MCAN_FCLK_HZ);
@@ -159,6 +167,7 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
     out->can = &can0;
     out->nvm = &nvm0;
     out->time = &tim0;
+    out->wdg = &wdg0;
     return true;
 }
 
@@ -173,9 +182,20 @@ void hal_board_start(void)
     am263x_vim_route(soc.vim, AM263X_IRQ_ADC_EOC, 0u, (uintptr_t)&am263x_adc_eoc_isr);
     am263x_adc_enable_irq(&adc0);
     am263x_pwm_start(&pwm0);   /* counters run, SOCA at each counter zero; outputs still tripped */
+    am263x_wdt_start(wdg0.wdt, AM263X_WDT_PRLD);   /* from here the loop must progress */
 #if defined(__arm__)
     __asm volatile("cpsie i" ::: "memory");
 #endif
+}
+
+void hal_wdg_kick(hal_wdg_t *wdg)
+{
+    am263x_wdt_kick(wdg->wdt);
+}
+
+float hal_board_min_dead_time_s(void)
+{
+    return (float)AM263X_PWM_DB_MIN / (float)AM263X_EPWMCLK_HZ;
 }
 
 void hal_board_idle(void)

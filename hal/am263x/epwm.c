@@ -21,7 +21,8 @@ bool am263x_pwm_timing(uint32_t clk_hz, float f_pwm_hz, float dead_time_s, uint1
     }
     const float pr = roundf(p);
     const float dr = roundf(d);
-    if (!(dr >= 0.0f && dr <= (float)EPWM_DB_MAX && dr < 0.25f * pr)) {
+    /* the floor refuses 0 (shoot-through) and anything the power stage cannot switch apart */
+    if (!(dr >= (float)AM263X_PWM_DB_MIN && dr <= (float)EPWM_DB_MAX && dr < 0.25f * pr)) {
         return false;
     }
     *prd = (uint16_t)pr;
@@ -40,9 +41,10 @@ uint16_t am263x_pwm_cmpa(hal_pwm_t *pwm, float d)
             d = d < 0.0f ? 0.0f : 1.0f;
         }
     }
-    /* A high while TBCTR > CMPA: on-fraction (TBPRD - CMPA) / TBPRD */
+    /* A high while TBCTR > CMPA: on-fraction (TBPRD - CMPA) / TBPRD; CMPA >= AM263X_PWM_CMPA_MIN
+     * (TI: CMPA >= 1 with load at zero; and the bootstrap supplies' recharge, see port.h) */
     const float c = roundf((1.0f - d) * (float)pwm->prd);
-    return (uint16_t)c;
+    return (uint16_t)(c < (float)AM263X_PWM_CMPA_MIN ? (float)AM263X_PWM_CMPA_MIN : c);
 }
 
 static void trip_all(const hal_pwm_t *pwm)
@@ -76,9 +78,11 @@ bool am263x_pwm_init(hal_pwm_t *pwm, float f_pwm_hz, float dead_time_s)
     for (uint32_t k = 0u; k < 3u; ++k) {
         const uintptr_t b = pwm->epwm[k];
         /* Time base: stopped, TBCLK = EPWMCLK (both dividers 1), TBPRD shadowed (loaded at zero),
-         * free run on an emulation halt. Module 0 master, 1 and 2 load TBPHS = 0 on its sync-out
-         * and count up after it. */
-        uint16_t tbctl = (uint16_t)(EPWM_TBCTL_FREE_RUN | EPWM_TBCTL_CTRMODE_STOP);
+         * on an emulation halt (a breakpoint) a soft stop: the counter stops when it next reaches
+         * zero, where A is low and B high on every phase (the zero vector V000, the bootstraps
+         * charged) instead of freezing mid-pulse or running on with stale duties. Module 0 master,
+         * 1 and 2 load TBPHS = 0 on its sync-out and count up after it. */
+        uint16_t tbctl = (uint16_t)(EPWM_TBCTL_SOFT_STOP | EPWM_TBCTL_CTRMODE_STOP);
         if (k != 0u) {
             tbctl = (uint16_t)(tbctl | EPWM_TBCTL_PHSEN | EPWM_TBCTL_PHSDIR);
         }
@@ -99,8 +103,9 @@ bool am263x_pwm_init(hal_pwm_t *pwm, float f_pwm_hz, float dead_time_s)
         am263x_wr16(b + EPWM_DBCTL, EPWM_DBCTL_AHC);
         am263x_wr16(b + EPWM_DBRED, db);
         am263x_wr16(b + EPWM_DBFED, db);
-        /* no hardware trip source wired (board-specific TZSEL); the forced one-shot trip stays */
-        am263x_wr16(b + EPWM_TZSEL, 0u);
+        /* the hardware trip: TZ1 (INPUTXBAR output 0, routed by board.c from the gate driver's
+         * nFAULT pin, docs/porting.md) as a one-shot source: a fault latches A and B low */
+        am263x_wr16(b + EPWM_TZSEL, EPWM_TZSEL_OSHT1);
         /* master: SOCA at counter zero, every period */
         if (k == 0u) {
             am263x_wr16(b + EPWM_ETSEL, (uint16_t)(EPWM_ETSEL_SOCAEN |

@@ -22,3 +22,18 @@ uint32_t hal_time_us(const hal_time_t *t)
 {
     return am263x_rd32(t->rti + RTI_RTIFRC0);
 }
+
+void am263x_wdt_start(uintptr_t wdt, uint32_t prld)
+{
+    am263x_wr32(wdt + RTI_RTIWDSTATUS, 0xFFu);
+    am263x_wr32(wdt + RTI_RTIWWDSIZECTRL, RTI_WWDSIZE_100);
+    am263x_wr32(wdt + RTI_RTIDWDPRLD, prld);
+    am263x_wr32(wdt + RTI_RTIWWDRXNCTRL, RTI_WWDRXN_RESET);
+    am263x_wr32(wdt + RTI_RTIDWDCTRL, RTI_DWDCTRL_ENABLE);
+}
+
+void am263x_wdt_kick(uintptr_t wdt)
+{
+    am263x_wr32(wdt + RTI_RTIWDKEY, RTI_WDKEY_1);
+    am263x_wr32(wdt + RTI_RTIWDKEY, RTI_WDKEY_2);
+}

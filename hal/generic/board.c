@@ -12,6 +12,7 @@ struct hal_qep { uintptr_t base; uint32_t counts_per_rev; };
 struct hal_time { uintptr_t base; };
 struct hal_can { hal_can_state_t state; };
 struct hal_nvm { uintptr_t flc; uint32_t base; };
+struct hal_wdg { uintptr_t base; };
 
 #define REG(b, off) (*(volatile uint32_t *)((b) + (off)))
 
@@ -26,6 +27,7 @@ static hal_qep_t qep0 = {GEN_QEP_BASE, 0};
 static hal_time_t tim0 = {GEN_TIM_BASE};
 static hal_can_t can0 = {HAL_CAN_BUS_OFF};
 static hal_nvm_t nvm0 = {GEN_FLC_BASE, GEN_NVM_BASE};
+static hal_wdg_t wdg0 = {GEN_WDT_BASE};
 /* The control interrupt's target: the one piece of state the vector needs. */
 static hal_isr_fn_t isr_fn;
 static void *isr_ctx;
@@ -40,7 +42,7 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
     /* up-down counter: period = 2 PRD clock counts */
     const float prd = (float)GEN_PWM_CLK_HZ / (2.0f * cfg->f_pwm_hz);
     const float dt = cfg->dead_time_s * (float)GEN_PWM_CLK_HZ;
-    if (!(prd >= 100.0f && prd <= 65535.0f) || !(dt >= 0.0f && dt < 0.25f * prd) || cfg->qep_counts_per_rev < 4u) {
+    if (!(prd >= 100.0f && prd <= 65535.0f) || !(dt >= (float)GEN_PWM_DT_MIN && dt < 0.25f * prd) || cfg->qep_counts_per_rev < 4u) {
         REG(GEN_PWM_BASE, GEN_PWM_CTRL) = 0u;
         return false;
     }
@@ -65,6 +67,7 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
     out->can = &can0;
     out->nvm = &nvm0;
     out->time = &tim0;
+    out->wdg = &wdg0;
     return true;
 }
 
@@ -81,6 +84,18 @@ void hal_board_start(void)
     REG(adc0.base, GEN_ADC_CTRL) = GEN_ADC_CTRL_EN | GEN_ADC_CTRL_IE;
     NVIC_ISER0 = 1u << GEN_ADC_IRQ;
     REG(pwm0.base, GEN_PWM_CTRL) = GEN_PWM_CTRL_RUN;   /* running, outputs still off */
+    REG(wdg0.base, GEN_WDT_LOAD) = GEN_WDT_TIMEOUT_US;
+    REG(wdg0.base, GEN_WDT_CTRL) = GEN_WDT_CTRL_EN;     /* from here the loop must progress */
+}
+
+void hal_wdg_kick(hal_wdg_t *wdg)
+{
+    REG(wdg->base, GEN_WDT_KICK) = GEN_WDT_KICK_KEY;
+}
+
+float hal_board_min_dead_time_s(void)
+{
+    return (float)GEN_PWM_DT_MIN / (float)GEN_PWM_CLK_HZ;
 }
 
 void hal_board_idle(void)

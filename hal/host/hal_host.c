@@ -1,6 +1,7 @@
 /* Host HAL port: the peripheral "registers" are the structs in hal_host/host.h. */
 #include "hal_host/host.h"
 #include <math.h>
+#include <stddef.h>
 
 void hal_host_pwm_init(hal_pwm_t *pwm, float period_s, float dead_time_s)
 {
@@ -111,4 +112,39 @@ uint32_t hal_time_us(const hal_time_t *t)
 void hal_stage_mark(hal_stage_t stage)
 {
     (void)stage;
+}
+
+/* ---- hal/watchdog.h */
+void hal_host_wdg_start(hal_wdg_t *wdg, uint32_t timeout_us, hal_pwm_t *pwm)
+{
+    wdg->timeout_us = timeout_us;
+    wdg->left_us = timeout_us;
+    wdg->kicks = 0u;
+    wdg->expired = false;
+    wdg->pwm = pwm;
+}
+
+void hal_wdg_kick(hal_wdg_t *wdg)
+{
+    wdg->kicks++;
+    if (!wdg->expired) {
+        wdg->left_us = wdg->timeout_us;
+    }
+}
+
+bool hal_host_wdg_elapse(hal_wdg_t *wdg, uint32_t dt_us)
+{
+    if (wdg->timeout_us == 0u || wdg->expired) {
+        return wdg->expired;
+    }
+    if (dt_us >= wdg->left_us) {
+        wdg->expired = true;
+        wdg->left_us = 0u;
+        if (wdg->pwm != NULL) {
+            hal_pwm_enable(wdg->pwm, false);
+        }
+        return true;
+    }
+    wdg->left_us -= dt_us;
+    return false;
 }

@@ -108,8 +108,10 @@ public:
             std::ostringstream m;
             m << "--pil " << elf << ": the image did not boot with the scenario's configuration (boot " << boot
               << ", parameter record " << mc_store_status_name(sp) << ", model record " << mc_store_status_name(sm)
-              << ", refused parameter id " << static_cast<int32_t>(word(offsetof(mc_monitor_t, cfg_err_param)))
-              << ")";
+              << ", refused parameter id " << static_cast<int32_t>(word(offsetof(mc_monitor_t, cfg_err_param)));
+            const uint32_t id = word(offsetof(mc_monitor_t, cfg_err_param));
+            if (id < MC_PARAM_COUNT) m << " " << mc_param_table[id].name;
+            m << ")";
             throw ScenarioError(m.str());
         }
         const double prd = t_->peripherals().pwm_period_s();

@@ -39,6 +39,12 @@
 //    outputs count as off, the eQEP0 A/B pads or the encoder does not count, MCAN0 RX/TX (and
 //    the transceiver's STB, GPIO51 on pad EPWM4_A, a GPIO output driven low) or no frame. The CAN bus of the bench runs at kBusBitrate: frames pass only when NBTP at the MCAN0
 //    clock the RCM selects gives exactly that rate. RTIFRC0 counts at the RTI0 clock selected.
+//  - WDT0 (an RTI module's DWWD): RTIDWDCTRL enable key starts the down counter at (DWDPRLD + 1)
+//    x 2^13 ticks of AM263X_WDT_CLK_HZ, the key pair E51A/A35C on RTIWDKEY reloads it, RTIDWDCNTR
+//    reads it; it runs in the plant's microseconds, checked at each period boundary. At zero:
+//    RTIWDSTATUS DWDST and DWWD_ST, and the reaction's effect on the bridge: the warm reset's
+//    (RTIWWDRXNCTRL 0x5) pads off stand as a one-shot trip of ePWM0-2 (outputs().enabled false),
+//    the core is not reset. CONTROLSS_INPUTXBAR: stored only (no trip input is driven).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -61,7 +67,7 @@
 namespace mcsim::pil {
 namespace {
 
-enum Win : int { kEpwm, kAdcRes, kEqep, kAdc, kXbar, kCtrlss, kTop, kVim, kRti, kMcanRam, kMcanCfg, kQspi, kIomux, kRcm, kGpio, kNumWin };
+enum Win : int { kEpwm, kAdcRes, kEqep, kAdc, kXbar, kCtrlss, kTop, kVim, kRti, kMcanRam, kMcanCfg, kQspi, kIomux, kRcm, kGpio, kWdt, kInXbar, kNumWin };
 
 struct WinDef {
     uint32_t base, size;
@@ -84,6 +90,8 @@ constexpr WinDef kWins[kNumWin] = {
     {AM263X_IOMUX_BASE, 0x1000, "IOMUX"},
     {AM263X_MSS_RCM_BASE, 0x2000, "MSS_RCM"},
     {AM263X_GPIO0_BASE, 0x1000, "GPIO0"},
+    {AM263X_WDT0_BASE, 0x1000, "WDT0"},
+    {AM263X_INPUTXBAR_BASE, 0x1000, "CONTROLSS_INPUTXBAR"},
 };
 
 constexpr uint32_t kAdcLine = AM263X_IRQ_ADC_EOC;
@@ -150,6 +158,10 @@ public:
             break;
         case kMcanCfg:
             return mcan_read(off, size);
+        case kWdt:
+            if (off == RTI_RTIDWDCNTR) return static_cast<uint32_t>(wdt_left_);
+            if (off == RTI_RTIWDKEY) return 0;
+            break;
         case kQspi:
             if (off == QSPI_SPI_STATUS) return QSPI_STATUS_WC | QSPI_STATUS_FC;   // never busy
             break;
@@ -214,6 +226,9 @@ public:
         case kGpio:
             if (gpio_write(off, v)) return;
             break;
+        case kWdt:
+            if (wdt_write(off, v)) return;
+            break;
         default:
             break;
         }
@@ -225,6 +240,7 @@ public:
         const uint32_t dt_us = in.time_us - time_us_;
         time_us_ = in.time_us;
         eqep_advance(in, dt_us);   // the encoder counts whether or not the PWM runs
+        wdt_advance(dt_us);
         if (!running()) return;
         for (int m = 0; m < 3; ++m) {
             const uint32_t b = 0x1000u * static_cast<uint32_t>(m);
@@ -371,6 +387,44 @@ private:
         }
         return true;
     }
+    // ---- WDT0's DWWD (true: handled)
+    bool wdt_write(uint32_t off, uint32_t v)
+    {
+        if (off == RTI_RTIDWDCTRL) {
+            if (v == RTI_DWDCTRL_ENABLE && !wdt_en_) {
+                wdt_en_ = true;
+                wdt_reload();
+            }
+            put(kWdt, off, 4, wdt_en_ ? RTI_DWDCTRL_ENABLE : v);
+            return true;
+        }
+        if (off == RTI_RTIWDKEY) {
+            if (v == RTI_WDKEY_2 && wdt_key1_ && wdt_en_ && !wdt_expired_) wdt_reload();
+            wdt_key1_ = v == RTI_WDKEY_1;
+            return true;
+        }
+        if (off == RTI_RTIWDSTATUS) {
+            put(kWdt, off, 4, get(kWdt, off, 4) & ~v);
+            return true;
+        }
+        return false;
+    }
+    void wdt_reload() { wdt_left_ = (uint64_t{get(kWdt, RTI_RTIDWDPRLD, 4) & 0xFFFu} + 1u) << RTI_DWD_PRLD_SHIFT; }
+    void wdt_advance(uint32_t dt_us)
+    {
+        if (!wdt_en_ || wdt_expired_) return;
+        const uint64_t ticks = uint64_t{dt_us} * (AM263X_WDT_CLK_HZ / 1000000u);
+        if (ticks < wdt_left_) {
+            wdt_left_ -= ticks;
+            return;
+        }
+        wdt_left_ = 0;
+        wdt_expired_ = true;
+        put(kWdt, RTI_RTIWDSTATUS, 4, get(kWdt, RTI_RTIWDSTATUS, 4) | RTI_WDSTATUS_DWDST | 0x20u);
+        for (uint32_t m = 0; m < 3; ++m)   // the reset's effect on the bridge: all outputs off
+            put(kEpwm, 0x1000u * m + EPWM_TZFLG, 2, get(kEpwm, 0x1000u * m + EPWM_TZFLG, 2) | EPWM_TZ_OST | EPWM_TZ_INT);
+    }
+
     bool tripped() const
     {
         for (uint32_t m = 0; m < 3; ++m)
@@ -748,6 +802,8 @@ private:
     MemWrite mem_write_;
     MemRead mem_read_;
     uint32_t time_us_ = 0;
+    uint64_t wdt_left_ = 0;   // WDT0 down counter [watchdog-clock ticks]
+    bool wdt_en_ = false, wdt_key1_ = false, wdt_expired_ = false;
     uint16_t cmpa_active_[3] = {0, 0, 0};
     uint16_t prd_active_[3] = {0, 0, 0};
     uint32_t adc_flag_ = 0, adc_ovf_ = 0;

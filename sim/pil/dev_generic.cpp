@@ -17,6 +17,9 @@
 //    2: erase the 16 KiB block holding ADDR to 0xFF), STS (BUSY always 0, ERR for a unit that is
 //    not 8-byte aligned or not inside the NVM blocks, or an unknown command; write 1 to clear).
 //    The NVM blocks start erased (0xFF) where the image does not load anything into them.
+//  - WDT: LOAD, CTRL.EN (sticky), KICK (the key reloads the count), STS.EXP; the count runs in the
+//    plant's microseconds and is checked at each period boundary: at zero STS.EXP is set and PWM
+//    CTRL cleared (the hardware's trip), once.
 // Word access is the registers' contract; byte and halfword accesses see the bytes of the word.
 #include <algorithm>
 #include <cstring>
@@ -38,7 +41,8 @@ public:
                 {GEN_ADC_BASE, 0x1000, "ADC"},
                 {GEN_QEP_BASE, 0x1000, "QEP"},
                 {GEN_TIM_BASE, 0x1000, "TIM"},
-                {GEN_FLC_BASE, 0x1000, "FLC"}};
+                {GEN_FLC_BASE, 0x1000, "FLC"},
+                {GEN_WDT_BASE, 0x1000, "WDT"}};
     }
 
     std::vector<MmioWindow> memories() const override
@@ -104,6 +108,7 @@ public:
         qep_count_ = in.qep_count;
         qep_index_seen_ = in.qep_index_seen;
         qep_index_count_ = in.qep_index_count;
+        wdt_advance(in.time_us - time_us_);
         time_us_ = in.time_us;
     }
 
@@ -157,6 +162,9 @@ private:
         case GEN_FLC_BASE + GEN_FLC_DATA0: return flc_data_[0];
         case GEN_FLC_BASE + GEN_FLC_DATA1: return flc_data_[1];
         case GEN_FLC_BASE + GEN_FLC_STS: return flc_sts_;
+        case GEN_WDT_BASE + GEN_WDT_LOAD: return wdt_load_;
+        case GEN_WDT_BASE + GEN_WDT_CTRL: return wdt_en_ ? GEN_WDT_CTRL_EN : 0u;
+        case GEN_WDT_BASE + GEN_WDT_STS: return wdt_exp_ ? GEN_WDT_STS_EXP : 0u;
         default: return 0;   // CMD, unmapped offsets
         }
     }
@@ -179,8 +187,33 @@ private:
         case GEN_FLC_BASE + GEN_FLC_DATA1: flc_data_[1] = v; break;
         case GEN_FLC_BASE + GEN_FLC_CMD: flc_command(v); break;
         case GEN_FLC_BASE + GEN_FLC_STS: flc_sts_ &= ~(v & 2u); break;
+        case GEN_WDT_BASE + GEN_WDT_LOAD:
+        case GEN_WDT_BASE + GEN_WDT_CTRL:
+        case GEN_WDT_BASE + GEN_WDT_KICK: wdt_write(a - GEN_WDT_BASE, v); break;
         default: break;   // read-only (RES, POS, STS, IDX, US) and unmapped offsets
         }
+    }
+
+    // ---- watchdog
+    void wdt_write(uint32_t off, uint32_t v)
+    {
+        if (off == GEN_WDT_LOAD && !wdt_en_) wdt_load_ = v;
+        if (off == GEN_WDT_CTRL && (v & GEN_WDT_CTRL_EN) && !wdt_en_) {
+            wdt_en_ = true;
+            wdt_left_ = wdt_load_;
+        }
+        if (off == GEN_WDT_KICK && v == GEN_WDT_KICK_KEY && !wdt_exp_) wdt_left_ = wdt_load_;
+    }
+    void wdt_advance(uint32_t dt_us)
+    {
+        if (!wdt_en_ || wdt_exp_) return;
+        if (dt_us < wdt_left_) {
+            wdt_left_ -= dt_us;
+            return;
+        }
+        wdt_left_ = 0;
+        wdt_exp_ = true;
+        pwm_ctrl_ = 0;   // expiry: the PWM's outputs off and its counter stopped, in hardware
     }
 
     void flc_command(uint32_t cmd)
@@ -219,6 +252,8 @@ private:
     bool qep_index_seen_ = false;
     uint32_t time_us_ = 0;
     uint32_t flc_addr_ = 0, flc_data_[2] = {0, 0}, flc_sts_ = 0;
+    uint32_t wdt_load_ = 0, wdt_left_ = 0;
+    bool wdt_en_ = false, wdt_exp_ = false;
 };
 
 }  // namespace

@@ -446,12 +446,93 @@ private:
         cur_ = nullptr;
         last_ = nullptr;
         nocp_pending_ = false;
-        const uc_err e = uc_emu_start(uc_, begin, kNoExit, 0, 0);
+        uc_err e = uc_emu_start(uc_, begin, kNoExit, 0, 0);
+        while (fault_entry_ && error_.empty() && e != UC_ERR_OK) {   // set_fault_entry: the core's exception
+            const uint32_t entry = enter_fault(e);
+            if (entry == 0) break;
+            mem_fault_.clear();
+            stopping_ = false;
+            prev_ = nullptr;
+            e = uc_emu_start(uc_, entry, kNoExit, 0, 0);
+        }
         const uint32_t pc = rd(UC_ARM_REG_PC);
         if (error_.empty() && nocp_pending_ && !fp_enabled()) error_ = nocp_message();
         if (!pending_precise_.empty()) instrument_precise();
         if (!error_.empty()) throw RunError(std::string("pil (") + what + "): " + error_);
         if (e != UC_ERR_OK) throw RunError(std::string("pil (") + what + "): " + describe(e, pc));
+    }
+
+    // ---- faults as the core takes them (set_fault_entry); the handler's address (bit 0: Thumb)
+    // or 0 when e is not a fault the core would take
+    void set_fault_entry(bool on) override { fault_entry_ = on; }
+    unsigned faults_taken() const override { return faults_; }
+    uint32_t enter_fault(uc_err e)
+    {
+        enum { Undef, Dabt, Pabt } kind;
+        switch (e) {
+        case UC_ERR_INSN_INVALID: kind = Undef; break;
+        case UC_ERR_READ_UNMAPPED:
+        case UC_ERR_WRITE_UNMAPPED:
+        case UC_ERR_READ_PROT:
+        case UC_ERR_WRITE_PROT: kind = Dabt; break;
+        case UC_ERR_FETCH_UNMAPPED:
+        case UC_ERR_FETCH_PROT: kind = Pabt; break;
+        default: return 0;
+        }
+        const uint32_t pc = rd(UC_ARM_REG_PC);
+        charge(model_.timing().irq_entry, 0, stage_);
+        ++faults_;
+        if (core_ == Core::CortexM4F) return enter_hardfault(pc);
+        const uint32_t cpsr = rd(UC_ARM_REG_CPSR);
+        uc_arm_cp_reg sctlr_r{15, 0, 0, 1, 0, 0, 0, 0};
+        uc_reg_read(uc_, UC_ARM_REG_CP_REG, &sctlr_r);
+        const uint32_t sctlr = static_cast<uint32_t>(sctlr_r.val);
+        const bool thumb = (cpsr & 0x20u) != 0;
+        // ARMv7-R exception entry (ARM ARM B1.8): mode, masks, state; LR as the vector expects it
+        static const uint32_t mode[] = {0x1Bu, 0x17u, 0x17u}, vec[] = {0x04u, 0x10u, 0x0Cu};
+        const uint32_t lr = kind == Undef ? pc + (thumb ? 2u : 4u) : kind == Dabt ? pc + 8u : pc + 4u;
+        uint32_t ncpsr = (cpsr & ~(0x1Fu | 0x20u | 0x0600FC00u | 0x200u)) | mode[kind] | 0x80u | 0x40u;
+        if (kind != Undef) ncpsr |= 0x100u;
+        if (sctlr & (1u << 30)) ncpsr |= 0x20u;
+        if (sctlr & (1u << 25)) ncpsr |= 0x200u;
+        wr(UC_ARM_REG_CPSR, ncpsr);   // banks SP, LR, SPSR
+        wr(UC_ARM_REG_SPSR, cpsr);
+        wr(UC_ARM_REG_LR, lr);
+        return ((sctlr & (1u << 13)) ? 0xFFFF0000u : 0u) + vec[kind] + ((ncpsr & 0x20u) ? 1u : 0u);
+    }
+    uint32_t enter_hardfault(uint32_t pc)
+    {
+        const uint32_t control = rd(UC_ARM_REG_CONTROL), xpsr = rd(UC_ARM_REG_XPSR);
+        const bool fpca = (control & 4u) != 0;
+        const uint32_t sp = rd(UC_ARM_REG_SP), frame = fpca ? 0x68u : 0x20u;
+        const bool align = ((sp - frame) & 4u) != 0;
+        const uint32_t fptr = (sp - frame) & ~4u;
+        uint32_t w[26] = {};
+        const int core_regs[6] = {UC_ARM_REG_R0, UC_ARM_REG_R1, UC_ARM_REG_R2, UC_ARM_REG_R3, UC_ARM_REG_R12, UC_ARM_REG_LR};
+        for (int k = 0; k < 6; ++k) w[k] = rd(core_regs[k]);
+        w[6] = pc & ~1u;
+        w[7] = xpsr | (align ? 0x200u : 0u);
+        if (fpca) {
+            for (int k = 0; k < 16; ++k) w[8 + k] = rd(UC_ARM_REG_S0 + k);
+            w[24] = rd(UC_ARM_REG_FPSCR);
+        }
+        if (uc_mem_write(uc_, fptr, w, frame) != UC_ERR_OK) {
+            fail("HardFault entry: the frame at " + hex(fptr) + " is not in memory (a lockup on the core)");
+            return 0;
+        }
+        uint32_t vec = 0;
+        if (uc_mem_read(uc_, vtor_ + 12u, &vec, 4) != UC_ERR_OK || !(vec & 1u)) {
+            fail("HardFault entry: vector 3 is " + hex(vec) + ", not a Thumb handler (a lockup on the core)");
+            return 0;
+        }
+        const bool handler = (xpsr & 0x1FFu) != 0;
+        wr(UC_ARM_REG_SP, fptr);
+        wr(UC_ARM_REG_LR, (handler ? 0xFFFFFFF1u : 0xFFFFFFF9u) & ~(fpca ? 0x10u : 0u));
+        wr(UC_ARM_REG_CONTROL, control & ~4u);
+        wr(UC_ARM_REG_XPSR_NZCVQG, (xpsr & 0xF80F0000u) | 0x01000000u | 3u);
+        rebuild_hflags();
+        in_isr_ = false;   // a fault in the ISR: its handler never returns to it
+        return vec;
     }
 
     void expect_idle(const char* what)
@@ -795,6 +876,7 @@ private:
         const uint32_t basepri = rd(UC_ARM_REG_BASEPRI) & 0xF0u, prio = ipr_[kControlIrq] & 0xF0u;
         if (basepri != 0 && prio >= basepri) return false;
         const uint32_t xpsr = rd(UC_ARM_REG_XPSR);
+        if (faults_ && (xpsr & 0x1FFu) >= 2u && (xpsr & 0x1FFu) <= 6u) return false;   // NMI/faults: higher priority
         if (xpsr & 0x1FFu)
             throw RunError("pil: take_irq: the core is in handler mode (IPSR " + std::to_string(xpsr & 0x1FFu) +
                            "): nested exceptions are not emulated");
@@ -1072,6 +1154,8 @@ private:
 
     // ISR
     bool in_isr_ = false, isr_done_ = false;
+    bool fault_entry_ = false;   // set_fault_entry
+    unsigned faults_ = 0;
     uint32_t ret_pc_ = 0, ret_mode_ = 0;
     uint32_t exc_return_ = 0;
     bool exc_returned_ = false, fp_frame_ = false, lazy_done_ = false;

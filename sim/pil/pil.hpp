@@ -123,6 +123,17 @@ public:
     // sorted by cycles, largest first.
     virtual void enable_profile(bool on) = 0;
     virtual std::vector<ProfileEntry> profile() const = 0;
+    // Faults taken as the core takes them (off by default: a fault stops the run with a RunError
+    // naming it). On: R5F an undefined instruction enters UND mode at vector 0x04, an access
+    // outside every memory and register window a data abort (ABT, 0x10; LR from the PC Unicorn
+    // reports, the start of the faulting block), an instruction fetch there a prefetch abort (ABT,
+    // 0x0C), each with SPSR = CPSR, IRQ/FIQ (and for aborts A) masked, the state from SCTLR.TE;
+    // M4F any of them a HardFault (vector 3, the 8/26-word frame, EXC_RETURN in LR: the port
+    // leaves SHCSR's MemManage/BusFault/UsageFault off, so they escalate). The handler then runs
+    // on as part of the same run (to its WFI); the entry costs the timing's interrupt entry.
+    // An active fault handler holds the control interrupt off (take_irq: false).
+    virtual void set_fault_entry(bool on) = 0;
+    virtual unsigned faults_taken() const = 0;
 };
 
 }  // namespace mcsim::pil

@@ -40,9 +40,9 @@ TEST(PilGeneric, MemoryMapIsTheRegisterHeaders)
     EXPECT_EQ(m[1].base, GEN_SRAM_BASE);
     EXPECT_EQ(m[1].size, GEN_SRAM_SIZE);
     const auto w = f.p->windows();
-    ASSERT_EQ(w.size(), 5u);
-    const uint64_t bases[5] = {GEN_PWM_BASE, GEN_ADC_BASE, GEN_QEP_BASE, GEN_TIM_BASE, GEN_FLC_BASE};
-    for (int k = 0; k < 5; ++k) {
+    ASSERT_EQ(w.size(), 6u);
+    const uint64_t bases[6] = {GEN_PWM_BASE, GEN_ADC_BASE, GEN_QEP_BASE, GEN_TIM_BASE, GEN_FLC_BASE, GEN_WDT_BASE};
+    for (int k = 0; k < 6; ++k) {
         EXPECT_EQ(w[k].base, bases[k]);
         EXPECT_EQ(w[k].size, 0x1000u);
     }
@@ -185,4 +185,32 @@ TEST(PilGeneric, FlashControllerHasFlashSemantics)
     EXPECT_EQ(f.rd(GEN_FLC_BASE + GEN_FLC_STS), 0u);
     for (uint32_t j = 0; j < 8; ++j) EXPECT_EQ(f.flash[u + j], 0xFF);
     EXPECT_EQ(f.rd(GEN_FLC_BASE + GEN_FLC_CMD), 0u);
+}
+
+// The watchdog: counts the plant's microseconds from LOAD once enabled, a kick reloads it, at zero
+// it clears PWM CTRL (outputs off) and sets STS.EXP; a kick after that does not revive anything.
+TEST(PilGeneric, WatchdogExpiryTurnsTheOutputsOff)
+{
+    Fixture f;
+    f.wr(GEN_PWM_BASE + GEN_PWM_PRD, 5000);
+    f.wr(GEN_PWM_BASE + GEN_PWM_CTRL, GEN_PWM_CTRL_RUN | GEN_PWM_CTRL_OE);
+    f.wr(GEN_WDT_BASE + GEN_WDT_LOAD, 1000);
+    f.wr(GEN_WDT_BASE + GEN_WDT_CTRL, GEN_WDT_CTRL_EN);
+    PeriphInputs in;
+    for (uint32_t t = 100; t <= 5000; t += 100) {   // kicked every 100 us: never expires
+        in.time_us = t;
+        f.p->period_boundary(in);
+        f.wr(GEN_WDT_BASE + GEN_WDT_KICK, GEN_WDT_KICK_KEY);
+    }
+    EXPECT_TRUE(f.p->outputs().enabled);
+    f.wr(GEN_WDT_BASE + GEN_WDT_KICK, 0x1234u);   // a wrong key does not reload
+    in.time_us = 5900;
+    f.p->period_boundary(in);
+    EXPECT_TRUE(f.p->outputs().enabled);
+    EXPECT_EQ(f.rd(GEN_WDT_BASE + GEN_WDT_STS), 0u);
+    in.time_us = 6000;   // 1000 us since the last kick
+    f.p->period_boundary(in);
+    EXPECT_FALSE(f.p->outputs().enabled);
+    EXPECT_EQ(f.rd(GEN_WDT_BASE + GEN_WDT_STS), GEN_WDT_STS_EXP);
+    EXPECT_EQ(f.rd(GEN_PWM_BASE + GEN_PWM_CTRL), 0u);
 }

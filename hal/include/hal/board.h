@@ -17,6 +17,7 @@
 #include "hal/pwm.h"
 #include "hal/qep.h"
 #include "hal/time.h"
+#include "hal/watchdog.h"
 
 typedef struct {
     float f_pwm_hz;             /* switching = sampling frequency [Hz]                        */
@@ -34,16 +35,22 @@ typedef struct {
     hal_can_t *can;
     hal_nvm_t *nvm;
     hal_time_t *time;
+    hal_wdg_t *wdg;             /* started by hal_board_start (hal/watchdog.h)                */
 } hal_board_t;
 
 typedef void (*hal_isr_fn_t)(void *ctx);
 
 /* false: the configuration cannot be realised (e.g. a PWM period or dead time out of the
- * counters' range); nothing is started then and the outputs are off. */
+ * counters' range, or a dead time below hal_board_min_dead_time_s); nothing is started then and
+ * the outputs are off. */
 bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out);
 /* The control ISR: called once per PWM period from the ADC end-of-conversion interrupt. */
 void hal_board_attach_isr(hal_isr_fn_t fn, void *ctx);
+/* Time base running, the control interrupt enabled, the watchdog started. */
 void hal_board_start(void);
+/* The port's dead-time floor [s] (its power stage's switching; below it hal_board_init refuses,
+ * and the image names hw.dead_time_s): the simulator's ideal inverter has none. */
+float hal_board_min_dead_time_s(void);
 /* Background loop: sleep until the next interrupt (WFI). */
 void hal_board_idle(void);
 

@@ -75,9 +75,11 @@ static void test_refused_but_tripped(void **st)
 {
     (void)st;
     /* 1 kHz: TBPRD 100000 > 16 bits; 1.5 MHz: TBPRD 67 < 100; 30 us at 20 kHz: above a quarter
-     * period; 90 us at 2 kHz: 18000 counts > 14 bits; negative and NaN */
-    const float bad[][2] = {{1000.0f, 1e-6f}, {1.5e6f, 0.1e-6f}, {20000.0f, 30e-6f}, {2000.0f, 90e-6f},
-                            {20000.0f, -1e-6f}, {NAN, 1e-6f}, {20000.0f, NAN}, {0.0f, 1e-6f}};
+     * period; 90 us at 2 kHz: 18000 counts > 14 bits; negative and NaN; no dead time (shoot-
+     * through) and 0.1 us = 20 counts, below the floor AM263X_PWM_DB_MIN (40) */
+    const float bad[][2] = {{1000.0f, 1e-6f}, {1.5e6f, 0.3e-6f}, {20000.0f, 30e-6f}, {2000.0f, 90e-6f},
+                            {20000.0f, -1e-6f}, {NAN, 1e-6f}, {20000.0f, NAN}, {0.0f, 1e-6f},
+                            {20000.0f, 0.0f}, {20000.0f, 0.1e-6f}, {20000.0f, 0.195e-6f}};
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
         setup(NULL);
         assert_false(am263x_pwm_init(&pwm, bad[k][0], bad[k][1]));
@@ -92,6 +94,9 @@ static void test_refused_but_tripped(void **st)
     assert_int_equal(prd, 65531);
     assert_int_equal(db, 16380);
     assert_false(am263x_pwm_timing(AM263X_EPWMCLK_HZ, 1526.0f, 82.0e-6f, &prd, &db));   /* 16400 */
+    /* the floor itself: 0.2 us = 40 counts */
+    assert_true(am263x_pwm_timing(AM263X_EPWMCLK_HZ, 20000.0f, 0.2e-6f, &prd, &db));
+    assert_int_equal(db, AM263X_PWM_DB_MIN);
 }
 
 static void test_mode_registers(void **st)
@@ -99,11 +104,12 @@ static void test_mode_registers(void **st)
     (void)st;
     setup(NULL);
     assert_true(am263x_pwm_init(&pwm, 20000.0f, 1e-6f));
-    /* master: stopped, up-down later, dividers 1 (HSPCLKDIV 0), shadowed TBPRD, free run */
-    assert_int_equal(r16(0, EPWM_TBCTL), 0x8003);
+    /* master: stopped, up-down later, dividers 1 (HSPCLKDIV 0), shadowed TBPRD, on a debugger
+     * halt a soft stop at the end of the cycle (FREE_SOFT = 1: counter zero, A low, B high) */
+    assert_int_equal(r16(0, EPWM_TBCTL), 0x4003);
     /* slaves: + phase load on sync-in, count up after it */
-    assert_int_equal(r16(1, EPWM_TBCTL), 0xA007);
-    assert_int_equal(r16(2, EPWM_TBCTL), 0xA007);
+    assert_int_equal(r16(1, EPWM_TBCTL), 0x6007);
+    assert_int_equal(r16(2, EPWM_TBCTL), 0x6007);
     assert_int_equal(r16(0, EPWM_EPWMSYNCINSEL), 0);
     assert_int_equal(r16(1, EPWM_EPWMSYNCINSEL), 1);   /* SYNCOUT of ePWM0 */
     assert_int_equal(r16(2, EPWM_EPWMSYNCINSEL), 1);
@@ -115,6 +121,7 @@ static void test_mode_registers(void **st)
         assert_int_equal(r16(m, EPWM_DBCTL), 0x000B);    /* AHC: RED+FED, B inverted, A source */
         assert_int_equal(r16(m, EPWM_TZCTL), 0x000A);
         assert_int_equal(r16(m, EPWM_TZFRC), EPWM_TZ_OST);
+        assert_int_equal(r16(m, EPWM_TZSEL), 0x0100);   /* TZ1 (the hardware trip) one-shot */
         uint32_t tbphs;
         memcpy(&tbphs, &epwm_ram[m][EPWM_TBPHS], 4);
         assert_int_equal(tbphs, 0);
@@ -130,7 +137,7 @@ static void test_mode_registers(void **st)
     for (int m = 0; m < 3; ++m) {
         assert_int_equal(r16(m, EPWM_TBCTL) & 3u, 2u);   /* up-down */
     }
-    assert_int_equal(r16(0, EPWM_TBCTL), 0x8002);
+    assert_int_equal(r16(0, EPWM_TBCTL), 0x4002);
     assert_int_equal(ctrl32(AM263X_CTRLSS_EPWM_CLKSYNC) & 7u, 7u);
     assert_int_equal(ctrl32(AM263X_LOCK0_KICK1), 0);
     /* the outputs stay tripped until enabled */
@@ -174,7 +181,7 @@ static void test_duties(void **st)
     /* clamps and a NaN, counted */
     hal_pwm_set_duties(&pwm, -0.3f, 1.7f, NAN);
     assert_int_equal(r16(0, EPWM_CMPA_HI), 10000);   /* 0 */
-    assert_int_equal(r16(1, EPWM_CMPA_HI), 0);       /* 1 */
+    assert_int_equal(r16(1, EPWM_CMPA_HI), AM263X_PWM_CMPA_MIN);   /* 1 -> the maximum duty */
     assert_int_equal(r16(2, EPWM_CMPA_HI), 5000);    /* NaN -> 0.5 */
     assert_int_equal(pwm.clamped, 2);
     assert_int_equal(pwm.nonfinite, 1);
@@ -185,7 +192,13 @@ static void test_duties(void **st)
     hal_pwm_set_duties(&pwm, 0.12344f, 0.00004f, 0.99996f);
     assert_int_equal(r16(0, EPWM_CMPA_HI), 8766);
     assert_int_equal(r16(1, EPWM_CMPA_HI), 10000);
-    assert_int_equal(r16(2, EPWM_CMPA_HI), 0);
+    assert_int_equal(r16(2, EPWM_CMPA_HI), AM263X_PWM_CMPA_MIN);
+    /* never CMPA 0 (TI: >= 1 with load at zero); the maximum duty 1 - CMPA_MIN / TBPRD = 99 % at
+     * TBPRD 10000, a low-side pulse every period for the bootstrap supplies */
+    hal_pwm_set_duties(&pwm, 1.0f, 0.99f, 0.995f);
+    assert_int_equal(r16(0, EPWM_CMPA_HI), AM263X_PWM_CMPA_MIN);
+    assert_int_equal(r16(1, EPWM_CMPA_HI), 100);
+    assert_int_equal(r16(2, EPWM_CMPA_HI), AM263X_PWM_CMPA_MIN);
 }
 
 static void test_enable_is_the_trip(void **st)

@@ -179,6 +179,31 @@ static void test_nvm_s25fl128s_map(void **st)
     assert_memory_equal(out, d, 8);
 }
 
+/* The host watchdog: kicks reload it, the simulated time expires it, the expiry turns the bound
+ * PWM's outputs off and sticks (a kick after it revives nothing). */
+static void test_watchdog_expiry_turns_outputs_off(void **st)
+{
+    (void)st;
+    hal_pwm_t pwm;
+    hal_host_pwm_init(&pwm, 1e-4f, 0.0f);
+    hal_pwm_enable(&pwm, true);
+    hal_wdg_t w;
+    hal_host_wdg_start(&w, 1000u, &pwm);
+    for (int k = 0; k < 50; ++k) {
+        assert_false(hal_host_wdg_elapse(&w, 100u));
+        hal_wdg_kick(&w);
+    }
+    assert_int_equal(w.kicks, 50);
+    assert_true(hal_pwm_enabled(&pwm));
+    assert_false(hal_host_wdg_elapse(&w, 999u));
+    assert_true(hal_host_wdg_elapse(&w, 1u));
+    assert_false(hal_pwm_enabled(&pwm));
+    hal_wdg_kick(&w);
+    hal_pwm_enable(&pwm, true);
+    assert_true(hal_host_wdg_elapse(&w, 0u));
+    assert_true(w.expired);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -186,6 +211,7 @@ int main(void)
         cmocka_unit_test(test_nvm_flash_semantics),
         cmocka_unit_test(test_nvm_power_cut_every_step),
         cmocka_unit_test(test_nvm_s25fl128s_map),
+        cmocka_unit_test(test_watchdog_expiry_turns_outputs_off),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -26,6 +26,7 @@
 #include "hal/pwm.h"
 #include "hal/qep.h"
 #include "hal/time.h"
+#include "hal/watchdog.h"
 #include "am263x/regs_mcan.h"
 
 /* ---------------------------------------------------------------- ePWM (epwm.c) */
@@ -40,8 +41,18 @@ struct hal_pwm {
     uint32_t clamped;       /* finite duties outside [0, 1] (clamped)                      */
 };
 
+/* Dead-band floor [TBCLK counts]: 40 = 200 ns at 200 MHz, the turn-off delay plus fall time of
+ * a typical low-voltage MOSFET stage with its gate driver; zero would be shoot-through. Raise it
+ * for a slower stage (hw.dead_time_s is refused below it: hal_board_min_dead_time_s). */
+#define AM263X_PWM_DB_MIN   40u
+/* CMPA floor [counts]: TI requires CMPA >= 1 with the shadow loaded at zero; 100 counts keep the
+ * low side on for at least 2 x 100 counts - dead band = 0.8 us per period at 0.2 us dead time,
+ * the recharge a bootstrap supply needs: the maximum high-side duty is 1 - 100 / TBPRD
+ * (98 % at 20 kHz, TBPRD 5000). */
+#define AM263X_PWM_CMPA_MIN 100u
 /* TBPRD and dead band in counts for f_pwm and dead_time at clk_hz; false if not realisable:
- * TBPRD outside [100, 65535], or the dead band above 14 bits or above a quarter period. */
+ * TBPRD outside [100, 65535], or the dead band below AM263X_PWM_DB_MIN, above 14 bits or above
+ * a quarter period. */
 bool am263x_pwm_timing(uint32_t clk_hz, float f_pwm_hz, float dead_time_s, uint16_t *prd, uint16_t *db);
 /* CMPA for a high-side on-fraction d (clamped / NaN as hal_pwm_set_duties). */
 uint16_t am263x_pwm_cmpa(hal_pwm_t *pwm, float d);
@@ -109,6 +120,20 @@ struct hal_time {
 };
 /* RTI counter block 0 at 1 MHz: RTICPUC0 = rti_clk_hz / 1 MHz - 1, counters restarted. */
 void am263x_time_init(hal_time_t *t, uint32_t rti_clk_hz);
+
+/* The watchdog (WDT0's DWWD, am263x/regs_rti.h): started by hal_board_start, kicked through
+ * hal_board_kick. Window 100 %, reaction a warm reset (RTIWWDRXNCTRL 0x5; TOP_RCM
+ * WARM_RESET_CONFIG.WDOG0_RST_EN is enabled at its reset value): the reset returns the ePWM pads
+ * to their reset state (inputs, off) and the rebooted image trips first (am263x_pwm_init), so the
+ * gate inputs are held off by the gate driver's input pull-downs during and after the reset.
+ * Timeout (AM263X_WDT_PRLD + 1) x 2^13 / AM263X_WDT_CLK_HZ = 9.83 ms: about 200 control periods,
+ * above the background loop's longest pass, far below a thermal time constant. */
+#define AM263X_WDT_PRLD   29u
+struct hal_wdg {
+    uintptr_t wdt;          /* WDT0 (an RTI module)                                        */
+};
+void am263x_wdt_start(uintptr_t wdt, uint32_t prld);
+void am263x_wdt_kick(uintptr_t wdt);
 
 /* ---------------------------------------------------------------- MCAN (mcan.c) */
 struct hal_can {

@@ -42,6 +42,10 @@
 #define EPWM_TBCTL_CLKDIV_SHIFT   10u       /* 0 = /1                                          */
 #define EPWM_TBCTL_PHSDIR         0x2000u   /* up-down mode: count up after a sync             */
 #define EPWM_TBCTL_FREE_RUN       0x8000u   /* FREE_SOFT = 2: free run on emulation halt       */
+#define EPWM_TBCTL_SOFT_STOP      0x4000u   /* FREE_SOFT = 1: on emulation halt, stop when the
+                                               counter completes the cycle (up-down: at zero);
+                                               0 = stop after the next count (TRM: TBCTL)     */
+#define EPWM_TBCTL_FREE_SOFT_MASK 0xC000u
 /* EPWMSYNCINSEL.SEL: 0 disabled, n+1 = SYNCOUT of ePWMn */
 #define EPWM_SYNCIN_EPWM(n)       ((uint16_t)((n) + 1u))
 /* EPWMSYNCOUTEN */
@@ -63,6 +67,16 @@
  * complementary (AHC) = OUT_MODE 3, POLSEL 2, IN_MODE 0. */
 #define EPWM_DBCTL_AHC            0x000Bu
 #define EPWM_DB_MAX               0x3FFFu   /* DBRED/DBFED: 14 bits, in TBCLK counts           */
+/* TZSEL: OSHTn (bit 8 + n - 1) makes TZn a one-shot trip source (cslr_epwm.h EPWM_TZSEL) */
+#define EPWM_TZSEL_OSHT1          0x0100u
+/* The hardware trip path on the LP-AM263 (TI MCU+ SDK examples/drivers/epwm/epwm_trip_zone/
+ * am263x-lp example.syscfg: pad SPI0_CS0 as GPIO11 -> INPUT XBAR output 0 -> ePWM TZ1 as OSHT1;
+ * register layout hw_include/am263x/cslr_controlss_inputxbar.h): the gate driver's open-drain
+ * nFAULT (or an over-current comparator), active low like every TZn input. */
+#define AM263X_INPUTXBAR_BASE     0x502D0000u   /* CSL_CONTROLSS_INPUTXBAR_U_BASE            */
+#define AM263X_INPUTXBAR_GSEL(n)  (0x100u + 0x40u * (uint32_t)(n))   /* 0: group 0 (GPIOs)   */
+#define AM263X_INPUTXBAR_G0(n)    (0x104u + 0x40u * (uint32_t)(n))   /* group 0: GPIO number */
+#define AM263X_TRIP_GPIO          11u
 /* TZCTL: TZA (1:0), TZB (3:2): 0 high-Z, 1 high, 2 low, 3 no action */
 #define EPWM_TZ_LOW               2u
 #define EPWM_TZCTL_BOTH_LOW       ((uint16_t)((EPWM_TZ_LOW << 0) | (EPWM_TZ_LOW << 2)))

@@ -32,6 +32,7 @@
 #define GEN_PWM_CLK_HZ   100000000u  /* PWM clock                                             */
 #define GEN_PWM_CTRL_RUN 0x1u
 #define GEN_PWM_CTRL_OE  0x2u
+#define GEN_PWM_DT_MIN   20u     /* dead-time floor [counts] = 200 ns: less is refused         */
 
 /* ADC: converts the four channels at every counter zero; EOC raises IRQ GEN_ADC_IRQ if enabled. */
 #define GEN_ADC_BASE     0x40001000u
@@ -69,6 +70,19 @@
                                     of the last command (write 1 to clear)                     */
 #define GEN_FLC_CMD_PROGRAM 1u
 #define GEN_FLC_CMD_ERASE   2u
+
+/* Watchdog: a down counter in microseconds. Once CTRL.EN is set it counts down from LOAD and
+ * stays enabled until reset; a write of GEN_WDT_KICK_KEY to KICK reloads it. At zero it sets
+ * STS.EXP and, in hardware, clears PWM CTRL (RUN and OE: all six switches off). */
+#define GEN_WDT_BASE     0x40005000u
+#define GEN_WDT_LOAD     0x00u   /* timeout [us] (written before EN)                           */
+#define GEN_WDT_CTRL     0x04u   /* bit0 EN                                                    */
+#define GEN_WDT_KICK     0x08u   /* write GEN_WDT_KICK_KEY                                     */
+#define GEN_WDT_STS      0x0Cu   /* bit0 EXP: expired (the outputs were turned off)            */
+#define GEN_WDT_CTRL_EN  0x1u
+#define GEN_WDT_KICK_KEY 0x5AFEu
+#define GEN_WDT_STS_EXP  0x1u
+#define GEN_WDT_TIMEOUT_US 10000u   /* the port's timeout: 200 periods at 20 kHz              */
 
 /* Stage marker for cycle accounting (hal/stage.h): not a register, a RAM variable of the port,
  * `hal_stage_reg`, whose stores the PIL watches. */

@@ -10,6 +10,7 @@
 #include "hal/qep.h"
 #include "hal/stage.h"
 #include "hal/time.h"
+#include "hal/watchdog.h"
 
 struct hal_pwm {
     float period_s;
@@ -36,6 +37,16 @@ struct hal_qep {
 
 struct hal_time {
     uint32_t us;
+};
+
+/* Watchdog: a down counter in simulated microseconds, reloaded by hal_wdg_kick; its expiry turns
+ * the bound PWM's outputs off, as the targets' do (hal/watchdog.h). */
+struct hal_wdg {
+    uint32_t timeout_us;    /* 0: not started                                               */
+    uint32_t left_us;
+    uint32_t kicks;
+    bool expired;
+    hal_pwm_t *pwm;         /* the outputs it turns off                                     */
 };
 
 /* CAN: two rings; the host side (the simulator's bus, a test) delivers received frames and
@@ -97,5 +108,8 @@ void hal_host_nvm_cut_at(hal_nvm_t *nvm, uint32_t step); /* 0: no cut */
 void hal_host_nvm_power_on(hal_nvm_t *nvm);              /* alive again, content as the cut left it */
 /* Period boundary: shadow -> active (what the hardware does at counter zero). */
 void hal_host_pwm_latch(hal_pwm_t *pwm);
+void hal_host_wdg_start(hal_wdg_t *wdg, uint32_t timeout_us, hal_pwm_t *pwm);
+/* dt_us of simulated time: true once expired (outputs off, and they stay expired). */
+bool hal_host_wdg_elapse(hal_wdg_t *wdg, uint32_t dt_us);
 
 #endif
