@@ -32,7 +32,9 @@
 //  - QSPI0: configuration-port frames of 8-bit words (WREN, RDSR, PP, P4E, SE) applied to the flash
 //    window through bind_memory (program = AND, never busy), erases as the LaunchPad's S25FL128S
 //    has them (am263x_s25fl128s, am263x/port.h): P4E = 0xFF over a 4 KiB parameter sector
-//    (0x000000-0x01FFFF) and nothing elsewhere, SE = 0xFF over a 64 KiB sector above them.
+//    (0x000000-0x01FFFF) and nothing elsewhere, SE = 0xFF over a 64 KiB sector above them. An SE
+//    keeps the part busy (RDSR WIP, every other command ignored) for kSectorEraseUs of the plant's
+//    time: the firmware waits through many control periods, as on the board.
 //  - SoC bring-up, from the SoC's reset values (am263x/regs_soc.h): IOMUX pads (0x5F7: GPIO,
 //    behind the IO_CFG_KICK lock) and MSS_RCM module clocks (source 0 = 25 MHz, divider 1, behind
 //    its KICK lock). Only pads with their function carry the signal: the ePWM0-2 A/B pads or the
@@ -751,7 +753,7 @@ private:
             frame_.push_back(static_cast<uint8_t>(get(kQspi, QSPI_SPI_DATA, 4)));
         } else if (cmd == QSPI_CMD_READ_SINGLE) {
             uint8_t b = 0xFF;
-            if (!frame_.empty() && frame_[0] == NOR_CMD_RDSR) b = wel_ ? NOR_SR_WEL : 0;
+            if (!frame_.empty() && frame_[0] == NOR_CMD_RDSR) b = flash_busy() ? NOR_SR_WIP : wel_ ? NOR_SR_WEL : 0;
             put(kQspi, QSPI_SPI_DATA, 4, b);
             frame_.push_back(b);
         }
@@ -763,6 +765,7 @@ private:
     void flash_frame()
     {
         const uint8_t c = frame_[0];
+        if (flash_busy()) return;   // an erase running: the part takes only RDSR
         const auto addr = [&] {
             return (uint32_t{frame_[1]} << 16) | (uint32_t{frame_[2]} << 8) | frame_[3];
         };
@@ -781,6 +784,7 @@ private:
             wel_ = false;
         } else if ((c == NOR_CMD_P4E || c == NOR_CMD_SE) && frame_.size() == 4 && wel_) {
             flash_erase(c, addr());
+            if (c == NOR_CMD_SE) erase_end_us_ = uint64_t{time_us_} + kSectorEraseUs;
             wel_ = false;
         }
     }
@@ -797,6 +801,12 @@ private:
             mem_write_(AM263X_FLASH_WIN_BASE + a, ff.data(), ff.size());
         }
     }
+
+    // S25FL128S 64 KiB sector erase, typical: the datasheet (Cypress 001-98283, Features: erase
+    // 0.5 to 0.65 MB/s) gives 64 KiB / 0.5 MB/s = 131 ms; its maximum is several times that.
+    static constexpr uint32_t kSectorEraseUs = 131'000;
+    bool flash_busy() const { return uint64_t{time_us_} < erase_end_us_; }
+    uint64_t erase_end_us_ = 0;
 
     std::vector<uint8_t> mem_[kNumWin];
     MemWrite mem_write_;

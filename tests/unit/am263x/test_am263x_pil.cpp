@@ -19,6 +19,7 @@ extern "C" {
 #include "am263x/port.h"
 #include "am263x/regs_adc.h"
 #include "am263x/regs_mcan.h"
+#include "am263x/regs_qspi.h"
 #include "am263x/regs_soc.h"
 #include "am263x/regs_vim.h"
 }
@@ -28,6 +29,7 @@ namespace {
 mcsim::pil::Peripherals* g_model = nullptr;
 std::vector<uint8_t> g_flash;
 int g_outside = 0;   // accesses outside every window and memory: a driver/model mismatch
+uint32_t g_wire_us = 0;   // the plant's clock while the NVM driver talks to the flash
 
 bool in_flash(uintptr_t a) { return a >= AM263X_FLASH_WIN_BASE && a < AM263X_FLASH_WIN_BASE + AM263X_FLASH_WIN_SIZE; }
 
@@ -50,6 +52,14 @@ extern "C" uint32_t am263x_mmio_read(uintptr_t a, unsigned size)
     if (!in_window(a, size)) {
         ++g_outside;
         return 0;
+    }
+    if (a == AM263X_QSPI_BASE + QSPI_SPI_DATA) {
+        // each word takes ~1 us on the wire (8 bits and the controller's turnaround): the time
+        // passes with the polls, so the model's sector erase (busy ~131 ms) ends while the
+        // driver waits. Nothing else runs in these tests, so the boundaries carry no inputs.
+        mcsim::pil::PeriphInputs in;
+        in.time_us = ++g_wire_us;
+        g_model->period_boundary(in);
     }
     return static_cast<uint32_t>(g_model->read(a, size));
 }
@@ -97,6 +107,7 @@ protected:
     {
         model = mcsim::pil::make_am263x_peripherals();
         g_model = model.get();
+        g_wire_us = 0;
         g_flash.assign(AM263X_FLASH_WIN_SIZE, 0x5A);
         g_outside = 0;
         model->bind_memory(
