@@ -161,6 +161,7 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
     (void)am263x_can_init(&can0, cfg->can_bitrate, AM263X_MCAN_FCLK_HZ);
     am263x_nvm_init(&nvm0, AM263X_QSPI_BASE, AM263X_FLASH_WIN_BASE, &am263x_s25fl128s, AM263X_NVM_FLASH_OFF,
                     AM263X_NVM_BYTES);
+    nvm0.wdg = &wdg0;   /* a store's erase waits with the watchdog serviced (hal/watchdog.h) */
     out->adc = &adc0;
     out->pwm = &pwm0;
     out->qep = &qep0;
@@ -208,6 +209,7 @@ void hal_board_idle(void)
 void am263x_adc_eoc_isr(void)
 {
     const hal_isr_fn_t fn = isr_fn;
+    wdg0.isr_runs = wdg0.isr_runs + 1u;   /* the progress hal_wdg_service looks for */
     if (fn != 0) {
         fn(isr_ctx);
     }
