@@ -9,8 +9,9 @@
  * frequency and dead time, the drive, the CANopen device, then the ISR. The ISR runs the drive
  * and the scope. The background loop sleeps until an interrupt; after each control ISR it runs
  * the drive's background work and the CANopen device every 10th period, publishes the telemetry
- * to the monitor block (mc/monitor.h) and hands the drive a command written there. It kicks the
- * watchdog (hal/watchdog.h) only when the ISR count advanced: a stalled ISR or a hung loop trips.
+ * to the monitor block (mc/monitor.h) and hands the drive a command written there. It services the
+ * watchdog (hal/watchdog.h: a kick only if the port counted an ISR since the last one), as the NVM
+ * driver does while a store waits on the flash: a stalled ISR or a hung loop trips.
  * Two commanders: the monitor (a debugger, the PIL) and CiA 402 over CAN. The last one heard
  * wins: a monitor command takes the drive from CANopen, a controlword gives it to CANopen. */
 #include <math.h>
@@ -74,7 +75,7 @@ static void service(uint32_t *seen_isr, uint32_t *seen_cmd, uint32_t *seen_cw)
     const uint32_t n = mc_monitor.isr_count;
     if (n != *seen_isr) {
         *seen_isr = n;
-        hal_wdg_kick(wdg);   /* progress: the ISR ran since the last kick and so did this loop */
+        hal_wdg_service(wdg);   /* progress: the ISR ran since the last kick and so did this loop */
         if ((n - 1u) % 10u == 0u) {
             mc_drive_background(&drive);
             mc_co_step(&co, hal_time_us(clock) / 1000u);

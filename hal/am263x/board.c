@@ -6,17 +6,16 @@
  * wiring strictly needs: the function and context given to hal_board_attach_isr, which the EOC
  * handler (called from the IRQ entry in startup.S, no argument) must find.
  *
- * Set here (the SBL leaves them at reset): the MCAN0 functional clock (80 MHz) and the RTI0 clock
- * (25 MHz crystal) in MSS_RCM, the pads of ePWM0-2 A/B, eQEP0 A/B/INDEX and MCAN0 RX/TX, and
- * the CAN transceiver's standby GPIO driven low (LP-AM263 wiring and mux modes: am263x/regs_soc.h).
+ * Set here (the SBL leaves them at reset): the MCAN0 functional clock (80 MHz), the RTI0 and WDT0
+ * clocks (25 MHz crystal) in MSS_RCM, the pads of ePWM0-2 A/B, eQEP0 A/B/INDEX and MCAN0 RX/TX,
+ * the CAN transceiver's standby GPIO driven low, and the hardware trip input's pad (GPIO11 on
+ * SPI0_CS0, input, pull-up) (LP-AM263 wiring and mux modes: am263x/regs_soc.h).
  * The ePWM pads are pulled-down GPIOs until am263x_pwm_init has forced the trip, and get the ePWM
  * function only then (outputs low).
  * The ADC inputs are dedicated analog pins (no IOMUX register). ePWM/eQEP/ADC run from SYSCLK
  * (200 MHz) with their own dividers (epwm.c TBCTL, adc.c ADCCTL2, eqep.c).
  * Left as TI's SBL configured them: the PLLs, SYSCLK and the R5F clock (Bootloader_socConfigurePll),
- * the QSPI clock and its memory-mapped read setup (SPI_SETUP0). Not set yet (assumed at reset /
- * as the SBL leaves them): the WDT0 clock (25 MHz, am263x/regs_rti.h) and the GPIO11 pad of the
- * hardware trip input (docs/porting.md). */
+ * the QSPI clock and its memory-mapped read setup (SPI_SETUP0). */
 #include "hal/board.h"
 #include "am263x/mmio.h"
 #include "am263x/port.h"
@@ -62,6 +61,12 @@ static const uint16_t pads[][2] = {
     {AM263X_PAD_EQEP0_A, PAD_FN(AM263X_PAD_FN_EQEP)},    {AM263X_PAD_EQEP0_B, PAD_FN(AM263X_PAD_FN_EQEP)},
     {AM263X_PAD_EQEP0_INDEX, PAD_FN(AM263X_PAD_FN_EQEP)}, {AM263X_PAD_MCAN0_RX, PAD_FN(AM263X_PAD_FN_MCAN)},
     {AM263X_PAD_MCAN0_TX, PAD_FN(AM263X_PAD_FN_MCAN)},   {AM263X_PAD_EPWM4_A, PAD_FN(AM263X_PAD_GPIO)},
+    /* the trip input: the gate driver's open-drain nFAULT, active low (epwm.c: TZ1 trips on low).
+     * Pulled up: an open-drain line reads high only through a pull, so a pull-down would hold the
+     * trip for ever. The cost: an nFAULT wire that is broken reads 'no fault' and loses the
+     * hardware trip (the software protection and the watchdog remain; the bring-up checklist
+     * tests the trip by pulling the line low). An absent driver switches no gate. */
+    {AM263X_PAD_SPI0_CS0, (uint16_t)(AM263X_PAD_GPIO | AM263X_PAD_PULLUP | AM263X_PAD_SLEW_LOW)},
 };
 
 /* pads[first..end-1]: their function, or (safe) a GPIO with the pull-down on (PI = 0, PUPDSEL =
@@ -133,6 +138,9 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
               AM263X_RCM_DIV(AM263X_CORE_HSDIV0_HZ / AM263X_MCAN_FCLK_HZ));
     rcm_clock(AM263X_RCM_RTI0_CLK_SRC_SEL, AM263X_RCM_RTI0_CLK_DIV_VAL, AM263X_RCM_SRC_XTALCLK,
               AM263X_RCM_DIV(AM263X_XTAL_HZ / AM263X_RTI_CLK_HZ));
+    /* the watchdog's timeout (port.h) assumes 25 MHz: the crystal, whatever ran before */
+    rcm_clock(AM263X_RCM_WDT0_CLK_SRC_SEL, AM263X_RCM_WDT0_CLK_DIV_VAL, AM263X_RCM_SRC_XTALCLK,
+              AM263X_RCM_DIV(AM263X_XTAL_HZ / AM263X_WDT_CLK_HZ));
     am263x_mmr_lock(AM263X_MSS_RCM_BASE);
     am263x_can_timing_t ct;
     const uint8_t ch[4] = {cfg->adc_ch_i[0], cfg->adc_ch_i[1], cfg->adc_ch_i[2], cfg->adc_ch_vdc};
@@ -161,6 +169,7 @@ bool hal_board_init(const hal_board_cfg_t *cfg, hal_board_t *out)
     (void)am263x_can_init(&can0, cfg->can_bitrate, AM263X_MCAN_FCLK_HZ);
     am263x_nvm_init(&nvm0, AM263X_QSPI_BASE, AM263X_FLASH_WIN_BASE, &am263x_s25fl128s, AM263X_NVM_FLASH_OFF,
                     AM263X_NVM_BYTES);
+    nvm0.wdg = &wdg0;   /* a store's erase waits with the watchdog serviced (hal/watchdog.h) */
     out->adc = &adc0;
     out->pwm = &pwm0;
     out->qep = &qep0;
@@ -208,6 +217,7 @@ void hal_board_idle(void)
 void am263x_adc_eoc_isr(void)
 {
     const hal_isr_fn_t fn = isr_fn;
+    wdg0.isr_runs = wdg0.isr_runs + 1u;   /* the progress hal_wdg_service looks for */
     if (fn != 0) {
         fn(isr_ctx);
     }

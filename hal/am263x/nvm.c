@@ -47,6 +47,7 @@ void am263x_nvm_init(hal_nvm_t *nvm, uintptr_t qspi, uintptr_t window, const hal
     nvm->busy_polls = BUSY_POLLS;
     nvm->erase_polls = ERASE_POLLS;
     nvm->program_polls = PROGRAM_POLLS;
+    nvm->wdg = NULL;
     am263x_wr32(qspi + QSPI_SPI_SWITCH, QSPI_SWITCH_MMPT_S);
 }
 
@@ -105,6 +106,10 @@ static bool write_enable(const hal_nvm_t *nvm)
 static bool wait_ready(const hal_nvm_t *nvm, uint32_t polls)
 {
     for (uint32_t k = 0u; k < polls; ++k) {
+        /* a 64 KiB erase outlasts the watchdog many times: kept alive while the ISR runs */
+        if (nvm->wdg != NULL) {
+            hal_wdg_service(nvm->wdg);
+        }
         uint8_t sr = 0xFFu;
         if (!read_status(nvm, &sr)) {
             return false;

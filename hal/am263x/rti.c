@@ -37,3 +37,12 @@ void am263x_wdt_kick(uintptr_t wdt)
     am263x_wr32(wdt + RTI_RTIWDKEY, RTI_WDKEY_1);
     am263x_wr32(wdt + RTI_RTIWDKEY, RTI_WDKEY_2);
 }
+
+void hal_wdg_service(hal_wdg_t *wdg)
+{
+    const uint32_t n = wdg->isr_runs;
+    if (n != wdg->seen) {
+        wdg->seen = n;
+        am263x_wdt_kick(wdg->wdt);
+    }
+}

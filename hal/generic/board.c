@@ -12,7 +12,11 @@ struct hal_qep { uintptr_t base; uint32_t counts_per_rev; };
 struct hal_time { uintptr_t base; };
 struct hal_can { hal_can_state_t state; };
 struct hal_nvm { uintptr_t flc; uint32_t base; };
-struct hal_wdg { uintptr_t base; };
+struct hal_wdg {
+    uintptr_t base;
+    volatile uint32_t isr_runs;   /* control-ISR entries, counted by hal_generic_adc_irq */
+    uint32_t seen;                /* isr_runs at the last hal_wdg_service kick            */
+};
 
 #define REG(b, off) (*(volatile uint32_t *)((b) + (off)))
 
@@ -27,7 +31,7 @@ static hal_qep_t qep0 = {GEN_QEP_BASE, 0};
 static hal_time_t tim0 = {GEN_TIM_BASE};
 static hal_can_t can0 = {HAL_CAN_BUS_OFF};
 static hal_nvm_t nvm0 = {GEN_FLC_BASE, GEN_NVM_BASE};
-static hal_wdg_t wdg0 = {GEN_WDT_BASE};
+static hal_wdg_t wdg0 = {GEN_WDT_BASE, 0u, 0u};
 /* The control interrupt's target: the one piece of state the vector needs. */
 static hal_isr_fn_t isr_fn;
 static void *isr_ctx;
@@ -93,6 +97,15 @@ void hal_wdg_kick(hal_wdg_t *wdg)
     REG(wdg->base, GEN_WDT_KICK) = GEN_WDT_KICK_KEY;
 }
 
+void hal_wdg_service(hal_wdg_t *wdg)
+{
+    const uint32_t n = wdg->isr_runs;
+    if (n != wdg->seen) {
+        wdg->seen = n;
+        hal_wdg_kick(wdg);
+    }
+}
+
 float hal_board_min_dead_time_s(void)
 {
     return (float)GEN_PWM_DT_MIN / (float)GEN_PWM_CLK_HZ;
@@ -107,6 +120,7 @@ void hal_board_idle(void)
 void hal_generic_adc_irq(void);
 void hal_generic_adc_irq(void)
 {
+    wdg0.isr_runs = wdg0.isr_runs + 1u;   /* the progress hal_wdg_service looks for */
     if (isr_fn != NULL) {
         isr_fn(isr_ctx);
     }

@@ -122,6 +122,8 @@ void hal_host_wdg_start(hal_wdg_t *wdg, uint32_t timeout_us, hal_pwm_t *pwm)
     wdg->kicks = 0u;
     wdg->expired = false;
     wdg->pwm = pwm;
+    wdg->isr_runs = 0u;
+    wdg->seen = 0u;
 }
 
 void hal_wdg_kick(hal_wdg_t *wdg)
@@ -129,6 +131,14 @@ void hal_wdg_kick(hal_wdg_t *wdg)
     wdg->kicks++;
     if (!wdg->expired) {
         wdg->left_us = wdg->timeout_us;
+    }
+}
+
+void hal_wdg_service(hal_wdg_t *wdg)
+{
+    if (wdg->isr_runs != wdg->seen) {
+        wdg->seen = wdg->isr_runs;
+        hal_wdg_kick(wdg);
     }
 }
 

@@ -32,7 +32,9 @@
 //  - QSPI0: configuration-port frames of 8-bit words (WREN, RDSR, PP, P4E, SE) applied to the flash
 //    window through bind_memory (program = AND, never busy), erases as the LaunchPad's S25FL128S
 //    has them (am263x_s25fl128s, am263x/port.h): P4E = 0xFF over a 4 KiB parameter sector
-//    (0x000000-0x01FFFF) and nothing elsewhere, SE = 0xFF over a 64 KiB sector above them.
+//    (0x000000-0x01FFFF) and nothing elsewhere, SE = 0xFF over a 64 KiB sector above them. An SE
+//    keeps the part busy (RDSR WIP, every other command ignored) for kSectorEraseUs of the plant's
+//    time: the firmware waits through many control periods, as on the board.
 //  - SoC bring-up, from the SoC's reset values (am263x/regs_soc.h): IOMUX pads (0x5F7: GPIO,
 //    behind the IO_CFG_KICK lock) and MSS_RCM module clocks (source 0 = 25 MHz, divider 1, behind
 //    its KICK lock). Only pads with their function carry the signal: the ePWM0-2 A/B pads or the
@@ -40,11 +42,17 @@
 //    the transceiver's STB, GPIO51 on pad EPWM4_A, a GPIO output driven low) or no frame. The CAN bus of the bench runs at kBusBitrate: frames pass only when NBTP at the MCAN0
 //    clock the RCM selects gives exactly that rate. RTIFRC0 counts at the RTI0 clock selected.
 //  - WDT0 (an RTI module's DWWD): RTIDWDCTRL enable key starts the down counter at (DWDPRLD + 1)
-//    x 2^13 ticks of AM263X_WDT_CLK_HZ, the key pair E51A/A35C on RTIWDKEY reloads it, RTIDWDCNTR
+//    x 2^13 ticks of the WDT0 clock MSS_RCM selects (reset: WUCPUCLK, 25 MHz by TI's clock map;
+//    RCCLK10M 10 MHz, RCCLK32K 32 kHz, ...: a timeout the firmware did not set), the key pair E51A/A35C on RTIWDKEY reloads it, RTIDWDCNTR
 //    reads it; it runs in the plant's microseconds, checked at each period boundary. At zero:
 //    RTIWDSTATUS DWDST and DWWD_ST, and the reaction's effect on the bridge: the warm reset's
 //    (RTIWWDRXNCTRL 0x5) pads off stand as a one-shot trip of ePWM0-2 (outputs().enabled false),
-//    the core is not reset. CONTROLSS_INPUTXBAR: stored only (no trip input is driven).
+//    the core is not reset.
+//  - The hardware trip input: set_pin("nFAULT", false) pulls the gate driver's open-drain fault
+//    line low. It reaches GPIO11 only through pad SPI0_CS0 muxed as a GPIO (mode 7, no IE/OE
+//    override: at reset it carries nothing); released, the line reads the pad's pull (down: low,
+//    up or none: high). A low GPIO11 selected by INPUT XBAR 0 (group 0) is TZ1: it latches the
+//    one-shot trip (TZFLG.OST) of each ePWM with TZSEL.OSHT1, at once and at each boundary.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -241,6 +249,7 @@ public:
         time_us_ = in.time_us;
         eqep_advance(in, dt_us);   // the encoder counts whether or not the PWM runs
         wdt_advance(dt_us);
+        trip_input();
         if (!running()) return;
         for (int m = 0; m < 3; ++m) {
             const uint32_t b = 0x1000u * static_cast<uint32_t>(m);
@@ -409,11 +418,51 @@ private:
         }
         return false;
     }
+    // WDT0's clock from MSS_RCM (soc_rcm.c gWdtClkSrcValMap; frequencies from TI's SysConfig clock
+    // map: WUCPUCLK and XTALCLK 25 MHz, RCCLK10M 10 MHz)
+    uint64_t wdt_hz() const
+    {
+        const uint32_t src = get(kRcm, AM263X_RCM_WDT0_CLK_SRC_SEL, 4) & 0xFFFu;
+        const uint64_t div = (get(kRcm, AM263X_RCM_WDT0_CLK_DIV_VAL, 4) & 0xFu) + 1u;
+        if (src == 0x111u || src == 0x555u) return 10000000u / div;
+        if (src == 0x777u) return 32000u / div;
+        return rcm_hz(AM263X_RCM_WDT0_CLK_SRC_SEL, AM263X_RCM_WDT0_CLK_DIV_VAL, true);
+    }
+    // The trip input (see the header): the level at GPIO11, and TZ1 when INPUT XBAR 0 selects it.
+    bool gpio11_low() const
+    {
+        const uint32_t pad = get(kIomux, AM263X_PAD_SPI0_CS0, 4);
+        if ((pad & 0xFFu) != AM263X_PAD_GPIO) return false;   // not muxed: carries nothing
+        if (nfault_low_) return true;
+        return (pad & AM263X_PAD_NOPULL) == 0 && (pad & AM263X_PAD_PULLUP) == 0;   // pulled down
+    }
+    void trip_input()
+    {
+        if (!gpio11_low() || get(kInXbar, AM263X_INPUTXBAR_GSEL(0u), 4) != 0u ||
+            get(kInXbar, AM263X_INPUTXBAR_G0(0u), 4) != AM263X_TRIP_GPIO)
+            return;
+        for (uint32_t m = 0; m < 3; ++m)
+            if (get(kEpwm, 0x1000u * m + EPWM_TZSEL, 2) & EPWM_TZSEL_OSHT1)
+                put(kEpwm, 0x1000u * m + EPWM_TZFLG, 2, get(kEpwm, 0x1000u * m + EPWM_TZFLG, 2) | EPWM_TZ_OST | EPWM_TZ_INT);
+    }
+
+public:
+    bool set_pin(const std::string& name, bool high) override
+    {
+        if (name != "nFAULT") return false;
+        nfault_low_ = !high;
+        trip_input();
+        return true;
+    }
+
+private:
     void wdt_reload() { wdt_left_ = (uint64_t{get(kWdt, RTI_RTIDWDPRLD, 4) & 0xFFFu} + 1u) << RTI_DWD_PRLD_SHIFT; }
     void wdt_advance(uint32_t dt_us)
     {
         if (!wdt_en_ || wdt_expired_) return;
-        const uint64_t ticks = uint64_t{dt_us} * (AM263X_WDT_CLK_HZ / 1000000u);
+        const uint64_t t = uint64_t{dt_us} * wdt_hz() + wdt_frac_;   // ticks x 1e6
+        const uint64_t ticks = t / 1000000u;
+        wdt_frac_ = t % 1000000u;
         if (ticks < wdt_left_) {
             wdt_left_ -= ticks;
             return;
@@ -751,7 +800,7 @@ private:
             frame_.push_back(static_cast<uint8_t>(get(kQspi, QSPI_SPI_DATA, 4)));
         } else if (cmd == QSPI_CMD_READ_SINGLE) {
             uint8_t b = 0xFF;
-            if (!frame_.empty() && frame_[0] == NOR_CMD_RDSR) b = wel_ ? NOR_SR_WEL : 0;
+            if (!frame_.empty() && frame_[0] == NOR_CMD_RDSR) b = flash_busy() ? NOR_SR_WIP : wel_ ? NOR_SR_WEL : 0;
             put(kQspi, QSPI_SPI_DATA, 4, b);
             frame_.push_back(b);
         }
@@ -763,6 +812,7 @@ private:
     void flash_frame()
     {
         const uint8_t c = frame_[0];
+        if (flash_busy()) return;   // an erase running: the part takes only RDSR
         const auto addr = [&] {
             return (uint32_t{frame_[1]} << 16) | (uint32_t{frame_[2]} << 8) | frame_[3];
         };
@@ -781,6 +831,7 @@ private:
             wel_ = false;
         } else if ((c == NOR_CMD_P4E || c == NOR_CMD_SE) && frame_.size() == 4 && wel_) {
             flash_erase(c, addr());
+            if (c == NOR_CMD_SE) erase_end_us_ = uint64_t{time_us_} + kSectorEraseUs;
             wel_ = false;
         }
     }
@@ -797,6 +848,14 @@ private:
             mem_write_(AM263X_FLASH_WIN_BASE + a, ff.data(), ff.size());
         }
     }
+
+    // S25FL128S 64 KiB sector erase, typical: the datasheet (Cypress 001-98283, Features: erase
+    // 0.5 to 0.65 MB/s) gives 64 KiB / 0.5 MB/s = 131 ms; its maximum is several times that.
+    static constexpr uint32_t kSectorEraseUs = 131'000;
+    bool flash_busy() const { return uint64_t{time_us_} < erase_end_us_; }
+    uint64_t erase_end_us_ = 0;
+    uint64_t wdt_frac_ = 0;     // WDT0 ticks x 1e6 not yet counted
+    bool nfault_low_ = false;   // the gate driver pulls nFAULT low (set_pin)
 
     std::vector<uint8_t> mem_[kNumWin];
     MemWrite mem_write_;

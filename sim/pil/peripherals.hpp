@@ -87,6 +87,9 @@ public:
     virtual bool can_supported() const { return false; }
     virtual bool can_take(CanFrame& f) { (void)f; return false; }
     virtual bool can_deliver(const CanFrame& f) { (void)f; return false; }
+    // A board-side input pin driven from outside (a test, the bench): e.g. the AM263x's "nFAULT"
+    // (the gate driver's fault line, high = released). False: the port has no such pin.
+    virtual bool set_pin(const std::string& name, bool high) { (void)name; (void)high; return false; }
 };
 
 std::unique_ptr<Peripherals> make_generic_peripherals();   // hal/generic (Cortex-M4F image)

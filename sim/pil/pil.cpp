@@ -270,6 +270,22 @@ public:
         expect_idle("background");
     }
 
+    bool run_background_for(uint64_t max_instructions) override
+    {
+        in_isr_ = false;
+        acc_ = nullptr;
+        preempt_ = true;
+        preempted_ = false;
+        struct End {
+            UcTarget* t;
+            ~End() { t->preempt_ = false; }
+        } end{this};
+        run(current_pc(), max_instructions, "background");
+        if (preempted_) return false;   // stopped before the block at the PC: resumable there
+        expect_idle("background");
+        return true;
+    }
+
     IsrCost run_counted(uint32_t entry, uint32_t sp, uint64_t max_instructions) override
     {
         IsrCost c;
@@ -731,6 +747,12 @@ private:
             return;
         }
         if (executed_ + b->n > budget_) {
+            if (preempt_) {   // run_background_for: the share is over, not an error
+                preempted_ = true;
+                stopping_ = true;
+                stop();
+                return;
+            }
             std::ostringstream m;
             m << "exceeded " << budget_ << " instructions (at PC " << hex(addr) << ")";
             fail(m.str());
@@ -1130,6 +1152,7 @@ private:
     uint64_t budget_ = 0, executed_ = 0;
     std::string error_, mem_fault_;
     bool stopping_ = false;
+    bool preempt_ = false, preempted_ = false;   // run_background_for
     const BlockCost* prev_ = nullptr;   // the block before, for its branch penalty
     const BlockCost* cur_ = nullptr;    // the block running (stage split)
     const BlockCost* last_ = nullptr;   // the last block entered (idle check)

@@ -84,6 +84,11 @@ public:
     virtual void reset_and_run_to_idle(uint64_t max_instructions) = 0;
     // Continue the background loop from where it waits, until it reaches the idle again.
     virtual void run_background_to_idle(uint64_t max_instructions) = 0;
+    // The same, preemptible: at most max_instructions (the background's share of a period), true
+    // when it reached the idle, false when the share ran out first; the core then stays where it
+    // was, take_irq preempts it there and the next call continues it (a background pass longer
+    // than a period, e.g. a store waiting on a flash erase, runs across periods as on the part).
+    virtual bool run_background_for(uint64_t max_instructions) = 0;
     // A period boundary on the peripherals (see Peripherals::period_boundary).
     virtual void period_boundary(const PeriphInputs& in) = 0;
     virtual PeriphOutputs outputs() const = 0;

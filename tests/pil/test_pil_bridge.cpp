@@ -12,6 +12,7 @@
 // exceeds its instruction budget with the outputs still on) and no watchdog ran.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <fstream>
 #include <string>
@@ -211,4 +212,53 @@ TEST(PilBridge, WatchdogTripsAStalledControlLoop)
             EXPECT_FALSE(d.t->outputs().enabled) << "the expiry left the outputs on";
         }
     }
+}
+
+// A CANopen store (0x1010 sub 1 "save") on the AM263x image while the control ISR runs: the
+// model's S25FL128S keeps each 64 KiB sector erase busy for ~131 ms (sim/pil/dev_am263x.cpp), far
+// beyond the watchdog's 9.83 ms, so the background loop waits in the NVM driver across many
+// periods. Each period it gets at most the period's core cycles (400 MHz) as instructions and is
+// preempted by the ISR, as on the part. The store must succeed (SDO response 0x60) without the
+// watchdog expiring. Before the NVM driver's waits serviced the watchdog (hal_wdg_service) it
+// expired 100 periods (its 9.83 ms) into the store, which never answered.
+TEST(PilBridge, WatchdogHoldsThroughAFlashStore)
+{
+    if (kAm263x.empty() || !std::ifstream(kAm263x).good()) GTEST_SKIP() << "no cross-built AM263x image";
+    Drive d(kAm263x);
+    for (int k = 0; k < 20; ++k) d.period(true, true);
+    CanFrame f;
+    f.id = 0x601;   // SDO request to node 1: expedited download of 4 bytes, 0x1010 sub 1, "save"
+    f.dlc = 8;
+    const uint8_t req[8] = {0x23, 0x10, 0x10, 0x01, 's', 'a', 'v', 'e'};
+    std::copy(req, req + 8, f.data);
+    ASSERT_TRUE(d.t->peripherals().can_deliver(f));
+    const uint64_t slice = uint64_t{d.period_us} * 400u;
+    const int limit = static_cast<int>(2'000'000 / d.period_us);   // 2 s of the plant's time
+    int answered = 0, preempted = 0;
+    uint8_t reply = 0;
+    for (int k = 1; k <= limit && answered == 0; ++k) {
+        d.time_us += d.period_us;
+        PeriphInputs in;
+        in.adc_i[0] = in.adc_i[1] = in.adc_i[2] = 2048;
+        in.adc_vdc = 2000;
+        in.time_us = d.time_us;
+        d.t->period_boundary(in);
+        IsrCost c;
+        ASSERT_TRUE(d.t->take_irq(&c, kRun)) << "the control ISR was not taken at period " << k;
+        if (!d.t->run_background_for(slice)) ++preempted;
+        ASSERT_FALSE(expired(d)) << "the watchdog expired " << k << " periods into the store";
+        CanFrame r;
+        while (d.t->peripherals().can_take(r))
+            if (r.id == 0x581) {
+                answered = k;
+                reply = r.data[0];
+            }
+    }
+    std::printf("am263x: store over CANopen answered after %d periods of %u us (%d preempted), watchdog held\n",
+                answered, d.period_us, preempted);
+    ASSERT_GT(answered, 0) << "no SDO response to the store";
+    EXPECT_EQ(reply, 0x60u) << "the store was refused (SDO abort)";
+    // the erase did take the part's time: many watchdog timeouts long
+    EXPECT_GT(answered * static_cast<double>(d.period_us), 131000.0);
+    EXPECT_EQ(d.mon(offsetof(mc_monitor_t, isr_count)), static_cast<uint32_t>(20 + answered));
 }

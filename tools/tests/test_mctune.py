@@ -478,3 +478,12 @@ def test_fault_names_from_the_generated_table():
     assert emcy_fault(0x6320, bytes([3, 17, 0, 0, 0])) is None
     assert emcy_fault(0x0000, bytes(5)) is None
     assert emcy_fault(0x2310, bytes([0])) is None
+
+
+def test_save_waits_for_the_flash_erase(capsys, bus, drive):
+    """A store answers after the flash erase (S25FL128S: ~130 ms typical, several times that at
+    worst): mctune waits for it longer than for the 1 s of other SDOs."""
+    drive.refuse[0x1010] = (lambda d: time.sleep(1.5), 0)   # answers after 1.5 s, never refuses
+    rc, out, err = run(capsys, bus, "save")
+    assert rc == 0, err
+    assert drive.value(0x1010, 1) == 0x65766173

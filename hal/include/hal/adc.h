@@ -1,5 +1,5 @@
-/* ADC hardware interface: phase currents and DC-link voltage, sampled at the PWM centre
- * (period boundary, centre of the zero vector) by the PWM trigger. Raw counts; scaling and
+/* ADC hardware interface: phase currents and DC-link voltage, sampled at the PWM counter's zero
+ * (period boundary, centre of the zero vector V000) by the PWM trigger. Raw counts; scaling and
  * offset calibration live in the firmware (mc drive), not in the port. */
 #ifndef HAL_ADC_H
 #define HAL_ADC_H

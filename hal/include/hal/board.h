@@ -3,7 +3,8 @@
  * hal/generic) maps it onto its registers; the image's main (firmware/image) is the only caller.
  *
  * Order: hal_board_init (clocks, pins, PWM time base stopped with the outputs off, ADC triggered
- * at the PWM period centre, encoder, CAN, NVM) -> hal_board_attach_isr -> hal_board_start (time
+ * at the PWM counter's zero, the centre of the zero vector V000, not the period's centre;
+ * encoder, CAN, NVM) -> hal_board_attach_isr -> hal_board_start (time
  * base running, the ADC end-of-conversion interrupt enabled). The outputs stay off until the
  * firmware calls hal_pwm_enable(true); a trip (hal_pwm_enable(false), or the port's hardware trip
  * input) turns all six switches off at once, without the CPU (the safe state). */

@@ -327,7 +327,14 @@ def test_image_under_pil_over_can(mcsim, pil_image, tmp_path):
             assert e.value.code == 0x06090031
             node.sdo[0x6040].raw = 0x06                 # outputs off, then a store into the QSPI flash
             wait_for(lambda: (state_bits(statusword(node)) == 0x21, hex(statusword(node))), 5, "ready to switch on")
+            # the store answers after the flash erase: the emulated S25FL128S keeps a 64 KiB sector
+            # busy ~131 ms of plant time (a few seconds of wall time under PIL; up to seconds on
+            # the part), so this response gets a store's timeout, not the 1 s of the others
+            node.sdo.RESPONSE_TIMEOUT = 30.0
+            t0 = time.monotonic()
             node.sdo[0x1010][1].raw = 0x65766173
+            print(f"image under PIL: store answered after {time.monotonic() - t0:.1f} s")
+            node.sdo.RESPONSE_TIMEOUT = 1.0
             assert node.sdo[0x2FF2].raw in (0, 7)      # committed (7: without the map)
         finally:
             net.disconnect()

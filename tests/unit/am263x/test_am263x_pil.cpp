@@ -19,6 +19,8 @@ extern "C" {
 #include "am263x/port.h"
 #include "am263x/regs_adc.h"
 #include "am263x/regs_mcan.h"
+#include "am263x/regs_qspi.h"
+#include "am263x/regs_rti.h"
 #include "am263x/regs_soc.h"
 #include "am263x/regs_vim.h"
 }
@@ -28,6 +30,7 @@ namespace {
 mcsim::pil::Peripherals* g_model = nullptr;
 std::vector<uint8_t> g_flash;
 int g_outside = 0;   // accesses outside every window and memory: a driver/model mismatch
+uint32_t g_wire_us = 0;   // the plant's clock while the NVM driver talks to the flash
 
 bool in_flash(uintptr_t a) { return a >= AM263X_FLASH_WIN_BASE && a < AM263X_FLASH_WIN_BASE + AM263X_FLASH_WIN_SIZE; }
 
@@ -50,6 +53,14 @@ extern "C" uint32_t am263x_mmio_read(uintptr_t a, unsigned size)
     if (!in_window(a, size)) {
         ++g_outside;
         return 0;
+    }
+    if (a == AM263X_QSPI_BASE + QSPI_SPI_DATA) {
+        // each word takes ~1 us on the wire (8 bits and the controller's turnaround): the time
+        // passes with the polls, so the model's sector erase (busy ~131 ms) ends while the
+        // driver waits. Nothing else runs in these tests, so the boundaries carry no inputs.
+        mcsim::pil::PeriphInputs in;
+        in.time_us = ++g_wire_us;
+        g_model->period_boundary(in);
     }
     return static_cast<uint32_t>(g_model->read(a, size));
 }
@@ -97,6 +108,7 @@ protected:
     {
         model = mcsim::pil::make_am263x_peripherals();
         g_model = model.get();
+        g_wire_us = 0;
         g_flash.assign(AM263X_FLASH_WIN_SIZE, 0x5A);
         g_outside = 0;
         model->bind_memory(
@@ -411,6 +423,10 @@ TEST_F(Am263xPil, BringUpFromTheResetValues)
     EXPECT_EQ(rcm(*model, AM263X_RCM_MCAN0_CLK_DIV_VAL), 0x444u);
     EXPECT_EQ(rcm(*model, AM263X_RCM_RTI0_CLK_SRC_SEL), 0x666u);
     EXPECT_EQ(rcm(*model, AM263X_RCM_RTI0_CLK_DIV_VAL), 0x000u);
+    // WDT0: the crystal / 1 too; the trip input's pad a GPIO input, pull enabled and up
+    EXPECT_EQ(rcm(*model, AM263X_RCM_WDT0_CLK_SRC_SEL), 0x666u);
+    EXPECT_EQ(rcm(*model, AM263X_RCM_WDT0_CLK_DIV_VAL), 0x000u);
+    EXPECT_EQ(pad(*model, AM263X_PAD_SPI0_CS0) & 0x3FFu, AM263X_PAD_GPIO | AM263X_PAD_PULLUP);
     // both locks closed again
     model->write(AM263X_IOMUX_BASE + AM263X_PAD_EPWM_A(0), 4, AM263X_PAD_RESET);
     model->write(AM263X_MSS_RCM_BASE + AM263X_RCM_MCAN0_CLK_SRC_SEL, 4, 0u);
@@ -555,3 +571,50 @@ TEST_F(Am263xPil, EncoderPadsWithoutTheirMuxDoNotCount)
 }
 
 }  // namespace
+
+// The watchdog's timeout is the port's own: whatever clock WDT0 ran from before (here the 10 MHz
+// RC oscillator, as a GEL script or an earlier image may leave it; at a true reset WUCPUCLK is
+// 25 MHz by TI's clock map), hal_board_init selects the crystal, so an unkicked watchdog expires
+// after (29 + 1) x 2^13 / 25 MHz = 9830.4 us. Without that step it would take 24576 us.
+TEST_F(Am263xPil, WatchdogTimeoutFromTheClockTheBoardSets)
+{
+    poke_rcm(*model, AM263X_RCM_WDT0_CLK_SRC_SEL, 0x555u);
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    hal_board_start();
+    const auto expired = [&] { return (model->read(AM263X_WDT0_BASE + RTI_RTIWDSTATUS, 4) & RTI_WDSTATUS_DWDST) != 0; };
+    mcsim::pil::PeriphInputs in;
+    uint32_t t = 0;
+    while (!expired() && t < 50000u) {
+        t += 100u;
+        in.time_us = t;
+        model->period_boundary(in);
+    }
+    EXPECT_EQ(t, 9900u) << "the watchdog expired after " << t << " us";
+    EXPECT_FALSE(model->outputs().enabled);
+}
+
+// The hardware trip: the gate driver pulling nFAULT low trips the bridge through pad SPI0_CS0
+// (GPIO11), INPUT XBAR 0 and TZ1; with the pad left at its reset value the same fault does
+// nothing, and released the line reads the pad's pull-up (no trip).
+TEST_F(Am263xPil, HardwareTripThroughItsPad)
+{
+    ASSERT_TRUE(hal_board_init(&cfg, &board));
+    hal_board_start();
+    hal_pwm_enable(board.pwm, true);
+    ASSERT_TRUE(model->outputs().enabled);
+    ASSERT_TRUE(model->set_pin("nFAULT", false));
+    EXPECT_FALSE(model->outputs().enabled) << "a gate-driver fault left the outputs on";
+    EXPECT_FALSE(hal_pwm_enabled(board.pwm));
+    ASSERT_TRUE(model->set_pin("nFAULT", true));
+    hal_pwm_enable(board.pwm, true);
+    EXPECT_TRUE(model->outputs().enabled) << "the released line (pull-up) still trips";
+    const uint32_t muxed = pad(*model, AM263X_PAD_SPI0_CS0);
+    poke_pad(*model, AM263X_PAD_SPI0_CS0, AM263X_PAD_RESET);
+    ASSERT_TRUE(model->set_pin("nFAULT", false));
+    EXPECT_TRUE(model->outputs().enabled);   // the pad not muxed: the fault does not arrive
+    poke_pad(*model, AM263X_PAD_SPI0_CS0, muxed);
+    mcsim::pil::PeriphInputs in;
+    in.time_us = 100u;
+    model->period_boundary(in);
+    EXPECT_FALSE(model->outputs().enabled);
+}

@@ -204,6 +204,28 @@ static void test_watchdog_expiry_turns_outputs_off(void **st)
     assert_true(w.expired);
 }
 
+/* hal_wdg_service kicks only when an ISR run was counted since its last kick: called in a
+ * loop without ISR progress it lets the watchdog expire. */
+static void test_watchdog_service_needs_isr_progress(void **st)
+{
+    (void)st;
+    hal_wdg_t w;
+    hal_host_wdg_start(&w, 1000u, NULL);
+    for (int k = 0; k < 50; ++k) {
+        assert_false(hal_host_wdg_elapse(&w, 100u));
+        w.isr_runs++;
+        hal_wdg_service(&w);
+        hal_wdg_service(&w);   /* no new run: no kick */
+    }
+    assert_int_equal(w.kicks, 50);
+    for (int k = 0; k < 9; ++k) {
+        assert_false(hal_host_wdg_elapse(&w, 100u));
+        hal_wdg_service(&w);
+    }
+    assert_int_equal(w.kicks, 50);
+    assert_true(hal_host_wdg_elapse(&w, 100u));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -212,6 +234,7 @@ int main(void)
         cmocka_unit_test(test_nvm_power_cut_every_step),
         cmocka_unit_test(test_nvm_s25fl128s_map),
         cmocka_unit_test(test_watchdog_expiry_turns_outputs_off),
+        cmocka_unit_test(test_watchdog_service_needs_isr_progress),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

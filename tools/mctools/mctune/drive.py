@@ -19,6 +19,9 @@ from mctools.mctune.eds import (
 from mctools.mctune.errors import CommError, InputError, MctuneError
 
 SAVE_SIGNATURE = 0x65766173   # "save", 0x1010 sub 1 (CiA 301 7.5.2.13)
+# 0x1010/0x1011 answer after the flash erase: on the LP-AM263's S25FL128S a 64 KiB sector takes
+# ~130 ms typically and several times that at worst (hal/am263x/nvm.c waits up to ~2 s)
+STORE_TIMEOUT_S = 5.0
 LOAD_SIGNATURE = 0x64616F6C   # "load", 0x1011 sub 1 (7.5.2.14)
 
 
@@ -346,12 +349,20 @@ class Drive:
                     f"tools/mctools/data/drive.eds) or pass --eds FILE")
         return None
 
+    def _store_write(self, index: int, signature: int, what: str) -> None:
+        sdo = self.node.sdo
+        sdo.RESPONSE_TIMEOUT = max(self.timeout, STORE_TIMEOUT_S)
+        try:
+            self.write_obj(index, 1, signature, what)
+        finally:
+            sdo.RESPONSE_TIMEOUT = self.timeout
+
     def save(self) -> int | None:
-        self.write_obj(0x1010, 1, SAVE_SIGNATURE, "save: ")
+        self._store_write(0x1010, SAVE_SIGNATURE, "save: ")
         return self._store_status()
 
     def restore(self) -> int | None:
-        self.write_obj(0x1011, 1, LOAD_SIGNATURE, "restore: ")
+        self._store_write(0x1011, LOAD_SIGNATURE, "restore: ")
         return self._store_status()
 
     def _store_status(self) -> int | None:

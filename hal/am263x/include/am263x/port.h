@@ -131,6 +131,8 @@ void am263x_time_init(hal_time_t *t, uint32_t rti_clk_hz);
 #define AM263X_WDT_PRLD   29u
 struct hal_wdg {
     uintptr_t wdt;          /* WDT0 (an RTI module)                                        */
+    volatile uint32_t isr_runs;   /* control-ISR entries, counted by am263x_adc_eoc_isr    */
+    uint32_t seen;          /* isr_runs at the last hal_wdg_service kick                   */
 };
 void am263x_wdt_start(uintptr_t wdt, uint32_t prld);
 void am263x_wdt_kick(uintptr_t wdt);
@@ -175,6 +177,7 @@ struct hal_nvm {
     uint32_t busy_polls;    /* QSPI word-complete polls before a transfer counts as failed */
     uint32_t erase_polls;   /* status reads while an erase runs                            */
     uint32_t program_polls; /* status reads while a page program runs                      */
+    hal_wdg_t *wdg;         /* serviced at each status read (hal/watchdog.h); NULL: none   */
 };
 /* The LaunchPad's flash, Infineon (Spansion) S25FL128S with 64 KiB sectors (the part TI's SDK
  * configures for the LP-AM263, mcupsdk-core source/board/.meta/flash/S25FL128SA.json: 16 MiB,

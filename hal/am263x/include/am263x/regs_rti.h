@@ -22,8 +22,8 @@
  * enabled it runs until a reset. RTIGCTRL.COS (bit 15) = 0: it stops while the CPU is halted by
  * a debugger (a breakpoint does not reset the part). */
 #define AM263X_WDT0_BASE   0x52100000u
-#define AM263X_WDT_CLK_HZ  25000000u   /* WDT0 functional clock assumed: XTAL (MSS_RCM
-                                          WDT0_CLK_SRC_SEL / _DIV_VAL), divider 1           */
+#define AM263X_WDT_CLK_HZ  25000000u   /* WDT0 functional clock: XTAL, divider 1, set by
+                                          board.c (MSS_RCM WDT0_CLK_SRC_SEL / _DIV_VAL)     */
 #define RTI_RTIDWDCTRL     0x90u   /* write RTI_DWDCTRL_ENABLE: start                          */
 #define RTI_RTIDWDPRLD     0x94u   /* 12 bits                                                  */
 #define RTI_RTIWDSTATUS    0x98u   /* bit1 DWDST: expired; bit5 DWWD_ST; write 1s to clear     */

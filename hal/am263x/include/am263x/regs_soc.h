@@ -88,6 +88,10 @@
 #define AM263X_RCM_RTI0_CLK_SRC_SEL   0x114u
 #define AM263X_RCM_MCAN0_CLK_DIV_VAL  0x200u
 #define AM263X_RCM_RTI0_CLK_DIV_VAL   0x214u
+/* WDT0 (cslr_mss_rcm.h CSL_MSS_RCM_WDT0_CLK_SRC_SEL / _DIV_VAL; soc_rcm.c gWdtClkSrcValMap: the
+ * same codes as RTI for WUCPUCLK 0x000 and XTALCLK 0x666, RCCLK10M 0x111/0x555, RCCLK32K 0x777) */
+#define AM263X_RCM_WDT0_CLK_SRC_SEL   0x128u
+#define AM263X_RCM_WDT0_CLK_DIV_VAL   0x228u
 #define AM263X_RCM_SRC_WUCPUCLK       0x000u   /* reset: 25 MHz                               */
 #define AM263X_RCM_SRC_XTALCLK        0x666u   /* 25 MHz crystal (MCAN and RTI)               */
 #define AM263X_RCM_SRC_MCAN_CORE_HSDIV0 0x444u /* DPLL_CORE_HSDIV0_CLKOUT0, 400 MHz (MCAN)    */
@@ -108,6 +112,7 @@
 #define AM263X_PAD_GPIO               7u
 #define AM263X_PAD_NOPULL             0x100u
 #define AM263X_PAD_SLEW_LOW           0x400u
+#define AM263X_PAD_PULLUP             0x200u   /* PUPDSEL: up (with PI = 0)                   */
 /* The LP-AM263 pads (cslr_iomux.h offsets). Which pads the LaunchPad wires: TI's am263x-lp
  * examples of mcupsdk-core assign ePWM0..2 A/B to the pads of the same name
  * (examples/drivers/epwm/epwm_deadband/am263x-lp/.../example.syscfg), eQEP0 A/B/INDEX to pads
@@ -123,7 +128,9 @@
 #define AM263X_PAD_EQEP0_A            0x208u
 #define AM263X_PAD_EQEP0_B            0x20Cu
 #define AM263X_PAD_EQEP0_INDEX        0x214u
-/* The MCAN transceiver's standby input: GPIO51 on pad EPWM4_A (ball D1; "GPIO51 -> EPWM4_A"
+/* The hardware trip input (docs/porting.md): the gate driver's nFAULT on pad SPI0_CS0 as GPIO11
+ * (pinmux.h PIN_SPI0_CS0 0x2C, mode 7), INPUT XBAR 0 -> TZ1 (regs_epwm.h AM263X_TRIP_GPIO). */
+#define AM263X_PAD_SPI0_CS0           0x02Cu/* The MCAN transceiver's standby input: GPIO51 on pad EPWM4_A (ball D1; "GPIO51 -> EPWM4_A"
  * in SysConfig-generated ti_pinmux_config.c, mode 7), driven low to leave standby
  * (canfd_external_read_write/am263x-lp/canfd_transceiver.c: GPIO_setDirMode output,
  * GPIO_pinWriteLow). gpio v0 registers (source/drivers/gpio/v0/cslr_gpio.h, gpio.h): 32 pins per

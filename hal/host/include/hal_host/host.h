@@ -47,6 +47,8 @@ struct hal_wdg {
     uint32_t kicks;
     bool expired;
     hal_pwm_t *pwm;         /* the outputs it turns off                                     */
+    uint32_t isr_runs;      /* control-ISR runs, counted by the host side (hal_wdg_service)  */
+    uint32_t seen;
 };
 
 /* CAN: two rings; the host side (the simulator's bus, a test) delivers received frames and
