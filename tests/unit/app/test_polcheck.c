@@ -96,6 +96,38 @@ static void test_verdicts(void **st)
     assert_int_equal(s.flips, 2u);
 }
 
+/* The verdict's margin on either side, with and without the map's ratio: log ratios 10 % inside
+ * the margin are inconclusive, 10 % outside decide (right for ln(+/-) > 0, reversed below), for
+ * both signs. The margin is 0.02 without a map, a quarter of the map's log ratio with one. */
+static void test_verdict_margin(void **st)
+{
+    (void)st;
+    const mc_polcheck_cfg_t c = config();
+    mc_polcheck_cfg_t m = c;
+    m.log_ratio = 0.4f;   /* margin 0.1 */
+    const struct { const mc_polcheck_cfg_t *cfg; float margin; } cases[] = {{&c, 0.02f}, {&m, 0.1f}};
+    mc_polcheck_t s = {0};
+    mc_polcheck_restart(&s);
+    for (int k = 0; k < 2; ++k) {
+        const mc_polcheck_cfg_t *cfg = cases[k].cfg;
+        for (int side = 0; side < 2; ++side) {
+            const float f = side == 0 ? 0.9f : 1.1f;   /* inside, outside */
+            /* ln(plus / minus) = 2 ln(a_plus / a_minus) = +-f margin */
+            const float r = expf(0.5f * f * cases[k].margin);
+            int n = 0;
+            assert_true(mc_polcheck_start(&s, cfg, 10.0f, true));
+            const bool right_flip = run_check(&s, cfg, 0.10f * r, 0.10f, &n);
+            assert_false(right_flip);
+            assert_int_equal(s.last, side == 0 ? 0 : -1);
+            assert_true(mc_polcheck_start(&s, cfg, 10.0f, true));
+            const bool rev_flip = run_check(&s, cfg, 0.10f, 0.10f * r, &n);
+            assert_int_equal(rev_flip, side == 1);
+            assert_int_equal(s.last, side == 0 ? 0 : 1);
+        }
+    }
+    assert_int_equal(s.flips, 2u);
+}
+
 /* Not settled: the raw angle 0.5 rad off the estimate ends the check at once without a verdict;
  * so does a speed estimate drifting by more than 10 deg in w_scale units. */
 static void test_unsettled(void **st)
@@ -175,6 +207,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_start_and_bias),
         cmocka_unit_test(test_verdicts),
+        cmocka_unit_test(test_verdict_margin),
         cmocka_unit_test(test_unsettled),
         cmocka_unit_test(test_schedule),
     };
