@@ -69,6 +69,36 @@ static void test_hard_trips(void **st)
     assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
 }
 
+/* The over-current trip level on every phase and both signs, the other two phases carrying the
+ * return current (the sum stays zero): a float step beyond i_trip trips in the period it is seen
+ * (detection time: one period, no persistence), i_trip itself and a little below never do. */
+static void test_overcurrent_every_phase(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const hal_adc_sample_t raw = mid();
+    for (int k = 0; k < 3; ++k) {
+        for (int sign = -1; sign <= 1; sign += 2) {
+            const float levels[3] = {c.i_trip - 0.05f, c.i_trip, nextafterf(c.i_trip, 2.0f * c.i_trip)};
+            for (int l = 0; l < 3; ++l) {
+                const float x = (float)sign * levels[l];
+                float ph[3] = {-0.5f * x, -0.5f * x, -0.5f * x};
+                ph[k] = x;
+                const mc_abc_t i = {ph[0], ph[1], ph[2]};
+                mc_protect_t s;
+                mc_protect_reset(&s, &c, 0.0f);
+                if (l < 2) {   /* at or below the level: never, however long */
+                    for (int n = 0; n < 1000; ++n) {
+                        assert_int_equal(mc_protect_sensors(&s, &c, &raw, i, 300.0f), 0u);
+                    }
+                } else {       /* beyond it: the first period */
+                    assert_int_equal(mc_protect_sensors(&s, &c, &raw, i, 300.0f), MC_FAULT_OVERCURRENT);
+                }
+            }
+        }
+    }
+}
+
 /* A steady state that fits the model (5.1) at speed w: i_q flowing, the voltage the machine needs. */
 static mc_protect_in_t steady(const mc_protect_cfg_t *c, float w, float iq)
 {
@@ -238,6 +268,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hard_trips),
+        cmocka_unit_test(test_overcurrent_every_phase),
         cmocka_unit_test(test_running_checks),
         cmocka_unit_test(test_speed_mode_checks),
         cmocka_unit_test(test_reactions),
