@@ -225,6 +225,64 @@ static void test_speed_mode_checks(void **st)
     assert_int_equal(r, MC_FAULT_TORQUE);
 }
 
+/* Speed mode at torque t_ref with the speed estimate on a ramp of slope acc [rad/s^2 el] from w0,
+ * the rest of the drive plausible (no current, the back-EMF as the voltage). Returns the fault
+ * and in *periods the period it came in (1-based), or 0 after n periods. */
+static uint32_t ramp(const mc_protect_cfg_t *c, float t_ref, float w0, float acc, int n, int *periods)
+{
+    mc_protect_t s;
+    mc_protect_reset(&s, c, w0);
+    mc_protect_in_t in = steady(c, w0, 0.0f);
+    in.speed_mode = true;
+    in.speed_ref = 100.0f;
+    in.torque_ref = t_ref;
+    uint32_t r = 0u;
+    int k = 0;
+    while (k < n && r == 0u) {
+        in.omega = in.omega_raw = w0 + acc * TS * (float)k;
+        in.u_dq = (mc_dq_t){0.0f, in.omega * c->psi_pm};
+        bool doubt;
+        r = mc_protect_running(&s, c, &in, &doubt);
+        ++k;
+    }
+    *periods = k;
+    return r;
+}
+
+/* Torque plausibility (MC_FAULT_TORQUE, protection.accel_time_s): a strong torque (|T| from
+ * accel_torque) with the speed estimate accelerating the other way at more than accel_per_nm |T|
+ * (half of what the torque alone would give). Either sign; at 10 % beyond that limit it trips
+ * after the average has crossed it (the 20 Hz low-pass: ln(1 - 800/880) / ln(1 - k) = 191
+ * periods) plus the persistence, at 10 % within it never; a speed following its torque (even
+ * fast) never, nor a torque below accel_torque, nor outside speed mode. */
+static void test_torque_plausibility(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const float lim = c.accel_per_nm * 8.0f;   /* 800 rad/s^2 el at 8 N m */
+    const int cross = (int)ceilf(logf(1.0f - 1.0f / 1.1f) / logf(1.0f - c.avg_k));
+    int n = 0;
+    /* against the torque at 1.1 x the limit: trips, each sign, after crossing + persistence */
+    assert_int_equal(ramp(&c, 8.0f, 300.0f, -1.1f * lim, 5000, &n), MC_FAULT_TORQUE);
+    assert_true(n >= cross + (int)c.accel_n - 2 && n <= cross + (int)c.accel_n + 2);
+    assert_int_equal(ramp(&c, -8.0f, -300.0f, 1.1f * lim, 5000, &n), MC_FAULT_TORQUE);
+    assert_true(n >= cross + (int)c.accel_n - 2 && n <= cross + (int)c.accel_n + 2);
+    /* a shorter persistence: the detection time follows it */
+    mc_protect_cfg_t shorter = c;
+    shorter.accel_n = 10u;
+    assert_int_equal(ramp(&shorter, 8.0f, 300.0f, -1.1f * lim, 5000, &n), MC_FAULT_TORQUE);
+    assert_true(n >= cross + 10 - 2 && n <= cross + 10 + 2);
+    /* against the torque at 0.9 x the limit: never (3000 periods, the average settled) */
+    assert_int_equal(ramp(&c, 8.0f, 300.0f, -0.9f * lim, 3000, &n), 0u);
+    assert_int_equal(ramp(&c, -8.0f, -300.0f, 0.9f * lim, 3000, &n), 0u);
+    /* the speed following a strong torque, 2.5 x the limit: never */
+    assert_int_equal(ramp(&c, 8.0f, -300.0f, 2.5f * lim, 3000, &n), 0u);
+    assert_int_equal(ramp(&c, -8.0f, 300.0f, -2.5f * lim, 3000, &n), 0u);
+    /* a torque just below accel_torque, even against a hard deceleration: never */
+    assert_int_equal(ramp(&c, nextafterf(c.accel_torque, 0.0f), 300.0f, -2000.0f, 3000, &n), 0u);
+    assert_int_equal(ramp(&c, c.accel_torque, 300.0f, -2000.0f, 3000, &n), MC_FAULT_TORQUE);
+}
+
 /* The reactions: recover only the recoverable reasons, while running, retries times, counted
  * again from zero after retry_reset_n periods of RUN; hold the field weakening only for
  * over-speed above the generation speed; the reaction ends below 95 % of the link. */
@@ -271,6 +329,7 @@ int main(void)
         cmocka_unit_test(test_overcurrent_every_phase),
         cmocka_unit_test(test_running_checks),
         cmocka_unit_test(test_speed_mode_checks),
+        cmocka_unit_test(test_torque_plausibility),
         cmocka_unit_test(test_reactions),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
