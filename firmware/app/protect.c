@@ -129,9 +129,8 @@ uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc
     const float ud = avg(&s->u_d, u_dq.d, k), uq = avg(&s->u_q, u_dq.q, k);
     const float id = avg(&s->i_d, i_fb.d, k), iq = avg(&s->i_q, i_fb.q, k);
     const float w = avg(&s->w, omega, k);
-    const mc_protect_cfg_t *p = b;
-    const float rd = ud - p->rs * id + w * p->lq * iq;
-    const float rq = uq - p->rs * iq - w * (p->ld * id + p->psi_pm);
+    const mc_dq_t r = mc_protect_residual(b, (mc_dq_t){ud, uq}, (mc_dq_t){id, iq}, w);
+    const float rd = r.d, rq = r.q;
     const float r_max = b->resid_v + b->resid_w_coef * fabsf(w);
     if (persists(&s->resid_n, !(rd * rd + rq * rq <= r_max * r_max), b->resid_n)) {
         return MC_FAULT_VOLTAGE_MODEL;

@@ -194,6 +194,88 @@ static void test_running_checks(void **st)
     assert_int_equal(run(&s, &off, &in, 3000, NULL), 0u);
 }
 
+/* A strongly salient machine (Lq = 2.5 Ld), for the residual's cross-coupling terms. */
+static mc_protect_cfg_t salient(void)
+{
+    mc_protect_cfg_t c = config();
+    c.ld = 6.0e-3f;
+    c.lq = 15.0e-3f;
+    return c;
+}
+
+/* The voltage (5.1) needs at speed w with current i, computed in double on its own. */
+static mc_dq_t model_u(const mc_protect_cfg_t *c, float w, mc_dq_t i)
+{
+    const double ud = (double)c->rs * i.d - (double)w * c->lq * i.q;
+    const double uq = (double)c->rs * i.q + (double)w * ((double)c->ld * i.d + c->psi_pm);
+    return (mc_dq_t){(float)ud, (float)uq};
+}
+
+/* The residual of (5.1) itself on a salient machine: ~0 where the machine fits the model (at
+ * speeds, currents and signs where w (Lq - Ld) i_q and w (Lq - Ld) i_d are tens of volts, far
+ * beyond the tolerance), and exactly an added voltage where it does not. */
+static void test_residual(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = salient();
+    const float ws[] = {500.0f, -500.0f, 150.0f};
+    const mc_dq_t is[] = {{0.0f, 8.0f}, {-3.0f, 8.0f}, {-6.0f, -10.0f}};
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+            const mc_dq_t u = model_u(&c, ws[a], is[b]);
+            const mc_dq_t r = mc_protect_residual(&c, u, is[b], ws[a]);
+            assert_float_equal(r.d, 0.0f, 2e-3f);
+            assert_float_equal(r.q, 0.0f, 2e-3f);
+            const mc_dq_t r2 = mc_protect_residual(&c, (mc_dq_t){u.d + 3.0f, u.q - 4.0f}, is[b], ws[a]);
+            assert_float_equal(r2.d, 3.0f, 2e-3f);
+            assert_float_equal(r2.q, -4.0f, 2e-3f);
+        }
+    }
+    /* the speed's terms on their own: a machine at standstill leaves only the resistance */
+    const mc_dq_t r0 = mc_protect_residual(&c, (mc_dq_t){1.0f, 2.0f}, (mc_dq_t){2.5f, 5.0f}, 0.0f);
+    assert_float_equal(r0.d, 1.0f - 0.4f * 2.5f, 1e-6f);
+    assert_float_equal(r0.q, 2.0f - 0.4f * 5.0f, 1e-6f);
+}
+
+/* The voltage-model check (protection.residual_time_s) near its threshold on the salient
+ * machine at 500 rad/s el, 8 A in q, -3 A in d: a voltage off the model by 1.1 x the threshold
+ * (resid_v + resid_w_coef |w| = 45 V) along +-d or +-q trips after the 20 Hz average has crossed
+ * the threshold (191 periods, as for the torque check) plus the persistence; 0.9 x never. */
+static void test_voltage_model_threshold(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = salient();
+    const float w = 500.0f;
+    const mc_dq_t i = {-3.0f, 8.0f};
+    const float r_max = c.resid_v + c.resid_w_coef * w;
+    const int cross = (int)ceilf(logf(1.0f - 1.0f / 1.1f) / logf(1.0f - c.avg_k));
+    const mc_dq_t dirs[] = {{-1.0f, 0.0f}, {1.0f, 0.0f}, {0.0f, -1.0f}, {0.0f, 1.0f}};
+    for (int d = 0; d < 4; ++d) {
+        for (int side = 0; side < 2; ++side) {
+            const float f = side == 0 ? 0.9f : 1.1f;
+            const mc_dq_t u = model_u(&c, w, i);
+            mc_protect_in_t in = {.theta = 0.1f, .omega = w, .theta_raw = 0.1f, .omega_raw = w, .i_ref = i,
+                                  .i_fb = i, .torque_ref = 2.0f, .speed_mode = false};
+            in.u_dq = (mc_dq_t){u.d + f * r_max * dirs[d].d, u.q + f * r_max * dirs[d].q};
+            mc_protect_t s;
+            mc_protect_reset(&s, &c, w);
+            int n = 0;
+            uint32_t r = 0u;
+            while (r == 0u && n < 3000) {
+                bool doubt;
+                r = mc_protect_running(&s, &c, &in, &doubt);
+                ++n;
+            }
+            if (side == 0) {
+                assert_int_equal(r, 0u);
+            } else {
+                assert_int_equal(r, MC_FAULT_VOLTAGE_MODEL);
+                assert_true(n >= cross + (int)c.resid_n - 2 && n <= cross + (int)c.resid_n + 2);
+            }
+        }
+    }
+}
+
 /* Speed mode: a stall (the torque at its limit, no speed) and a torque that the speed estimate
  * contradicts; neither outside speed mode. */
 static void test_speed_mode_checks(void **st)
@@ -328,6 +410,8 @@ int main(void)
         cmocka_unit_test(test_hard_trips),
         cmocka_unit_test(test_overcurrent_every_phase),
         cmocka_unit_test(test_running_checks),
+        cmocka_unit_test(test_residual),
+        cmocka_unit_test(test_voltage_model_threshold),
         cmocka_unit_test(test_speed_mode_checks),
         cmocka_unit_test(test_torque_plausibility),
         cmocka_unit_test(test_reactions),

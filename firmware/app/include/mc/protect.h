@@ -61,6 +61,14 @@ typedef struct {
                                     lock checks wait for its verdict                            */
 } mc_protect_in_t;
 
+/* The residual of the steady-state model (5.1) for voltage u, current i at speed w [V, A, rad/s el]:
+ * u_d - (Rs i_d - w Lq i_q), u_q - (Rs i_q + w (Ld i_d + psi_pm)); ~0 for a machine that fits
+ * the motor entries. The voltage-model check (mc_protect_running) applies it to its averages. */
+static inline mc_dq_t mc_protect_residual(const mc_protect_cfg_t *c, mc_dq_t u, mc_dq_t i, float w)
+{
+    return (mc_dq_t){u.d - c->rs * i.d + w * c->lq * i.q, u.q - c->rs * i.q - w * (c->ld * i.d + c->psi_pm)};
+}
+
 /* The detectors' averages primed for a steady state at speed omega [rad/s el] (a caught rotor):
  * speeds at omega, the voltage at its back-EMF with no current. */
 void mc_protect_reset(mc_protect_t *s, const mc_protect_cfg_t *c, float omega);
