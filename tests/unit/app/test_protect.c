@@ -365,6 +365,218 @@ static void test_torque_plausibility(void **st)
     assert_int_equal(ramp(&c, c.accel_torque, 300.0f, -2000.0f, 3000, &n), MC_FAULT_TORQUE);
 }
 
+/* Runs the running checks on a fixed input until a fault or n periods; *periods: how many ran. */
+static uint32_t run_for(mc_protect_t *s, const mc_protect_cfg_t *c, const mc_protect_in_t *in, int n, int *periods)
+{
+    uint32_t r = 0u;
+    int k = 0;
+    while (k < n && r == 0u) {
+        bool doubt;
+        r = mc_protect_running(s, c, in, &doubt);
+        ++k;
+    }
+    *periods = k;
+    return r;
+}
+
+/* Periods for a 20 Hz average starting at 0 to cross 1 / f of its final value. */
+static int crossing(const mc_protect_cfg_t *c, float f)
+{
+    return (int)ceilf(logf(1.0f - 1.0f / f) / logf(1.0f - c->avg_k));
+}
+
+/* The sensor checks next to their limits: the current sum 1 % beyond i_sum_tol (either sign)
+ * after exactly i_sum_n periods, 1 % within never; the link at its window's edges never, one
+ * float step outside at once. */
+static void test_sensor_limits(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const hal_adc_sample_t raw = mid();
+    mc_protect_t s;
+    for (int sign = -1; sign <= 1; sign += 2) {
+        const float x = (float)sign * c.i_sum_tol;
+        const mc_abc_t in_tol = {0.5f * x, 0.49f * x, 0.0f}, out_tol = {0.5f * x, 0.51f * x, 0.0f};
+        mc_protect_reset(&s, &c, 0.0f);
+        for (int n = 0; n < 1000; ++n) {
+            assert_int_equal(mc_protect_sensors(&s, &c, &raw, in_tol, 300.0f), 0u);
+        }
+        mc_protect_reset(&s, &c, 0.0f);
+        for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+            assert_int_equal(mc_protect_sensors(&s, &c, &raw, out_tol, 300.0f), 0u);
+        }
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, out_tol, 300.0f), MC_FAULT_CURRENT_SENSOR);
+    }
+    const mc_abc_t zero = {0.0f, 0.0f, 0.0f};
+    mc_protect_reset(&s, &c, 0.0f);
+    for (int n = 0; n < 100; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, c.vdc_max), 0u);
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, c.vdc_min), 0u);
+    }
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, nextafterf(c.vdc_max, 1e9f)), MC_FAULT_OVERVOLTAGE);
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, nextafterf(c.vdc_min, 0.0f)), MC_FAULT_UNDERVOLTAGE);
+}
+
+/* Over-speed at its limit (either sign) never, one float step beyond at once. */
+static void test_overspeed_limit(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    for (int sign = -1; sign <= 1; sign += 2) {
+        const float w = (float)sign * c.overspeed;
+        mc_protect_t s;
+        mc_protect_reset(&s, &c, w);
+        mc_protect_in_t in = steady(&c, w, 5.0f);
+        int n = 0;
+        assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        in.omega = in.omega_raw = nextafterf(w, 2.0f * w);
+        assert_int_equal(run_for(&s, &c, &in, 1, &n), MC_FAULT_OVERSPEED);
+    }
+}
+
+/* Tracking next to its limit: the current error 1.1 x track_err along +-d or +-q trips after the
+ * average's crossing + track_n periods, 0.9 x never. */
+static void test_tracking_limit(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const float w = 500.0f;
+    const mc_dq_t dirs[] = {{1.0f, 0.0f}, {-1.0f, 0.0f}, {0.0f, 1.0f}, {0.0f, -1.0f}};
+    for (int d = 0; d < 4; ++d) {
+        for (int side = 0; side < 2; ++side) {
+            const float f = side == 0 ? 0.9f : 1.1f;
+            mc_protect_t s;
+            mc_protect_reset(&s, &c, w);
+            mc_protect_in_t in = steady(&c, w, 5.0f);
+            in.i_ref.d += f * c.track_err * dirs[d].d;
+            in.i_ref.q += f * c.track_err * dirs[d].q;
+            int n = 0;
+            const uint32_t r = run_for(&s, &c, &in, 3000, &n);
+            if (side == 0) {
+                assert_int_equal(r, 0u);
+            } else {
+                assert_int_equal(r, MC_FAULT_TRACKING);
+                const int t = crossing(&c, 1.1f) + (int)c.track_n;
+                assert_true(n >= t - 2 && n <= t + 2);
+            }
+        }
+    }
+}
+
+/* Loss of lock next to its limits: (a) the raw speed 1.1 x the band (lock_tol |w| + lock_floor)
+ * off the filtered one, either side, after the average's crossing + lock_n periods, 0.9 x never;
+ * the swing: the filtered speed oscillating at 200 Hz with an rms 1.1 x lock_floor about its
+ * average trips within the persistence + the mean square's settling, 0.9 x never; the fast path:
+ * the raw angle 1.1 x lock_jump off the PLL's (either side) after exactly jump_n periods, 0.9 x
+ * never. */
+static void test_lock_limits(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const float w = 500.0f, band = c.lock_tol * w + c.lock_floor;
+    for (int sign = -1; sign <= 1; sign += 2) {
+        for (int side = 0; side < 2; ++side) {
+            const float f = side == 0 ? 0.9f : 1.1f;
+            mc_protect_t s;
+            mc_protect_reset(&s, &c, w);
+            mc_protect_in_t in = steady(&c, w, 5.0f);
+            in.omega_raw = w + (float)sign * f * band;
+            int n = 0;
+            const uint32_t r = run_for(&s, &c, &in, 3000, &n);
+            if (side == 0) {
+                assert_int_equal(r, 0u);
+            } else {
+                assert_int_equal(r, MC_FAULT_LOSS_OF_LOCK);
+                const int t = crossing(&c, 1.1f) + (int)c.lock_n;
+                assert_true(n >= t - 2 && n <= t + 2);
+            }
+        }
+    }
+    /* the swing */
+    for (int side = 0; side < 2; ++side) {
+        const float amp = (side == 0 ? 0.9f : 1.1f) * c.lock_floor * 1.41421356f;
+        mc_protect_t s;
+        mc_protect_reset(&s, &c, w);
+        mc_protect_in_t in = steady(&c, w, 5.0f);
+        uint32_t r = 0u;
+        int n = 0;
+        while (r == 0u && n < 3000) {
+            in.omega = in.omega_raw = w + amp * sinf(6.2831853f * 200.0f * TS * (float)n);
+            in.u_dq.q = c.rs * 5.0f + in.omega * c.psi_pm;
+            bool doubt;
+            r = mc_protect_running(&s, &c, &in, &doubt);
+            ++n;
+        }
+        if (side == 0) {
+            assert_int_equal(r, 0u);
+        } else {
+            assert_int_equal(r, MC_FAULT_LOSS_OF_LOCK);
+            /* mean square 1.21 floor^2 from 0: crosses floor^2 after ln(1 - 1/1.21) / ln(1 - k),
+             * its 400 Hz ripple holds the condition for good a little later (18 periods here) */
+            const int t = crossing(&c, 1.21f) + (int)c.lock_n;
+            assert_true(n >= t && n <= t + 30);
+        }
+    }
+    /* the fast path */
+    for (int sign = -1; sign <= 1; sign += 2) {
+        for (int side = 0; side < 2; ++side) {
+            const float f = side == 0 ? 0.9f : 1.1f;
+            mc_protect_t s;
+            mc_protect_reset(&s, &c, w);
+            mc_protect_in_t in = steady(&c, w, 5.0f);
+            in.theta_raw = in.theta + (float)sign * f * c.jump;
+            int n = 0;
+            const uint32_t r = run_for(&s, &c, &in, 3000, &n);
+            if (side == 0) {
+                assert_int_equal(r, 0u);
+            } else {
+                assert_int_equal(r, MC_FAULT_LOSS_OF_LOCK);
+                assert_int_equal(n, (int)c.jump_n);
+            }
+        }
+    }
+}
+
+/* Stall next to its limits: the torque at stall_torque (either sign), no speed, the speed loop
+ * asking for speed: after exactly stall_n periods; the speed at stall_speed, the torque a float
+ * step below stall_torque, the reference at stall_speed, or torque mode: never. */
+static void test_stall_limits(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    for (int sign = -1; sign <= 1; sign += 2) {
+        const float sg = (float)sign;
+        mc_protect_in_t base = steady(&c, 0.0f, 5.0f);
+        base.speed_mode = true;
+        base.speed_ref = sg * 100.0f;
+        base.torque_ref = sg * c.stall_torque;
+        base.omega = base.omega_raw = sg * nextafterf(c.stall_speed, 0.0f);
+        base.u_dq.q = c.rs * 5.0f + base.omega * c.psi_pm;
+        mc_protect_t s;
+        mc_protect_reset(&s, &c, base.omega);
+        int n = 0;
+        assert_int_equal(run_for(&s, &c, &base, 3000, &n), MC_FAULT_STALL);
+        assert_int_equal(n, (int)c.stall_n);
+        mc_protect_in_t in = base;
+        in.omega = in.omega_raw = sg * c.stall_speed;
+        in.u_dq.q = c.rs * 5.0f + in.omega * c.psi_pm;
+        mc_protect_reset(&s, &c, in.omega);
+        assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        in = base;
+        in.torque_ref = sg * nextafterf(c.stall_torque, 0.0f);
+        mc_protect_reset(&s, &c, in.omega);
+        assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        in = base;
+        in.speed_ref = sg * c.stall_speed / (float)c.pole_pairs;
+        mc_protect_reset(&s, &c, in.omega);
+        assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        in = base;
+        in.speed_mode = false;
+        mc_protect_reset(&s, &c, in.omega);
+        assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+    }
+}
+
 /* The reactions: recover only the recoverable reasons, while running, retries times, counted
  * again from zero after retry_reset_n periods of RUN; hold the field weakening only for
  * over-speed above the generation speed; the reaction ends below 95 % of the link. */
@@ -414,6 +626,11 @@ int main(void)
         cmocka_unit_test(test_voltage_model_threshold),
         cmocka_unit_test(test_speed_mode_checks),
         cmocka_unit_test(test_torque_plausibility),
+        cmocka_unit_test(test_sensor_limits),
+        cmocka_unit_test(test_overspeed_limit),
+        cmocka_unit_test(test_tracking_limit),
+        cmocka_unit_test(test_lock_limits),
+        cmocka_unit_test(test_stall_limits),
         cmocka_unit_test(test_reactions),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
