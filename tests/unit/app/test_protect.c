@@ -3,6 +3,7 @@
 #include <math.h>
 
 #include "../mc_test.h"
+#include "mc/drive.h"
 #include "mc/protect.h"
 #include "mc/sequencer.h"
 
@@ -577,6 +578,58 @@ static void test_stall_limits(void **st)
     }
 }
 
+/* The detection times of the configuration the drive builds from its default parameters (the
+ * sensorless estimator: the lock checks on), in seconds against the protection.*_time_s they
+ * come from: loss of lock (the raw speed reversed: the 20 Hz average needs ~1.3 ms to say so)
+ * within lock_time_s + 5 ms, its fast path (the raw angle 90 deg off) within lock_jump_time_s +
+ * one period, torque plausibility (against the torque at 4 x the limit: ~2.3 ms; the lock checks
+ * off as with an encoder) within accel_time_s + 5 ms, none before its time. No drive: only
+ * mc_drive_build and this block. */
+static void test_built_detection_times(void **st)
+{
+    (void)st;
+    static mc_drive_cfg_t cfg;
+    static mc_drive_built_t b;
+    mc_param_err_t err;
+    mc_drive_cfg_default(&cfg);
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_control_angle_source, "unop", NULL));
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_estimator_model, "const", NULL));   /* no flux map */
+    assert_true(mc_drive_build(&cfg, &b, &err));
+    const mc_protect_cfg_t *c = &b.blk.prot;
+    const float ts = b.p.control_ts_s;
+    const float w = 0.5f * c->overspeed;
+    mc_protect_t s;
+    int n = 0;
+    /* loss of lock */
+    mc_protect_reset(&s, c, w);
+    mc_protect_in_t in = steady(c, w, 0.0f);
+    in.omega_raw = -w;
+    assert_int_equal(run_for(&s, c, &in, 20000, &n), MC_FAULT_LOSS_OF_LOCK);
+    float t = (float)n * ts;
+    assert_true(b.p.protection_lock_time_s > 0.0f);
+    assert_true(t >= b.p.protection_lock_time_s && t <= b.p.protection_lock_time_s + 5e-3f);
+    /* its fast path */
+    mc_protect_reset(&s, c, w);
+    in = steady(c, w, 0.0f);
+    in.theta_raw = in.theta + 1.5707963f;
+    assert_int_equal(run_for(&s, c, &in, 20000, &n), MC_FAULT_LOSS_OF_LOCK);
+    t = (float)n * ts;
+    assert_true(b.p.protection_lock_jump_time_s > 0.0f);
+    assert_true(t >= b.p.protection_lock_jump_time_s - 0.5f * ts && t <= b.p.protection_lock_jump_time_s + 1.5f * ts);
+    /* torque plausibility */
+    const float acc = -4.0f * c->accel_per_nm * c->accel_torque;
+    const float w0 = 0.9f * c->overspeed;
+    assert_true(w0 + acc * (b.p.protection_accel_time_s + 0.01f) > 0.0f);   /* the ramp stays in range */
+    /* the lock checks off, as with an encoder: a speed estimate this steep swings about its
+     * average and they would (rightly) speak first */
+    mc_protect_cfg_t enc = *c;
+    enc.lock_n = enc.jump_n = 0u;
+    assert_int_equal(ramp(&enc, c->accel_torque, w0, acc, 20000, &n), MC_FAULT_TORQUE);
+    t = (float)n * ts;
+    assert_true(b.p.protection_accel_time_s > 0.0f);
+    assert_true(t >= b.p.protection_accel_time_s && t <= b.p.protection_accel_time_s + 5e-3f);
+}
+
 /* The reactions: recover only the recoverable reasons, while running, retries times, counted
  * again from zero after retry_reset_n periods of RUN; hold the field weakening only for
  * over-speed above the generation speed; the reaction ends below 95 % of the link. */
@@ -631,6 +684,7 @@ int main(void)
         cmocka_unit_test(test_tracking_limit),
         cmocka_unit_test(test_lock_limits),
         cmocka_unit_test(test_stall_limits),
+        cmocka_unit_test(test_built_detection_times),
         cmocka_unit_test(test_reactions),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
