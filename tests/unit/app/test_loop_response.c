@@ -16,6 +16,8 @@
 #include "mc/angle.h"
 #include "mc/drive.h"
 #include "mc/encoder.h"
+#include "mc/current_ctrl.h"
+#include "mc/speed_ctrl.h"
 
 /* ---- the design responses ---------------------------------------------------------------- */
 
@@ -35,7 +37,7 @@ static double crit2_lag(double a, double t)
 }
 
 /* Step response of a / (s + a): the current loop after pole-zero cancellation. */
-static __attribute__((unused)) double first_step(double a, double t)
+static double first_step(double a, double t)
 {
     return 1.0 - exp(-a * t);
 }
@@ -107,7 +109,7 @@ static void check_response(const char *what, const resp_t *m, double (*f)(double
     printf("%s: overshoot %.2f %% (design %.2f %%), rise %.3f ms (%.3f), peak at %.3f ms (%.3f), "
            "settled to %.0f %% at %.3f ms (%.3f)\n",
            what, 100.0 * (m->peak - 1.0), 100.0 * (peak - 1.0), 1e3 * (m->t90 - m->t10), 1e3 * (t90 - t10),
-           1e3 * m->t_peak, 1e3 * 2.0 / a, 100.0 * band, 1e3 * m->t_settle, 1e3 * ts_design);
+           1e3 * m->t_peak, overshoot ? 1e3 * 2.0 / a : INFINITY, 100.0 * band, 1e3 * m->t_settle, 1e3 * ts_design);
     if (overshoot) {
         if (fabs(m->peak - peak) > tol_os) {
             fail_msg("%s: peak %.4f, design %.4f (+-%.3f)", what, m->peak, peak, tol_os);
@@ -229,11 +231,98 @@ static void test_encoder_pll_ramp_lag(void **st)
     assert_true(fabs((double)n_settled * ts - t_design) < 0.15 * t_design + ts);
 }
 
+/* ---- the current loop ----------------------------------------------------------------------- */
+
+enum { CC_N = 300, SC_N = 3000 };
+static double y2[SC_N];
+
+/* A reference step on one axis (the other held at 0, at standstill: no decoupling terms), the
+ * controller as built from control.current_bw_hz on the R-L plant it was designed for (the motor
+ * parameters, exact zero-order hold over each period, the voltage applied in the period it is
+ * computed): pole-zero cancellation leaves wb / (s + wb), no overshoot, 10-90 % in ln 9 / wb,
+ * 2 % in ln 50 / wb. A halved kp halves the bandwidth (and overshoots in the sampled loop); a
+ * halved ki leaves a slow tail. */
+static void cc_step_axis(bool q_axis)
+{
+    static mc_drive_built_t b;
+    build(&b, "encoder");
+    const double wb = 2.0 * PI_D * b.p.control_current_bw_hz, ts = b.p.control_ts_s;
+    const double r = b.p.motor_rs_ohm, l = q_axis ? b.p.motor_lq_h : b.p.motor_ld_h;
+    const double phi = exp(-r * ts / l);
+    mc_cc_t cc;
+    mc_cc_init(&cc, &b.cc);
+    const double step = 5.0;   /* [A] */
+    const mc_dq_t ref = {q_axis ? 0.0f : (float)step, q_axis ? (float)step : 0.0f};
+    double id = 0.0, iq = 0.0;
+    for (int k = 0; k < CC_N; ++k) {
+        const mc_dq_t meas = {(float)id, (float)iq};
+        const mc_dq_t u = mc_cc_step(&cc, ref, meas, 0.0f, 1e3f);
+        id = phi * id + (1.0 - phi) * (double)u.d / r;
+        iq = phi * iq + (1.0 - phi) * (double)u.q / r;
+        y[k] = (q_axis ? iq : id) / step;
+        /* the other axis stays at rest */
+        assert_near(q_axis ? id : iq, 0.0, 1e-6);
+    }
+    const resp_t m = measure(y, CC_N, ts, 0.02);
+    check_response(q_axis ? "current loop, i_q step" : "current loop, i_d step", &m, first_step, wb, ts, 0.02, false,
+                   0.02, 0.15);
+    /* the cancellation itself: with ki off its design the slow plant pole R / L stays in the
+     * loop with a residue of about (R / L) / wb, under the 2 % band; to 0.1 % the design takes
+     * ln 1000 / wb */
+    const resp_t fine = measure(y, CC_N, ts, 0.001);
+    const double t_fine = settling(first_step, wb, 0.001);
+    printf("  settled to 0.1 %% at %.3f ms (design %.3f)\n", 1e3 * fine.t_settle, 1e3 * t_fine);
+    assert_true(fabs(fine.t_settle - t_fine) < 0.15 * t_fine + ts);
+}
+
+static void test_current_loop_step(void **st)
+{
+    (void)st;
+    cc_step_axis(false);
+    cc_step_axis(true);
+}
+
+/* ---- the speed loop --------------------------------------------------------------------------- */
+
+/* A speed reference step on the inertia the gains were designed for (motor.inertia_kgm2, no
+ * load, small enough that the torque limit stays out of it), the loop running every
+ * control.speed_decimation periods: kp = J w, ki = kp w / 4 with w = 2 pi control.speed_bw_hz
+ * give J s^2 + kp s + ki = J (s + w/2)^2 and the response (2a s + a^2) / (s + a)^2, a = w / 2:
+ * 13.5 % overshoot at 4 / w, 2 % after 10.8 / w. The gains are the parameters' own
+ * (control.speed_kp, control.speed_ki: their defaults follow from the bandwidth and inertia). */
+static void test_speed_loop_step(void **st)
+{
+    (void)st;
+    static mc_drive_built_t b;
+    build(&b, "encoder");
+    const double w = 2.0 * PI_D * b.p.control_speed_bw_hz, j = b.p.motor_inertia_kgm2;
+    const double ts = b.p.control_ts_s, ts_sc = b.sc.ts;
+    assert_near(ts_sc, ts * (double)b.sc.decimation, 1e-9);
+    mc_sc_t sc;
+    mc_sc_init(&sc, &b.sc);
+    mc_sc_reset(&sc, 0.0f);
+    const double step = 0.2 * b.sc.torque_max / b.sc.kp;   /* [rad/s mech]: 20 % of the limit at first */
+    double om = 0.0;
+    int n = 0;
+    for (int k = 0; k < SC_N * b.sc.decimation && n < SC_N; ++k) {
+        const float t = mc_sc_step(&sc, (float)step, (float)om);
+        assert_true(fabs((double)t) < b.sc.torque_max);
+        om += (double)t * ts / j;
+        if ((k + 1) % b.sc.decimation == 0) {
+            y2[n++] = om / step;
+        }
+    }
+    const resp_t m = measure(y2, n, ts_sc, 0.02);
+    check_response("speed loop, speed step", &m, crit2_step, 0.5 * w, ts_sc, 0.02, true, 0.03, 0.15);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_encoder_pll_speed_step),
         cmocka_unit_test(test_encoder_pll_ramp_lag),
+        cmocka_unit_test(test_current_loop_step),
+        cmocka_unit_test(test_speed_loop_step),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
