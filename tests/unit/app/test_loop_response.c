@@ -4,6 +4,8 @@
  * to the output. A gain built at half (or twice) its design moves at least one of them out.
  *  - the encoder's speed PLL (mc/encoder.h, control.encoder_pll_bw_hz): critically damped,
  *    s^2 + 2w s + w^2, both poles at -w;
+ *  - the UNOP source's PLL filter (Fig. 6.9, estimator.pll_bw_hz): the same design on the raw
+ *    estimate's angle;
  *  - the current loop (mc/current_ctrl.h, control.current_bw_hz) on an R-L plant: pole-zero
  *    cancellation, first order at the bandwidth;
  *  - the speed loop (mc/speed_ctrl.h, control.speed_bw_hz) on the inertia motor.inertia_kgm2:
@@ -16,6 +18,8 @@
 #include "mc/angle.h"
 #include "mc/drive.h"
 #include "mc/encoder.h"
+#include "mc/pll.h"
+#include "mc/unop.h"
 #include "mc/current_ctrl.h"
 #include "mc/speed_ctrl.h"
 
@@ -231,6 +235,60 @@ static void test_encoder_pll_ramp_lag(void **st)
     assert_true(fabs((double)n_settled * ts - t_design) < 0.15 * t_design + ts);
 }
 
+/* ---- the UNOP source's PLL filter (Fig. 6.9) ------------------------------------------------- */
+
+/* src_unop.c's configuration (private there): the estimator's, then the PLL's. Checked below
+ * field by field against the parameters, so that a change of that layout fails here loudly. */
+typedef struct {
+    mc_unop_cfg_t unop;
+    mc_pll_cfg_t pll;
+} unop_cfg_mirror_t;
+
+/* The PLL after the estimator filters its angle: with the estimated speed as feed-forward the
+ * raw angle goes through (kp s + ki) / (s^2 + kp s + ki), critically damped at
+ * w = 2 pi estimator.pll_bw_hz (3.9): a jump of the raw angle (no speed in it) comes through
+ * with 13.5 % overshoot at 2 / w and settles to 2 % in 5.4 / w. The PLL as the unop source
+ * builds it from the parameters. */
+static void test_unop_pll_filter_step(void **st)
+{
+    (void)st;
+    static mc_drive_built_t b;
+    mc_drive_cfg_t cfg;
+    mc_drive_cfg_default(&cfg);
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_control_angle_source, "unop", NULL));
+    assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_estimator_model, "const", NULL));   /* no map here */
+    mc_param_err_t err;
+    assert_true(mc_drive_build(&cfg, &b, &err));
+    unop_cfg_mirror_t c;
+    memcpy(&c, &b.blk.src.cfg, sizeof c);
+    assert_true(c.unop.ts == b.p.control_ts_s && c.unop.k1 == b.p.estimator_k1 && c.unop.k2 == b.p.estimator_k2 &&
+                c.unop.iter_max == (int)b.p.estimator_iter_max);
+    assert_true(c.pll.ts == b.p.control_ts_s && c.pll.speed_fc_hz == b.p.estimator_pll_speed_fc_hz);
+    const double w = 2.0 * PI_D * b.p.estimator_pll_bw_hz, ts = b.p.control_ts_s;
+    mc_pll_t pll;
+    mc_pll_init(&pll, &c.pll);
+    /* running at a steady estimated speed, the raw angle jumps by 0.2 rad once */
+    const double we = 300.0, jump = 0.2;
+    double th = 0.5;
+    mc_pll_reset(&pll, (float)(th - we * ts), (float)we);
+    pll.integ = 0.0f;
+    for (int k = 0; k < 20; ++k) {
+        mc_pll_step(&pll, (float)th, (float)we);
+        th += we * ts;
+    }
+    enum { UN = 1500 };
+    static double yu[UN];
+    for (int k = 0; k < UN; ++k) {
+        mc_pll_step(&pll, mc_wrap_pi((float)(th + jump)), (float)we);
+        /* the PLL's angle, relative to the raw one without the jump, over the jump */
+        yu[k] = (double)mc_wrap_pi((float)((double)pll.theta - th)) / jump;
+        th += we * ts;
+    }
+    /* the first sample is the prediction made before the jump: the response starts one late */
+    const resp_t m = measure(yu + 1, UN - 1, ts, 0.02);
+    check_response("unop PLL filter, raw angle jump", &m, crit2_step, w, ts, 0.02, true, 0.03, 0.15);
+}
+
 /* ---- the current loop ----------------------------------------------------------------------- */
 
 enum { CC_N = 300, SC_N = 3000 };
@@ -321,6 +379,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_encoder_pll_speed_step),
         cmocka_unit_test(test_encoder_pll_ramp_lag),
+        cmocka_unit_test(test_unop_pll_filter_step),
         cmocka_unit_test(test_current_loop_step),
         cmocka_unit_test(test_speed_loop_step),
     };
