@@ -326,6 +326,150 @@ static void test_corrupt_newest_falls_back(void **state)
     assert_true(same_cfg(&got, b, false));
 }
 
+/* Two saves a (slot 0) and b (slot 1, newest) with records of the same lengths (same map size),
+ * so that the header's length checks cannot tell one save's records from the other's; the payload
+ * offsets and lengths of their records. */
+static const mc_drive_cfg_t *splice_a, *splice_b;
+static uint8_t *pay0, *pay1;
+static const size_t splice_pl = MC_STORE_PARAMS_MAX, splice_ml = 4u * (14u + 2u * 6u * 9u);
+static uint8_t splice_tmp[MC_STORE_PARAMS_MAX + MC_STORE_MODEL_MAX];
+
+static void two_saves(void)
+{
+    nvm_init(&nvm);
+    splice_a = make_cfg(1, 6, 9);
+    splice_b = make_cfg(2, 6, 9);
+    assert_int_equal(mc_pstore_save(&nvm, splice_a, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 0 */
+    assert_int_equal(mc_pstore_save(&nvm, splice_b, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 1 */
+    snap = nvm;
+    pay0 = blk(&nvm, 0) + 40;
+    pay1 = blk(&nvm, s1) + 40;
+    /* each record valid on its own (mc/store.h's decoders), and every record differs */
+    mc_params_t p;
+    mc_est_model_t m;
+    for (int k = 0; k < 2; ++k) {
+        const uint8_t *pay = k == 0 ? pay0 : pay1;
+        assert_int_equal(mc_store_params_decode(pay, splice_pl, &p, NULL), MC_STORE_OK);
+        assert_int_equal(mc_store_model_decode(pay + splice_pl, splice_ml, &m, &got_map), MC_STORE_OK);
+    }
+    assert_true(memcmp(pay0, pay1, splice_pl) != 0 && memcmp(pay0 + splice_pl, pay1 + splice_pl, splice_ml) != 0);
+}
+
+/* Records moved within and between copies where the record structure shows it, and a commit
+ * that does not match its records: the newest copy so damaged is refused (the older copy,
+ * whole, FELL_BACK); the older copy spliced does not disturb the newest. */
+static void test_reordered_records_refused(void **state)
+{
+    (void)state;
+    two_saves();
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    /* b's records in the other order (model first) */
+    memcpy(splice_tmp, pay1 + splice_pl, splice_ml);
+    memcpy(splice_tmp + splice_ml, pay1, splice_pl);
+    memcpy(pay1, splice_tmp, splice_pl + splice_ml);
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, splice_a, false));
+    assert_int_equal(info.slot, 0);
+    assert_true(info.fell_back);
+    /* b's parameter record twice, where the model belongs (its CRC valid, its magic wrong) */
+    nvm = snap;
+    memcpy(pay1 + splice_pl, pay1, splice_pl < splice_ml ? splice_pl : splice_ml);
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, splice_a, false));
+    /* a commit that does not match its payload: b's header with another payload CRC and its
+     * header CRC made valid again (a header written for other records); b's records intact */
+    nvm = snap;
+    uint8_t *h1 = blk(&nvm, s1);
+    h1[24] ^= 0x01u;
+    const uint32_t hc = mc_crc32(h1, 28u);
+    for (int k = 0; k < 4; ++k) {
+        h1[28 + k] = (uint8_t)(hc >> (8 * k));
+    }
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, splice_a, false));
+    assert_int_equal(info.slot, 0);
+    /* the older copy spliced (b's model in a's copy), the newest intact: the newest */
+    nvm = snap;
+    memcpy(pay0 + splice_pl, pay1 + splice_pl, splice_ml);
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, splice_b, false));
+    assert_int_equal(info.slot, 1);
+}
+
+/* Records spliced between saves, each keeping its own valid CRC: only the commit (the header's
+ * payload CRC, covered by the header's CRC) can tell such a copy from a real one. The newest copy
+ * spliced must give the older copy, whole, with FELL_BACK; both spliced: CORRUPT, nothing
+ * applied. Never a mixed set.
+ * KNOWN FAILURE (issue 30 finding, registered WILL_FAIL as app_param_store_splice): the payload
+ * CRC runs over each record's bytes AND its CRC word, and a CRC over data followed by its own CRC
+ * ends in a constant state, so the payload CRC of two records with valid CRCs depends on their
+ * lengths only (a and b here have the same payload CRC, c599e090 on 4 x 4 KiB): b's parameters
+ * with a's model load as "ok". Remove WILL_FAIL with the fix. */
+#ifdef MC_TEST_PSTORE_SPLICE
+static void test_spliced_records_refused(void **state)
+{
+    (void)state;
+    two_saves();
+    const mc_drive_cfg_t *a = splice_a;
+    const size_t pl = splice_pl, ml = splice_ml;
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    /* 1. b's parameters with a's model: the older copy, a, whole */
+    memcpy(pay1 + pl, pay0 + pl, ml);
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, a, false));
+    assert_int_equal(info.slot, 0);
+    assert_true(info.fell_back);
+
+    /* 2. a's parameters with b's model */
+    nvm = snap;
+    memcpy(pay1, pay0, pl);
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, a, false));
+    assert_int_equal(info.slot, 0);
+
+    /* 3. the whole payload of the other copy under b's header (a's records, b's commit) */
+    nvm = snap;
+    memcpy(pay1, pay0, pl + ml);
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, a, false));
+    assert_int_equal(info.slot, 0);
+
+    /* 4. a record of a save that never committed here: d's parameter record (taken from a save
+     * of d over a's slot) in b's copy, a's copy as it was */
+    nvm = snap;
+    const mc_drive_cfg_t *d = make_cfg(4, 6, 9);
+    assert_int_equal(mc_pstore_save(&nvm, d, work, sizeof work, &info), MC_PSTORE_OK);
+    assert_int_equal(info.slot, 0);
+    memcpy(splice_tmp, pay0, pl);
+    nvm = snap;
+    memcpy(pay1, splice_tmp, pl);
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_true(same_cfg(&got, a, false));
+
+    /* 5. both copies spliced crosswise (each holds the other's model): neither loads, nothing is
+     * applied, and a save still goes to a slot and loads */
+    nvm = snap;
+    memcpy(splice_tmp, pay0 + pl, ml);
+    memcpy(pay0 + pl, pay1 + pl, ml);
+    memcpy(pay1 + pl, splice_tmp, ml);
+    assert_int_equal(load(&got, &info), MC_PSTORE_CORRUPT);
+    mc_params_t def;
+    mc_params_default(&def);
+    assert_memory_equal(&got.p, &def, sizeof def);
+    assert_null(got.est.map);
+    assert_int_equal(info.slot, -1);
+    const mc_drive_cfg_t *c = make_cfg(3, 0, 0);
+    assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, NULL), MC_PSTORE_OK);
+    assert_int_equal(load(&got, NULL), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, c, false));
+
+    /* the cause: the two commits hold the same payload CRC for different records */
+    assert_true(memcmp(blk(&snap, 0) + 24, blk(&snap, s1) + 24, 4u) != 0);
+}
+#endif
+
 static void test_erase_restores_defaults(void **state)
 {
     (void)state;
@@ -558,11 +702,18 @@ static int group_s25fl128s(void **state)
 
 int main(void)
 {
+#ifdef MC_TEST_PSTORE_SPLICE
+    /* app_param_store_splice: the known failure alone (see test_spliced_records_refused) */
+    const struct CMUnitTest splice[] = {cmocka_unit_test(test_spliced_records_refused)};
+    const int rs = cmocka_run_group_tests_name("host_4x4KiB", splice, group_uniform4k, NULL);
+    return rs + cmocka_run_group_tests_name("s25fl128s_2x64KiB", splice, group_s25fl128s, NULL);
+#endif
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_geometry),
         cmocka_unit_test(test_empty_and_bad_args),
         cmocka_unit_test(test_round_trip_records_bit_exact),
         cmocka_unit_test(test_corrupt_newest_falls_back),
+        cmocka_unit_test(test_reordered_records_refused),
         cmocka_unit_test(test_erase_restores_defaults),
         cmocka_unit_test(test_failing_device),
         cmocka_unit_test(test_power_cut_at_every_step),
