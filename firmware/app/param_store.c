@@ -19,7 +19,7 @@ typedef struct {
 } geom_t;
 
 typedef struct {
-    uint32_t seq, flags, params_len, model_len, payload_crc;
+    uint32_t seq, flags, params_len, model_len, payload_crc, format;
     bool sane;                          /* magic, format, CRC, flags and lengths check      */
     bool marked;                        /* the commit marker is complete                    */
 } head_t;
@@ -242,22 +242,32 @@ static void sink_flush(sink_t *s, bool last)
     s->fill = 0u;
 }
 
-static void sink_put(sink_t *s, uint32_t w)
+static void sink_word(sink_t *s, uint32_t w, bool in_pay)
 {
     uint8_t *b = s->buf + s->fill;
     put32(b, w);
     s->rec = crc_add(s->rec, b, 4u);
-    s->pay = crc_add(s->pay, b, 4u);
+    if (in_pay) {
+        s->pay = crc_add(s->pay, b, 4u);
+    }
     s->fill += 4u;
     if (s->fill == s->g->chunk) {
         sink_flush(s, false);
     }
 }
 
-/* a record ends with the CRC-32 of its words before (the same as mc_crc32 over them) */
+static void sink_put(sink_t *s, uint32_t w)
+{
+    sink_word(s, w, true);
+}
+
+/* a record ends with the CRC-32 of its words before (the same as mc_crc32 over them); that word
+ * stays out of the payload CRC (format 2): a CRC run over data and then the data's own CRC ends
+ * in a constant, so with it the payload CRC of valid records depended on their lengths only and
+ * records spliced from two saves passed */
 static void sink_close(sink_t *s)
 {
-    sink_put(s, ~s->rec);
+    sink_word(s, ~s->rec, false);
     s->rec = 0xFFFFFFFFu;
 }
 
@@ -326,9 +336,10 @@ typedef struct {
     uint32_t at, left;            /* payload offset of the next read, bytes still unread    */
     uint32_t rec, pay;
     bool io_ok;
+    bool pay_crcs;                /* format 1: the records' CRC words are in the payload CRC */
 } src_t;
 
-static bool src_take(src_t *r, uint32_t *w)
+static bool src_word(src_t *r, uint32_t *w, bool in_pay)
 {
     if (r->pos == r->fill) {
         if (r->left == 0u || !r->io_ok) {
@@ -347,9 +358,16 @@ static bool src_take(src_t *r, uint32_t *w)
     const uint8_t *b = r->buf + r->pos;   /* lengths are whole words: pos + 4 <= fill */
     r->pos += 4u;
     r->rec = crc_add(r->rec, b, 4u);
-    r->pay = crc_add(r->pay, b, 4u);
+    if (in_pay) {
+        r->pay = crc_add(r->pay, b, 4u);
+    }
     *w = get32(b);
     return true;
+}
+
+static bool src_take(src_t *r, uint32_t *w)
+{
+    return src_word(r, w, true);
 }
 
 static copy_t src_fail(const src_t *r)
@@ -361,7 +379,7 @@ static copy_t src_crc(src_t *r)
 {
     const uint32_t want = ~r->rec;
     uint32_t w;
-    if (!src_take(r, &w)) {
+    if (!src_word(r, &w, r->pay_crcs)) {
         return src_fail(r);
     }
     r->rec = 0xFFFFFFFFu;
@@ -469,7 +487,8 @@ static copy_t check_copy(const hal_nvm_t *nvm, const geom_t *g, int slot, const 
     if ((h->flags & MC_PSTORE_FLAG_DEFAULTS) != 0u) {
         return COPY_OK;   /* nothing else in it (read_head checked the lengths are 0) */
     }
-    src_t r = {nvm, g, slot, work, 0u, 0u, 0u, h->params_len + h->model_len, 0xFFFFFFFFu, 0xFFFFFFFFu, true};
+    src_t r = {nvm, g, slot, work, 0u, 0u, 0u, h->params_len + h->model_len, 0xFFFFFFFFu, 0xFFFFFFFFu, true,
+               h->format == 1u};
     copy_t st = get_params(&r, h->params_len, q, rep);
     if (st == COPY_OK) {
         st = get_model(&r, h->model_len, m, map_out);
@@ -509,9 +528,10 @@ static bool read_head(const hal_nvm_t *nvm, const geom_t *g, int slot, uint8_t *
     h->params_len = get32(work + 16);
     h->model_len = get32(work + 20);
     h->payload_crc = get32(work + 24);
+    h->format = get32(work + 4);   /* 1: written before the record CRCs left the payload CRC */
     const bool defaults = (h->flags & MC_PSTORE_FLAG_DEFAULTS) != 0u;
     const uint32_t cap = g->payload_cap;
-    h->sane = get32(work) == MC_PSTORE_MAGIC && get32(work + 4) == MC_PSTORE_FORMAT &&
+    h->sane = get32(work) == MC_PSTORE_MAGIC && (h->format == MC_PSTORE_FORMAT || h->format == 1u) &&
               get32(work + 28) == ~crc_add(0xFFFFFFFFu, work, 28u) &&
               (h->flags & ~(MC_PSTORE_FLAG_DEFAULTS | MC_PSTORE_FLAG_NO_MAP)) == 0u &&
               (defaults ? h->params_len == 0u && h->model_len == 0u
@@ -689,7 +709,7 @@ mc_pstore_status_t mc_pstore_save(hal_nvm_t *nvm, const mc_drive_cfg_t *cfg, uin
     if ((map != NULL && !map_ok(map)) || !params_ok(&cfg->p, &q)) {
         return MC_PSTORE_BAD_ARGS;
     }
-    head_t h = {0u, 0u, MC_STORE_PARAMS_MAX, model_len(map), 0u, false, false};
+    head_t h = {0u, 0u, MC_STORE_PARAMS_MAX, model_len(map), 0u, MC_PSTORE_FORMAT, false, false};
     if (round_up(h.params_len + h.model_len, g.align) > g.payload_cap) {
         map = NULL;   /* too big for a slot: the set without its map (geometry() saw that fits) */
         h.model_len = model_len(NULL);
@@ -769,7 +789,7 @@ mc_pstore_status_t mc_pstore_erase(hal_nvm_t *nvm, uint8_t *work, size_t work_le
     }
     /* first a committed "defaults" copy (atomic by its marker, like a save) ... */
     const int slot = pk.slot >= 0 ? 1 - pk.slot : 0;
-    head_t h = {pk.seq_next, MC_PSTORE_FLAG_DEFAULTS, 0u, 0u, 0u, false, false};
+    head_t h = {pk.seq_next, MC_PSTORE_FLAG_DEFAULTS, 0u, 0u, 0u, MC_PSTORE_FORMAT, false, false};
     st = commit(nvm, &g, slot, &h, NULL, NULL, NULL, work, &q, &m);
     if (st != MC_PSTORE_OK) {
         return st;

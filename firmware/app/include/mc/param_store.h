@@ -12,7 +12,9 @@
  * A copy, at byte offsets from its slot's first block (U: write unit, A = max(U, 8)):
  *   0      header, 8 little-endian words: MC_PSTORE_MAGIC, MC_PSTORE_FORMAT, sequence, flags
  *          (MC_PSTORE_FLAG_*), parameter record length, model record length, CRC-32 of the
- *          payload, CRC-32 of the 7 words before; padded with 0xFF to H = round_up(32, U)
+ *          payload's words without the records' own CRC words (format 2; format 1, still read,
+ *          had them in, which made it depend on the records' lengths only), CRC-32 of the 7
+ *          words before; padded with 0xFF to H = round_up(32, U)
  *   H      the commit marker: A bytes 0x5A 0xA5 0x5A ..., written LAST (0xFF until then)
  *   H + A  the payload: the parameter record then the model record, exactly as
  *          mc_store_params_encode / mc_store_model_encode write them (each closed by its own
@@ -61,7 +63,7 @@
 #include "mc/store.h"
 
 #define MC_PSTORE_MAGIC         0x5350434Du   /* "MCPS" */
-#define MC_PSTORE_FORMAT        1u
+#define MC_PSTORE_FORMAT        2u   /* 2: the records' CRC words are not in the payload CRC; 1 is read */
 #define MC_PSTORE_FLAG_DEFAULTS 1u            /* restored to defaults: no records */
 #define MC_PSTORE_FLAG_NO_MAP   2u            /* the map was dropped: it did not fit */
 #define MC_PSTORE_WORK_MIN      64u           /* [bytes], and at least 2 write units */
