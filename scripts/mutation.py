@@ -115,10 +115,15 @@ def sample(all_mutants: dict[str, list[dict]], n: int | None, seed: int) -> list
             f = max(files, key=lambda f: (take[f], f))
             take[f] -= 1
         chosen = [m for f in files for m in pools[f][:take[f]]]
+    # a mutant that does not build is replaced by the next of its file's shuffled pool (main())
+    for f in files:
+        k = sum(1 for m in chosen if m["file"] == f)
+        RESERVE[f] = pools[f][k:]
     chosen.sort(key=lambda m: (m["file"], m["line"], m["mutated"]))
-    for k, m in enumerate(chosen):
-        m["id"] = k
     return chosen
+
+
+RESERVE: dict[str, list[dict]] = {}
 
 
 def load_equivalent(path: Path) -> list[tuple[str, int, str, str]]:
@@ -198,10 +203,10 @@ class CRunner:
             # --quick (CI): only the covering tests (first stage), only the targets they run:
             # the cmocka executables named as their tests and mcsim for the scenarios
             self.tests = sorted({t for f in quick_files for t in self.stages(f)[0]})
-            known = subprocess.run(["ninja", "-C", str(self.build), "-t", "targets", "all"],
-                                   capture_output=True, text=True, check=True).stdout
-            known = {ln.split(":")[0].rsplit("/", 1)[-1] for ln in known.splitlines()}
-            self.targets = sorted({t for t in self.tests if t in known} | {"mcsim"})
+            # the firmware layers' unit-test folders (their executables and generators), the
+            # CANopen fuzzer's, and mcsim for the scenarios; not the plant's, PIL's or ports' tests
+            self.targets = ["mcsim"] + [f"tests/{d}/all" for d in ("unit/core", "unit/control",
+                            "unit/estimators", "unit/app", "unit/comms", "fuzz")]
         rc, out, _ = run(["ninja", "-C", str(self.build), f"-j{jobs}", *self.targets], None, None)
         if rc != 0:
             sys.exit("mutation: the unmutated copy does not build:\n" + out[-3000:])
@@ -244,6 +249,8 @@ class CRunner:
             return "timeout", "", out
         if rc == 0:
             return "passed", "", out
+        if "***Not Run" in out or "Could not find executable" in out:
+            sys.exit("mutation: a test's executable is missing from the mutant build (not a kill):\n" + out[-2000:])
         failed = re.findall(r"\d+/\d+ Test\s+#\d+:\s+(\S+)\s+\.+\*+(\w+)", out)
         timeouts = [n for n, why in failed if why.lower().startswith("timeout")]
         names = [n for n, _ in failed]
@@ -319,10 +326,22 @@ def main() -> int:
     work.mkdir(parents=True, exist_ok=True)
 
     t_start = time.monotonic()
-    all_mutants = {}
-    for f in files:
+    # universalmutator takes a few seconds a file: its mutants are cached by the file's content
+    import hashlib
+    from concurrent.futures import ThreadPoolExecutor
+    cache = work / "mutants"
+    cache.mkdir(exist_ok=True)
+
+    def gen(f):
+        key = hashlib.sha256((ROOT / f).read_bytes() + lang.encode()).hexdigest()[:20]
+        c = cache / f"{Path(f).name}.{key}.json"
+        if c.exists():
+            return json.loads(c.read_text())
         ms = [m for m in generate(f, lang) if not skip_line(m["original"], lang)]
-        all_mutants[f] = ms
+        c.write_text(json.dumps(ms))
+        return ms
+    with ThreadPoolExecutor(max(1, a.jobs)) as ex:
+        all_mutants = dict(zip(files, ex.map(gen, files)))
     chosen = sample(all_mutants, a.sample, a.seed)
     # the must-kill mutants always run, whatever the sample (a line number that moved is found
     # again by its text; one that is no longer generated fails the run: update the list)
@@ -352,7 +371,11 @@ def main() -> int:
         print(f"mutation: the unmutated tests pass in {base_t:.0f} s", flush=True)
 
     results = []
-    for k, m in enumerate(chosen):
+    queue = list(chosen)
+    k = -1
+    while k + 1 < len(queue):
+        k += 1
+        m = queue[k]
         t0 = time.monotonic()
         eq = next((r for (f, ln, mu, r) in equivalent
                    if f == m["file"] and ln == m["line"] and mu == m["mutated"].strip()), None)
@@ -363,6 +386,12 @@ def main() -> int:
             ok, bout = runner.build_mutant(a.build_timeout)
             if not ok:
                 m.update(status="no_compile")
+                # keep the number of tested mutants: the file's next mutant in the seeded order
+                while RESERVE.get(m["file"]):
+                    r = RESERVE[m["file"]].pop(0)
+                    if not any(q["line"] == r["line"] and q["mutated"] == r["mutated"] and q["file"] == r["file"] for q in queue):
+                        queue.insert(k + 1, dict(r, must_kill=False))
+                        break
             else:
                 deadline = t0 + a.timeout
                 m["status"] = "survived"
@@ -383,7 +412,7 @@ def main() -> int:
         results.append(m)
         done = k + 1
         el = time.monotonic() - t_start
-        print(f"[{done}/{len(chosen)}] {m['file']}:{m['line']} {m['status']}"
+        print(f"[{done}/{len(queue)}] {m['file']}:{m['line']} {m['status']}"
               f"{' by ' + m['by'] if m.get('by') else ''} ({m['seconds']:.0f} s; elapsed {el/60:.1f} min)", flush=True)
     runner.build_mutant(a.build_timeout)   # leave the copy's build unmutated
 
@@ -392,7 +421,7 @@ def main() -> int:
     (out / "report.md").write_text(report(summary))
     s = summary["totals"]
     print(f"mutation: {s['killed']} killed, {s['survived']} survived, {s['equivalent']} equivalent, "
-          f"{s['no_compile']} not compiling (sample of {len(chosen)} of {generated}, seed {a.seed}"
+          f"{s['no_compile']} not compiling (sample of {len(chosen)} of {generated}, {len(queue) - len(chosen)} more drawn for those that do not build, seed {a.seed}"
           f"{', ' + a.label if a.label else ''}): score {s['score']:.1f} %", flush=True)
     print(f"mutation: {out / 'report.md'}", flush=True)
 
