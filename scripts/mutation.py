@@ -279,10 +279,16 @@ class PyRunner:
         first = sorted({t for t in self.tests for p in pats if fnmatch.fnmatch(t, p)})
         return [first, [t for t in self.tests if t not in first]]
 
-    apply = CRunner.apply
+    def apply(self, m: dict | None, rel: str):
+        self.last = self.src / rel
+        CRunner.apply(self, m, rel)
 
     def build_mutant(self, timeout: float) -> tuple[bool, str]:
-        return True, ""
+        # a mutant that is not valid Python "does not build" (not a kill)
+        rc, out, _ = run([str(ROOT / ".venv/bin/python"), "-c",
+                          "import ast, sys; ast.parse(open(sys.argv[1]).read())", str(self.last)],
+                         None, timeout)
+        return rc == 0, out
 
     def test_stage(self, tests: list[str], timeout: float) -> tuple[str, str, str]:
         if not tests:
