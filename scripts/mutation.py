@@ -23,6 +23,7 @@ import os
 import random
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -170,13 +171,18 @@ def copy_tree(work: Path) -> Path:
 
 
 def run(cmd, cwd, timeout, env=None) -> tuple[int | None, str, float]:
+    """The command in its own process group: past the timeout the whole group (ctest and the
+    tests it started) is killed, so a hung mutant cannot hold the run."""
     t0 = time.monotonic()
+    p = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                         text=True, start_new_session=True)
     try:
-        p = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
-        return p.returncode, p.stdout + p.stderr, time.monotonic() - t0
-    except subprocess.TimeoutExpired as e:
-        out = (e.stdout or b"").decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
-        return None, out, time.monotonic() - t0
+        out, _ = p.communicate(timeout=timeout)
+        return p.returncode, out, time.monotonic() - t0
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        out, _ = p.communicate()
+        return None, out or "", time.monotonic() - t0
 
 
 class CRunner:
