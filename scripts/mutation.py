@@ -80,6 +80,15 @@ def generate(rel: str, lang: str) -> list[dict]:
             seen.add(key)
             mutants.append({"file": rel, "line": i + 1, "original": src[i].rstrip("\n"),
                             "mutated": mut[i].rstrip("\n")})
+        if lang == "python":
+            # lines inside a multi-line string (docstrings): universalmutator mutates their text
+            import io
+            import tokenize
+            inside = set()
+            for tok in tokenize.generate_tokens(io.StringIO("".join(src)).readline):
+                if tok.type == tokenize.STRING and tok.end[0] > tok.start[0]:
+                    inside |= set(range(tok.start[0], tok.end[0] + 1))
+            mutants = [m for m in mutants if m["line"] not in inside]
         return mutants
 
 
@@ -345,7 +354,7 @@ def main() -> int:
     cache.mkdir(exist_ok=True)
 
     def gen(f):
-        key = hashlib.sha256((ROOT / f).read_bytes() + lang.encode()).hexdigest()[:20]
+        key = hashlib.sha256((ROOT / f).read_bytes() + lang.encode() + b"v2").hexdigest()[:20]   # v2: filters
         c = cache / f"{Path(f).name}.{key}.json"
         if c.exists():
             return json.loads(c.read_text())
