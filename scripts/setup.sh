@@ -25,8 +25,8 @@ if [ ! -x .venv/bin/python ]; then
   echo "setup: creating .venv"
   python3 -m venv .venv
 fi
-if ! .venv/bin/python -c "import mctools, pytest, matplotlib, distributed, can, canopen" 2>/dev/null ||
-   [ ! -x .venv/bin/mctune ]; then
+if ! .venv/bin/python -c "import mctools, pytest, matplotlib, distributed, can, canopen, universalmutator, mutmut" 2>/dev/null ||
+   [ ! -x .venv/bin/mctune ] || [ ! -x .venv/bin/mutate ]; then
   echo "setup: installing the Python tools into .venv"
   .venv/bin/pip install -q --upgrade pip
   .venv/bin/pip install -q -e "tools[test,can]"
