@@ -242,6 +242,20 @@ static void test_residual(void **st)
  * machine at 500 rad/s el, 8 A in q, -3 A in d: a voltage off the model by 1.1 x the threshold
  * (resid_v + resid_w_coef |w| = 45 V) along +-d or +-q trips after the 20 Hz average has crossed
  * the threshold (191 periods, as for the torque check) plus the persistence; 0.9 x never. */
+/* Runs the running checks on a fixed input until a fault or n periods; *periods: how many ran. */
+static uint32_t run_for(mc_protect_t *s, const mc_protect_cfg_t *c, const mc_protect_in_t *in, int n, int *periods)
+{
+    uint32_t r = 0u;
+    int k = 0;
+    while (k < n && r == 0u) {
+        bool doubt;
+        r = mc_protect_running(s, c, in, &doubt);
+        ++k;
+    }
+    *periods = k;
+    return r;
+}
+
 static void test_voltage_model_threshold(void **st)
 {
     (void)st;
@@ -261,12 +275,7 @@ static void test_voltage_model_threshold(void **st)
             mc_protect_t s;
             mc_protect_reset(&s, &c, w);
             int n = 0;
-            uint32_t r = 0u;
-            while (r == 0u && n < 3000) {
-                bool doubt;
-                r = mc_protect_running(&s, &c, &in, &doubt);
-                ++n;
-            }
+            const uint32_t r = run_for(&s, &c, &in, 3000, &n);
             if (side == 0) {
                 assert_int_equal(r, 0u);
             } else {
@@ -364,20 +373,6 @@ static void test_torque_plausibility(void **st)
     /* a torque just below accel_torque, even against a hard deceleration: never */
     assert_int_equal(ramp(&c, nextafterf(c.accel_torque, 0.0f), 300.0f, -2000.0f, 3000, &n), 0u);
     assert_int_equal(ramp(&c, c.accel_torque, 300.0f, -2000.0f, 3000, &n), MC_FAULT_TORQUE);
-}
-
-/* Runs the running checks on a fixed input until a fault or n periods; *periods: how many ran. */
-static uint32_t run_for(mc_protect_t *s, const mc_protect_cfg_t *c, const mc_protect_in_t *in, int n, int *periods)
-{
-    uint32_t r = 0u;
-    int k = 0;
-    while (k < n && r == 0u) {
-        bool doubt;
-        r = mc_protect_running(s, c, in, &doubt);
-        ++k;
-    }
-    *periods = k;
-    return r;
 }
 
 /* Periods for a 20 Hz average starting at 0 to cross 1 / f of its final value. */
