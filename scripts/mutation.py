@@ -30,6 +30,9 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from mutation_cov import TCE, build_coverage, tree_key  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 C_FILES = "firmware/{core,control,estimators,app,comms}/*.c"
 PY_FILES = "tools/mctools/mctune/eds.py,tools/mctools/mctune/drive.py,tools/mctools/sweep/common.py"
@@ -194,18 +197,47 @@ def run(cmd, cwd, timeout, env=None) -> tuple[int | None, str, float]:
         return None, out or "", time.monotonic() - t0
 
 
+def test_targets(build: Path) -> dict[str, list[str]]:
+    """Each test's build outputs (ninja targets): the paths inside the build folder its command
+    names, with those of the fixtures it requires."""
+    outs = set()
+    for ln in subprocess.run(["ninja", "-C", str(build), "-t", "targets", "all"], capture_output=True,
+                             text=True, check=True).stdout.splitlines():
+        outs.add(ln.rsplit(": ", 1)[0])
+    js = json.loads(subprocess.run(["ctest", "--test-dir", str(build), "--show-only=json-v1"],
+                                   capture_output=True, text=True, check=True).stdout)
+    own: dict[str, set[str]] = {}
+    requires: dict[str, list[str]] = {}
+    setup: dict[str, list[str]] = {}
+    b = str(build.resolve()) + "/"
+    for t in js["tests"]:
+        mine = set()
+        for tok in t.get("command", []):
+            for part in tok.split("="):
+                if part.startswith(b) and part[len(b):] in outs:
+                    mine.add(part[len(b):])
+        own[t["name"]] = mine
+        props = {p["name"]: p["value"] for p in t.get("properties", [])}
+        requires[t["name"]] = list(props.get("FIXTURES_REQUIRED", []))
+        for fx in props.get("FIXTURES_SETUP", []):
+            setup.setdefault(fx, []).append(t["name"])
+    return {t: sorted(own[t].union(*[own[s] for fx in requires[t] for s in setup.get(fx, [])]))
+            for t in own}
+
+
 class CRunner:
     lang = "c"
 
-    def __init__(self, work: Path, jobs: int, quick_files: list[str] | None = None):
+    def __init__(self, work: Path, jobs: int, quick_files: list[str] | None = None, name: str = "w0"):
         self.work = work
-        self.src = copy_tree(work)
-        self.build = work / "build"
+        self.src = copy_tree(work / name)
+        self.build = work / name / "build"
         self.jobs = jobs
         self.quick = quick_files is not None
         if not (self.build / "build.ninja").exists():
             subprocess.run(["cmake", "-S", str(self.src), "-B", str(self.build), "-G", "Ninja",
-                            "-DCMAKE_BUILD_TYPE=Release", "-DMC_BUILD_IMAGES=OFF"], check=True,
+                            "-DCMAKE_BUILD_TYPE=Release", "-DMC_BUILD_IMAGES=OFF",
+                            "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON"], check=True,
                            stdout=subprocess.DEVNULL)
         names = subprocess.run(["ctest", "--test-dir", str(self.build), "-N", "-LE", "pil"],
                                capture_output=True, text=True, check=True).stdout
@@ -214,6 +246,7 @@ class CRunner:
         # same mutant, and their comparison cannot see it)
         self.tests = [t for t in self.tests if not t.startswith("pil_")]
         self.targets: list[str] = []
+        self.cov = None   # Coverage (mutation_cov.py) when the run selects tests by line
         if self.quick:
             # --quick (CI): only the covering tests (first stage), only the targets they run:
             # the cmocka executables named as their tests and mcsim for the scenarios
@@ -225,6 +258,20 @@ class CRunner:
         rc, out, _ = run(["ninja", "-C", str(self.build), f"-j{jobs}", *self.targets], None, None)
         if rc != 0:
             sys.exit("mutation: the unmutated copy does not build:\n" + out[-3000:])
+        self.needs = test_targets(self.build)
+        self.tce = TCE(self.build, self.src)
+        self.tce_dir = Path(tempfile.mkdtemp(prefix="tce-", dir=work / name))
+        self.orig_obj: dict[str, str | None] = {}
+
+    def object_hash(self, rel: str) -> str | None:
+        """The mutated (as written now) file's object code hash; None: it does not compile."""
+        return self.tce.object_hash(rel, self.tce_dir / "m.o")
+
+    def original_object(self, rel: str) -> str | None:
+        if rel not in self.orig_obj:
+            self.apply(None, rel)
+            self.orig_obj[rel] = self.object_hash(rel)
+        return self.orig_obj[rel]
 
     def baseline(self, timeout: float) -> float:
         t0 = time.monotonic()
@@ -233,7 +280,13 @@ class CRunner:
             sys.exit(f"mutation: the unmutated tests do not pass ({status}); fix that first")
         return time.monotonic() - t0
 
-    def stages(self, rel: str) -> list[list[str]]:
+    def stages(self, rel: str, line: int | None = None) -> list[list[str]]:
+        if self.cov is not None and line is not None:
+            kind, first = self.cov.tests_for(rel, line, self.tests)
+            if kind == "line":
+                # only the tests that execute the line can tell the mutant from the original
+                return [first]
+            return [first, [t for t in self.tests if t not in first]]
         layer = Path(rel).parent.name
         stem = Path(rel).stem
         first = [t for t in self.tests if any(t.startswith(p) for p in LAYER_PREFIX.get(layer, []))
@@ -248,13 +301,34 @@ class CRunner:
             lines[m["line"] - 1] = m["mutated"] + "\n"
         path.write_text("".join(lines))
 
-    def build_mutant(self, timeout: float) -> tuple[bool, str]:
-        rc, out, _ = run(["ninja", "-C", str(self.build), f"-j{self.jobs}", *self.targets], None, timeout)
+    def build_mutant(self, timeout: float, tests: list[str] | None = None) -> tuple[bool, str]:
+        targets = self.targets
+        if tests is not None and not self.quick:
+            # only what the stage's tests run (and their fixtures'): ninja rebuilds a target
+            # whose sources changed when it is asked for, so nothing stale is ever run
+            targets = sorted({x for t in tests for x in self.needs.get(t, [])})
+            if not targets:
+                return True, ""
+        rc, out, _ = run(["ninja", "-C", str(self.build), f"-j{self.jobs}", *targets], None, timeout)
         return rc == 0, out
 
     def test_stage(self, tests: list[str], timeout: float) -> tuple[str, str, str]:
         if not tests:
             return "passed", "", ""
+        if self.cov is not None and len(tests) > 1:
+            # one at a time in the given order (fastest first): ctest would start the costliest
+            deadline = time.monotonic() + timeout
+            outs = []
+            for t in tests:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return "timeout", "", "".join(outs)
+                # a hung mutant: ten times the test's own time (coverage build, -O0) at most
+                st, names, out = self.test_stage([t], min(left, max(30.0, 10 * self.cov.seconds.get(t, 60.0))))
+                outs.append(out)
+                if st != "passed":
+                    return st, names, "".join(outs)
+            return "passed", "", "".join(outs)
         regex = "^(" + "|".join(re.escape(t) for t in tests) + ")$"
         per_test = max(10, int(timeout))
         rc, out, _ = run(["ctest", "--test-dir", str(self.build), "-R", regex, "-j", str(self.jobs),
@@ -289,7 +363,7 @@ class PyRunner:
             sys.exit(f"mutation: the unmutated Python tests do not pass ({status}):\n{out[-2000:]}")
         return time.monotonic() - t0
 
-    def stages(self, rel: str) -> list[list[str]]:
+    def stages(self, rel: str, line: int | None = None) -> list[list[str]]:
         pats = PY_TESTS.get(Path(rel).name, "").split()
         first = sorted({t for t in self.tests for p in pats if fnmatch.fnmatch(t, p)})
         return [first, [t for t in self.tests if t not in first]]
@@ -298,7 +372,7 @@ class PyRunner:
         self.last = self.src / rel
         CRunner.apply(self, m, rel)
 
-    def build_mutant(self, timeout: float) -> tuple[bool, str]:
+    def build_mutant(self, timeout: float, tests: list[str] | None = None) -> tuple[bool, str]:
         # a mutant that is not valid Python "does not build" (not a kill)
         rc, out, _ = run([str(ROOT / ".venv/bin/python"), "-c",
                           "import ast, sys; ast.parse(open(sys.argv[1]).read())", str(self.last)],
@@ -327,7 +401,13 @@ def main() -> int:
     ap.add_argument("--build-timeout", type=float, default=600)
     ap.add_argument("--out", default="out/mutation")
     ap.add_argument("--python", action="store_true", help="mutate the Python tools' key modules, run pytest")
-    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 2)
+    ap.add_argument("--jobs", type=int, default=None, help="ninja/ctest jobs of a worker (default: the cores shared among the workers)")
+    ap.add_argument("--workers", type=int, default=1, help="mutants tested at once, each in its own copy and build folder")
+    ap.add_argument("--no-coverage", action="store_true", help="C: do not select the tests by per-test line coverage (run the file's tests, then the rest)")
+    ap.add_argument("--no-tce", action="store_true", help="C: do not compile a mutant alone first to set apart the ones that do not build, the equivalent and the duplicate")
+    ap.add_argument("--resume", action="store_true", help="reuse the results in OUT/journal.jsonl of mutants whose file has not changed since")
+    ap.add_argument("--retest-survivors", action="store_true", help="with --resume: test the journal's survivors again (after new tests)")
+    ap.add_argument("--shard", help="I/N: only the I-th of N interleaved parts of the mutants (1-based), for several machines")
     ap.add_argument("--equivalent", default="scripts/mutation_equivalent.txt")
     ap.add_argument("--must-kill", help="file of file:line:mutated line that must be killed (fails otherwise)")
     ap.add_argument("--min-score", type=float, help="fail if the killed share of the tested non-equivalent mutants is below this (percent)")
@@ -336,6 +416,7 @@ def main() -> int:
     ap.add_argument("--work", help="folder of the source copy and its build (default build/mutation)")
     ap.add_argument("--label", default="", help="a label for the score line")
     a = ap.parse_args()
+    a.jobs = a.jobs or max(1, (os.cpu_count() or 2) // max(1, a.workers))
 
     lang = "python" if a.python else "c"
     files = expand(a.files or (PY_FILES if a.python else C_FILES))
@@ -343,15 +424,17 @@ def main() -> int:
         sys.exit("mutation: no file matches")
     out = (ROOT / a.out) if not os.path.isabs(a.out) else Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    work = (Path(a.work) if a.work else ROOT / "build" / "mutation") / lang
+    work = ((Path(a.work) if a.work else ROOT / "build" / "mutation") / lang).resolve()
     work.mkdir(parents=True, exist_ok=True)
 
     t_start = time.monotonic()
     # universalmutator takes a few seconds a file: its mutants are cached by the file's content
     import hashlib
+    import threading
     from concurrent.futures import ThreadPoolExecutor
     cache = work / "mutants"
     cache.mkdir(exist_ok=True)
+    fhash = {f: hashlib.sha256((ROOT / f).read_bytes()).hexdigest()[:16] for f in files}
 
     def gen(f):
         key = hashlib.sha256((ROOT / f).read_bytes() + lang.encode() + b"v2").hexdigest()[:20]   # v2: filters
@@ -361,9 +444,14 @@ def main() -> int:
         ms = [m for m in generate(f, lang) if not skip_line(m["original"], lang)]
         c.write_text(json.dumps(ms))
         return ms
-    with ThreadPoolExecutor(max(1, a.jobs)) as ex:
+    with ThreadPoolExecutor(max(1, a.jobs * a.workers)) as ex:
         all_mutants = dict(zip(files, ex.map(gen, files)))
     chosen = sample(all_mutants, a.sample, a.seed)
+    if a.shard:
+        i, n = (int(x) for x in a.shard.split("/"))
+        chosen = chosen[i - 1::n]
+        for f in RESERVE:
+            RESERVE[f] = RESERVE[f][i - 1::n]
     # the must-kill mutants always run, whatever the sample (a line number that moved is found
     # again by its text; one that is no longer generated fails the run: update the list)
     must = load_must_kill(ROOT / a.must_kill) if a.must_kill else []
@@ -374,75 +462,179 @@ def main() -> int:
         if not cands:
             missing.append(f"{f}:{ln}:{mu}")
             continue
-        if not any(c is cands[0] for c in chosen) and not any(
-                m["file"] == f and m["line"] == cands[0]["line"] and m["mutated"] == cands[0]["mutated"] for m in chosen):
+        if not any(m["file"] == f and m["line"] == cands[0]["line"] and m["mutated"] == cands[0]["mutated"] for m in chosen):
             chosen.append(dict(cands[0]))
     for m in chosen:
         m["must_kill"] = any(m["file"] == f and m["mutated"].strip() == mu for (f, _, mu) in must)
     chosen.sort(key=lambda m: (m["file"], m["line"], m["mutated"]))
     generated = sum(len(v) for v in all_mutants.values())
-    print(f"mutation: {generated} mutants of {len(files)} files (universalmutator), testing {len(chosen)} (seed {a.seed})", flush=True)
+    print(f"mutation: {generated} mutants of {len(files)} files (universalmutator), testing {len(chosen)} (seed {a.seed}"
+          f"{', shard ' + a.shard if a.shard else ''}, {a.workers} worker{'s' if a.workers > 1 else ''})", flush=True)
+
+    def mkey(m):
+        return f"{m['file']}@{fhash[m['file']]}:{m['line']}:{m['mutated']}"
+    journal = out / "journal.jsonl"
+    done_before: dict[str, dict] = {}
+    if a.resume and journal.exists():
+        for ln in journal.read_text().splitlines():
+            r = json.loads(ln)
+            if r.get("key"):
+                done_before[r["key"]] = r
+        if a.retest_survivors:
+            done_before = {k: r for k, r in done_before.items() if r["status"] != "survived"}
+        print(f"mutation: {len(done_before)} results reused from {journal}", flush=True)
+    elif journal.exists():
+        journal.unlink()
 
     equivalent = load_equivalent(ROOT / a.equivalent)
-    runner = CRunner(work, a.jobs, files if a.quick else None) if lang == "c" else PyRunner(work, a.jobs)
-    for f in files:
-        runner.apply(None, f)
+    use_tce = lang == "c" and not a.no_tce
+    if lang == "c":
+        runners = [CRunner(work, a.jobs, files if a.quick else None, f"w{i}") for i in range(a.workers)]
+    else:
+        runners = [PyRunner(work, a.jobs)]
+        a.workers = 1
+    for r in runners:
+        for f in files:
+            r.apply(None, f)
+    if lang == "c" and not a.quick and not a.no_coverage:
+        r0 = runners[0]
+        srcs = subprocess.run(["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT, check=True,
+                              capture_output=True, text=True).stdout.split()
+        # what the tests and the code are (not this script, the docs or the equivalence list)
+        key = tree_key(r0.src, [f for f in srcs if not f.startswith(("scripts/mutation", "docs/"))])
+        cov = build_coverage(r0.src, work, r0.tests, expand(C_FILES), key,
+                             log=lambda s: print(s, flush=True))
+        for r in runners:
+            r.cov = cov
     if not a.no_baseline:
-        base_t = runner.baseline(max(a.timeout, 1800))
+        base_t = runners[0].baseline(max(a.timeout, 1800))
         print(f"mutation: the unmutated tests pass in {base_t:.0f} s", flush=True)
 
     results = []
     queue = list(chosen)
-    k = -1
-    while k + 1 < len(queue):
-        k += 1
-        m = queue[k]
+    lock = threading.Lock()
+    seen_obj: dict[str, dict] = {}   # object hash -> the first mutant with it (TCE duplicates)
+    state = {"next": 0}
+
+    def replace(m):
+        """A sampled mutant that is not tested (no build, equivalent, duplicate): the file's next
+        one in the seeded order keeps the number of tested mutants (under the lock)."""
+        if a.sample is None:
+            return
+        while RESERVE.get(m["file"]):
+            r = RESERVE[m["file"]].pop(0)
+            if not any(q["line"] == r["line"] and q["mutated"] == r["mutated"] and q["file"] == r["file"] for q in queue):
+                queue.append(dict(r, must_kill=False))
+                break
+
+    def test_one(runner, m):
         t0 = time.monotonic()
         eq = next((r for (f, ln, mu, r) in equivalent
                    if f == m["file"] and ln == m["line"] and mu == m["mutated"].strip()), None)
+        prev = done_before.get(mkey(m))
         if eq is not None:
             m.update(status="equivalent", reason=eq, seconds=0.0)
+            return
+        if prev is not None:
+            m.update({k: prev[k] for k in ("status", "by", "reason", "of", "seconds") if k in prev}, reused=True)
+            return
+        if use_tce:
+            orig = runner.original_object(m["file"])
+            runner.apply(m, m["file"])
+            h = runner.object_hash(m["file"])
+            if h is None:
+                m.update(status="no_compile")
+            elif h == orig:
+                m.update(status="equivalent", reason="TCE: the object code is identical to the original's")
+            else:
+                with lock:
+                    first = seen_obj.setdefault(h, m)
+                if first is not m:
+                    m.update(status="duplicate", reason="TCE: the object code is identical to another mutant's",
+                             of=f"{first['file']}:{first['line']}: {first['mutated'].strip()}")
+            if m.get("status"):
+                runner.apply(None, m["file"])
+                m["seconds"] = round(time.monotonic() - t0, 1)
+                return
         else:
             runner.apply(m, m["file"])
-            ok, bout = runner.build_mutant(a.build_timeout)
+        if getattr(runner, "cov", None) is not None:
+            kind, tests = runner.cov.tests_for(m["file"], m["line"], runner.tests)
+            if kind == "line" and not tests:
+                # no test executes the line: the mutant survives every test without a build
+                runner.apply(None, m["file"])
+                m.update(status="survived", reason="no test executes the line",
+                         seconds=round(time.monotonic() - t0, 1))
+                return
+        deadline = t0 + a.timeout
+        m["status"] = "survived"
+        for stage in runner.stages(m["file"], m["line"]):
+            ok, bout = runner.build_mutant(a.build_timeout, stage)
             if not ok:
-                m.update(status="no_compile")
-                # keep the number of tested mutants: the file's next mutant in the seeded order
-                while RESERVE.get(m["file"]):
-                    r = RESERVE[m["file"]].pop(0)
-                    if not any(q["line"] == r["line"] and q["mutated"] == r["mutated"] and q["file"] == r["file"] for q in queue):
-                        queue.insert(k + 1, dict(r, must_kill=False))
-                        break
-            else:
-                deadline = t0 + a.timeout
-                m["status"] = "survived"
-                for stage in runner.stages(m["file"]):
-                    left = deadline - time.monotonic()
-                    if left <= 0:
-                        m.update(status="killed", by="timeout")
-                        break
-                    st, names, _ = runner.test_stage(stage, left)
-                    if st == "failed":
-                        m.update(status="killed", by=names)
-                        break
-                    if st == "timeout":
-                        m.update(status="killed", by="timeout" + (f" ({names})" if names else ""))
-                        break
-            runner.apply(None, m["file"])
-            m["seconds"] = round(time.monotonic() - t0, 1)
-        results.append(m)
-        done = k + 1
-        el = time.monotonic() - t_start
-        print(f"[{done}/{len(queue)}] {m['file']}:{m['line']} {m['status']}"
-              f"{' by ' + m['by'] if m.get('by') else ''} ({m['seconds']:.0f} s; elapsed {el/60:.1f} min)", flush=True)
-    runner.build_mutant(a.build_timeout)   # leave the copy's build unmutated
+                # compiled alone (TCE) but the build failed: a test target compiles the file with
+                # other options, or the link failed; the build's last lines say which
+                m.update(status="no_compile", reason="build: " + " | ".join(bout.strip().splitlines()[-3:])[:300])
+                break
+            left = deadline - time.monotonic()
+            if left <= 0:
+                m.update(status="killed", by="timeout")
+                break
+            st, names, _ = runner.test_stage(stage, left)
+            if st == "failed":
+                m.update(status="killed", by=names)
+                break
+            if st == "timeout":
+                m.update(status="killed", by="timeout" + (f" ({names})" if names else ""))
+                break
+        runner.apply(None, m["file"])
+        m["seconds"] = round(time.monotonic() - t0, 1)
+
+    def worker(runner):
+        while True:
+            with lock:
+                if state["next"] >= len(queue):
+                    return
+                k = state["next"]
+                state["next"] += 1
+                m = queue[k]
+            try:
+                test_one(runner, m)
+            except BaseException as e:   # a worker's error stops the run, with the mutant named
+                m.update(status="error", reason=repr(e))
+                with lock:
+                    state["next"] = len(queue)
+                raise
+            with lock:
+                if m["status"] in ("no_compile", "duplicate") or (
+                        m["status"] == "equivalent" and m.get("reason", "").startswith("TCE")):
+                    replace(m)
+                results.append(m)
+                if not m.get("reused"):
+                    with journal.open("a") as j:
+                        j.write(json.dumps(dict({k: m[k] for k in ("file", "line", "mutated", "status", "by", "reason", "of", "seconds") if k in m},
+                                                key=mkey(m))) + "\n")
+                el = time.monotonic() - t_start
+                tested = [x for x in results if x["status"] in ("killed", "survived")]
+                sc = 100.0 * sum(x["status"] == "killed" for x in tested) / len(tested) if tested else 0.0
+                if not m.get("reused") or len(results) % 500 == 0:
+                    print(f"[{len(results)}/{len(queue)}] {m['file']}:{m['line']} {m['status']}"
+                          f"{' by ' + m['by'] if m.get('by') else ''}{' (' + m['reason'] + ')' if m.get('reason') and m['status'] == 'survived' else ''}"
+                          f" ({m.get('seconds', 0):.0f} s; elapsed {el/60:.1f} min; score so far {sc:.1f} % of {len(tested)})", flush=True)
+
+    with ThreadPoolExecutor(len(runners)) as ex:
+        for fut in [ex.submit(worker, r) for r in runners]:
+            fut.result()
+    for r in runners:
+        r.build_mutant(a.build_timeout)   # leave the copies' builds unmutated
+    results.sort(key=lambda m: (m["file"], m["line"], m["mutated"]))
 
     summary = summarize(results, files, a, generated, lang, time.monotonic() - t_start)
     (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     (out / "report.md").write_text(report(summary))
     s = summary["totals"]
     print(f"mutation: {s['killed']} killed, {s['survived']} survived, {s['equivalent']} equivalent, "
-          f"{s['no_compile']} not compiling (sample of {len(chosen)} of {generated}, {len(queue) - len(chosen)} more drawn for those that do not build, seed {a.seed}"
+          f"{s['duplicate']} duplicate, {s['no_compile']} not compiling (sample of {len(chosen)} of {generated}, "
+          f"{len(queue) - len(chosen)} more drawn for those not tested, seed {a.seed}"
           f"{', ' + a.label if a.label else ''}): score {s['score']:.1f} %", flush=True)
     print(f"mutation: {out / 'report.md'}", flush=True)
 
@@ -460,22 +652,37 @@ def main() -> int:
     return status
 
 
+def wilson(k: int, n: int) -> list[float] | None:
+    """95 % Wilson interval of a killed share k/n (percent): what a sample's score says of the
+    whole population of mutants it was drawn from."""
+    if n == 0:
+        return None
+    z = 1.96
+    p = k / n
+    c = (p + z * z / (2 * n)) / (1 + z * z / n)
+    h = z * ((p * (1 - p) / n + z * z / (4 * n * n)) ** 0.5) / (1 + z * z / n)
+    return [round(100 * max(0.0, c - h), 1), round(100 * min(1.0, c + h), 1)]
+
+
 def summarize(results, files, a, generated, lang, seconds):
     def pick(st):
-        return [{k: m[k] for k in ("file", "line", "original", "mutated", "by", "reason", "seconds")
+        return [{k: m[k] for k in ("file", "line", "original", "mutated", "by", "reason", "of", "seconds")
                  if k in m} for m in results if m["status"] == st]
     per_file = {}
     for f in files:
         rs = [m for m in results if m["file"] == f]
         if not rs:
             continue
-        c = {st: sum(1 for m in rs if m["status"] == st) for st in ("killed", "survived", "equivalent", "no_compile")}
+        c = {st: sum(1 for m in rs if m["status"] == st) for st in STATUSES}
         den = c["killed"] + c["survived"]
         c["score"] = round(100.0 * c["killed"] / den, 1) if den else None
+        c["ci95"] = wilson(c["killed"], den)
         per_file[f] = c
-    tot = {st: sum(1 for m in results if m["status"] == st) for st in ("killed", "survived", "equivalent", "no_compile")}
+    tot = {st: sum(1 for m in results if m["status"] == st) for st in STATUSES}
+    tot["not_covered"] = sum(1 for m in results if m["status"] == "survived" and m.get("reason"))
     den = tot["killed"] + tot["survived"]
     tot["score"] = round(100.0 * tot["killed"] / den, 1) if den else 100.0
+    tot["ci95"] = wilson(tot["killed"], den)
     tot["timeouts"] = sum(1 for m in results if m.get("by", "").startswith("timeout"))
     tested = [m["seconds"] for m in results if m["status"] in ("killed", "survived")]
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
@@ -490,8 +697,12 @@ def summarize(results, files, a, generated, lang, seconds):
         "totals": tot, "per_file": per_file,
         "mutants": [{k: m[k] for k in ("file", "line", "original", "mutated", "status") } for m in results],
         "killed": pick("killed"), "survived": pick("survived"),
-        "equivalent": pick("equivalent"), "no_compile": pick("no_compile"),
+        "equivalent": pick("equivalent"), "duplicate": pick("duplicate"), "no_compile": pick("no_compile"),
+        "workers": getattr(a, "workers", 1), "coverage": not getattr(a, "no_coverage", True) and not a.quick,
     }
+
+
+STATUSES = ("killed", "survived", "equivalent", "duplicate", "no_compile")
 
 
 def report(s) -> str:
@@ -500,22 +711,32 @@ def report(s) -> str:
          f"Commit {s['commit']}, {s['date']}, seed {s['seed']}, sample {s['sample'] or 'all'} of {s['generated']} mutants, "
          f"{s['seconds']/60:.1f} min ({s['seconds_per_tested_mutant']} s a built and tested mutant).", "",
          f"**{t['killed']} killed** ({t['timeouts']} of them by the time limit of {s['timeout_s']:.0f} s), "
-         f"**{t['survived']} survived**, {t['equivalent']} equivalent, {t['no_compile']} not compiling: "
-         f"score {t['score']:.1f} % of the non-equivalent mutants that build.", "",
-         "| file | killed | survived | equivalent | not compiling | score |", "|---|---:|---:|---:|---:|---:|"]
+         f"**{t['survived']} survived** ({t['not_covered']} on lines no test executes), {t['equivalent']} equivalent, "
+         f"{t['duplicate']} duplicate, {t['no_compile']} not compiling: "
+         f"score {t['score']:.1f} % of the non-equivalent, non-duplicate mutants that build.", "",
+         f"95 % interval of the score (Wilson): {t['ci95']} %." if t.get("ci95") else "", "",
+         "| file | killed | survived | equivalent | duplicate | not compiling | score | 95 % interval |",
+         "|---|---:|---:|---:|---:|---:|---:|---|"]
     for f, c in s["per_file"].items():
         sc = f"{c['score']:.1f} %" if c["score"] is not None else "-"
-        L.append(f"| {f} | {c['killed']} | {c['survived']} | {c['equivalent']} | {c['no_compile']} | {sc} |")
+        ci = f"{c['ci95'][0]:.0f}-{c['ci95'][1]:.0f} %" if c.get("ci95") else "-"
+        L.append(f"| {f} | {c['killed']} | {c['survived']} | {c['equivalent']} | {c['duplicate']} | {c['no_compile']} | {sc} | {ci} |")
     L += ["", "## Survivors", ""]
     for m in s["survived"] or []:
-        L += [f"- `{m['file']}:{m['line']}`", f"  - `{m['original'].strip()}`", f"  + `{m['mutated'].strip()}`"]
+        L += [f"- `{m['file']}:{m['line']}`{' (' + m['reason'] + ')' if m.get('reason') else ''}",
+              f"  - `{m['original'].strip()}`", f"  + `{m['mutated'].strip()}`"]
     if not s["survived"]:
         L.append("None.")
-    L += ["", "## Equivalent (scripts/mutation_equivalent.txt)", ""]
+    L += ["", "## Equivalent (scripts/mutation_equivalent.txt, or TCE: identical object code)", ""]
     for m in s["equivalent"] or []:
         L.append(f"- `{m['file']}:{m['line']}` `{m['mutated'].strip()}`: {m['reason']}")
     if not s["equivalent"]:
         L.append("None in this sample.")
+    L += ["", "## Duplicates (TCE: the same object code as an earlier mutant; not scored)", ""]
+    for m in s["duplicate"] or []:
+        L.append(f"- `{m['file']}:{m['line']}` `{m['mutated'].strip()}` = `{m.get('of', '')}`")
+    if not s["duplicate"]:
+        L.append("None.")
     L += ["", "## Killed", ""]
     for m in s["killed"]:
         L.append(f"- `{m['file']}:{m['line']}` `{m['mutated'].strip()}` by {m['by']}")
