@@ -812,6 +812,36 @@ static void test_protect_overspeed(void **st)
     assert_fault(&r, MC_FAULT_OVERSPEED);
 }
 
+/* The flying-start catch's longest wait for the current to rest (mc/catch.h): where the diodes
+ * conduct, their current comes in pulses a sixth of a turn apart, and 2.5 of them at
+ * omega_ug = Vdc / (sqrt3 psi_pm) are enough; at least 1 ms. The wait is the smallest number of
+ * periods covering that, not more: a longer wait lets a coasting rotor turn further (and the
+ * catch's time-out grow) before the catch even starts. The thesis motor (5.2 ms) and a low-flux
+ * motor whose pulses come faster than the 1 ms floor. */
+static void test_catch_wait_bounded(void **st)
+{
+    (void)st;
+    static mc_drive_built_t b;
+    mc_drive_cfg_t cfg;
+    mc_param_err_t err;
+    const float psi[2] = {NAN, 0.05f};   /* NAN: the motor's 0.34305 Wb */
+    const double want[2] = {5.18e-3, 1e-3};
+    for (int k = 0; k < 2; ++k) {
+        mc_drive_cfg_default(&cfg);
+        cfg.est.psi_pm = psi[k];
+        assert_true(mc_drive_build(&cfg, &b, &err));
+        const double ts = (double)b.blk.ts;
+        const double psi_pm = k == 0 ? (double)b.p.motor_psi_pm_wb : (double)psi[k];
+        const double w_ug = (double)b.p.hw_vdc_nominal_v / (sqrt(3.0) * psi_pm);
+        const double wait = fmax(2.5 * (3.14159265358979 / 3.0) / w_ug, 1e-3);
+        assert_float_equal(wait, want[k], 0.01e-3);
+        const double n = (double)b.blk.flying.n_wait_max;
+        assert_true(n * ts >= wait * (1.0 - 1e-6));        /* covers the wait ... */
+        assert_true((n - 1.0) * ts < wait * (1.0 + 1e-6)); /* ... by less than a period */
+        assert_true(b.blk.flying.n_wait_max < b.blk.flying.n_gap_max);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -837,6 +867,7 @@ int main(void)
         cmocka_unit_test(test_param_write_rule_follows),
         cmocka_unit_test(test_protect_overrun),
         cmocka_unit_test(test_protect_current_sum),
+        cmocka_unit_test(test_catch_wait_bounded),
         cmocka_unit_test(test_protect_tracking),
         cmocka_unit_test(test_protect_stall),
         cmocka_unit_test(test_protect_overspeed),
