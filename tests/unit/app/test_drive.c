@@ -842,6 +842,54 @@ static void test_catch_wait_bounded(void **st)
     }
 }
 
+/* The offset calibration's plausibility (offset_calibration fault, mc/offset_cal.h): a channel
+ * whose mean lies within hw.adc_offset_tol of mid-scale is calibrated away, one a count beyond
+ * it faults, on every phase and both sides, at the period a good calibration finishes (the
+ * whole average is needed to judge it), with the outputs never switched on. */
+static void test_offset_cal_limit_every_phase(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    const float tol = r.d.cfg->blk.offs.tol;
+    const int inside = (int)floorf(tol), outside = inside + 1;
+    assert_true((float)inside <= tol && (float)outside > tol);
+    const int max = (int)r.d.cfg->p.control_offset_cal_samples + 20;
+    /* a centred ADC: the period the calibration ends */
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    int n_good = 0;
+    while (mc_drive_state(&r.d) == MC_STATE_OFFSET_CAL || n_good == 0) {
+        run(&r, 1);
+        assert_true(++n_good < max);
+    }
+    assert_int_equal(mc_drive_faults(&r.d), 0u);
+    for (int ph = 0; ph < 3; ++ph) {
+        for (int side = -1; side <= 1; side += 2) {
+            for (int out = 0; out <= 1; ++out) {
+                rig_init(&r);
+                r.adc.sample.i[ph] = (uint16_t)((int)r.adc.sample.i[ph] + side * (out ? outside : inside));
+                command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+                int n = 0;
+                while (mc_drive_state(&r.d) == MC_STATE_OFFSET_CAL || n == 0) {
+                    assert_false(hal_pwm_enabled(&r.pwm));
+                    run(&r, 1);
+                    assert_true(++n < max);
+                }
+                assert_int_equal(n, n_good);
+                if (out) {
+                    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+                    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_OFFSET_CAL);
+                    assert_false(hal_pwm_enabled(&r.pwm));
+                } else {
+                    assert_int_not_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+                    assert_int_equal(mc_drive_faults(&r.d), 0u);
+                    assert_float_equal(r.d.offs.offset[ph], r.d.cfg->blk.offs.nominal + (float)(side * inside), 1e-3f);
+                }
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -868,6 +916,7 @@ int main(void)
         cmocka_unit_test(test_protect_overrun),
         cmocka_unit_test(test_protect_current_sum),
         cmocka_unit_test(test_catch_wait_bounded),
+        cmocka_unit_test(test_offset_cal_limit_every_phase),
         cmocka_unit_test(test_protect_tracking),
         cmocka_unit_test(test_protect_stall),
         cmocka_unit_test(test_protect_overspeed),
