@@ -890,6 +890,39 @@ static void test_offset_cal_limit_every_phase(void **st)
     }
 }
 
+/* The configuration's range check (config fault): control.ts_s exactly at either end of its
+ * table range is taken (the drive calibrates and runs), a float step beyond either end is
+ * refused with the range named, and an enable then faults config at once, outputs off. */
+static void test_config_range_ends(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const mc_param_info_t *e = &mc_param_table[MC_PARAM_control_ts_s];
+    const float ends[2] = {e->min, e->max}, beyond[2] = {nextafterf(e->min, 0.0f), nextafterf(e->max, 1.0f)};
+    for (int k = 0; k < 2; ++k) {
+        rig_init(&r);
+        r.cfg.p.control_ts_s = ends[k];
+        assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        set_inputs(&r, 0.0f, 0.0f, 300.0f);
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 2);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_int_equal(mc_drive_faults(&r.d), 0u);
+
+        rig_init(&r);
+        r.cfg.p.control_ts_s = beyond[k];
+        assert_false(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        const mc_param_err_t *err = mc_drive_config_error(&r.d);
+        assert_int_equal(err->kind, MC_PERR_RANGE);
+        assert_int_equal(err->param, MC_PARAM_control_ts_s);
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_CONFIG);
+        assert_false(hal_pwm_enabled(&r.pwm));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -917,6 +950,7 @@ int main(void)
         cmocka_unit_test(test_protect_current_sum),
         cmocka_unit_test(test_catch_wait_bounded),
         cmocka_unit_test(test_offset_cal_limit_every_phase),
+        cmocka_unit_test(test_config_range_ends),
         cmocka_unit_test(test_protect_tracking),
         cmocka_unit_test(test_protect_stall),
         cmocka_unit_test(test_protect_overspeed),
