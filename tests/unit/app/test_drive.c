@@ -1,4 +1,5 @@
 /* The drive's sequencing, protection and bookkeeping, driven through the host HAL port. */
+#include <float.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -923,6 +924,41 @@ static void test_config_range_ends(void **st)
     }
 }
 
+/* The modulator's guard (numeric fault): whatever makes the voltage non-finite (here the q
+ * integrator of the current loop, as a bug or a corrupted state would), the duties never reach
+ * the PWM: the period that computes them faults numeric alone and switches the outputs off.
+ * The largest values short of that (the integrator at +-FLT_MAX, or +-inf, which the loop
+ * clamps) are only a voltage at its limit: finite duties within [0, 1], no numeric fault. */
+static void test_numeric_guard(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const float bad[5] = {FLT_MAX, -FLT_MAX, INFINITY, -INFINITY, NAN};
+    for (int k = 0; k < 5; ++k) {
+        rig_init(&r);
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 1.0f);
+        run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 5);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_true(hal_pwm_enabled(&r.pwm));
+        r.d.cc.pi_q.integ = bad[k];
+        run(&r, 1);
+        if (!isnan(bad[k])) {
+            assert_int_equal(mc_drive_faults(&r.d), 0u);
+            assert_true(hal_pwm_enabled(&r.pwm));
+            for (int ph = 0; ph < 3; ++ph) {
+                assert_true(r.pwm.shadow[ph] >= 0.0f && r.pwm.shadow[ph] <= 1.0f);
+            }
+        } else {
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+            assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_NUMERIC);
+            assert_false(hal_pwm_enabled(&r.pwm));
+            for (int ph = 0; ph < 3; ++ph) {
+                assert_true(isfinite(r.pwm.shadow[ph]));
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -951,6 +987,7 @@ int main(void)
         cmocka_unit_test(test_catch_wait_bounded),
         cmocka_unit_test(test_offset_cal_limit_every_phase),
         cmocka_unit_test(test_config_range_ends),
+        cmocka_unit_test(test_numeric_guard),
         cmocka_unit_test(test_protect_tracking),
         cmocka_unit_test(test_protect_stall),
         cmocka_unit_test(test_protect_overspeed),
