@@ -310,6 +310,11 @@ mc_q15_t mc_pi_q15_step(mc_pi_q15_t *s, mc_q15_t err)
     if (lo > hi) {
         lo = hi = (lo + hi) / 2;
     }
+    /* keep p + integ inside int64 as the Q31 version does: a shift of 33 or more saturates the
+     * products at +-INT64_MAX, whose sum with the other term would wrap and invert the output */
+    const int64_t pmax = (int64_t)1 << 61;
+    p = (p > pmax) ? pmax : ((p < -pmax) ? -pmax : p);
+    inc = (inc > pmax) ? pmax : ((inc < -pmax) ? -pmax : inc);
     int64_t integ = s->integ;
     int64_t u = pi_core(&integ, p, inc, err, lo, hi);
     s->integ = (int32_t)integ;     /* clamped to [out_min, out_max] << 16: fits */

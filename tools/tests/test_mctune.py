@@ -308,6 +308,19 @@ def test_enable_walks_the_state_machine(capsys, bus, drive):
     assert rc == 1 and "still in SWITCH ON DISABLED" in err and "READY TO SWITCH ON" in err
 
 
+def test_fault_reset_makes_its_own_rising_edge(capsys, bus, drive):
+    """A drive in FAULT whose controlword already has bit 7 set (a master that left it high):
+    only a rising edge of bit 7 resets the fault (CiA 402), so mctune writes 0x00 first, then
+    0x80, then 0x00 again; the drive leaves FAULT."""
+    drive.set_state(FAULT)
+    drive.put(0x6040, 0, 0x80)
+    drive.controlwords[:] = [0x80]
+    rc, out, err = run(capsys, bus, "fault-reset")
+    assert rc == 0, err
+    assert drive.controlwords == [0x80, 0x00, 0x80, 0x00]
+    assert drive.state == SWITCH_ON_DISABLED and "SWITCH ON DISABLED" in out
+
+
 def test_speed_torque_save_restore(capsys, bus, drive):
     rc, out, err = run(capsys, bus, "speed", "1500")
     assert rc == 0, err

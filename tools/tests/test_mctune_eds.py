@@ -17,7 +17,7 @@ pytest.importorskip("canopen")
 from mctools import mctune  # noqa: E402
 from mctools.mctune.drive import format_value  # noqa: E402
 from mctools.mctune.eds import (  # noqa: E402
-    INT_RANGES, PARAM_BASE, PARAM_END, TELEM_BASE, TELEM_END, Eds, check_range, default_eds_path,
+    INT_RANGES, PARAM_BASE, PARAM_END, TELEM_BASE, TELEM_END, Eds, Entry, check_range, default_eds_path,
     parse_value,
 )
 from mctools.mctune.errors import InputError  # noqa: E402
@@ -136,3 +136,42 @@ def test_console_scripts_point_at_the_entry_points():
 
     assert by_name["mctools"].load() is cli.main
     assert by_name["mctune"].load() is mctune.main
+
+
+# CiA 301 Table 44: the integer types' codes, widths and signs
+CIA301_INTEGERS = {0x01: ("BOOLEAN", 1, False), 0x02: ("INTEGER8", 8, True), 0x03: ("INTEGER16", 16, True),
+                   0x04: ("INTEGER32", 32, True), 0x05: ("UNSIGNED8", 8, False), 0x06: ("UNSIGNED16", 16, False),
+                   0x07: ("UNSIGNED32", 32, False), 0x15: ("INTEGER64", 64, True), 0x1B: ("UNSIGNED64", 64, False)}
+
+
+def _entry(data_type, access_type="rw"):
+    return Entry(index=0x2100, sub=0, name="x", parent="", var=None, data_type=data_type, access_type=access_type)
+
+
+def test_integer_ranges_are_the_types_ranges():
+    """`mctune set` refuses a value its data type cannot hold before any write: every integer type
+    takes its whole range, ends included, and nothing one beyond either end (a value outside it
+    would be truncated or refused by the drive with a less helpful abort)."""
+    assert set(INT_RANGES) == set(CIA301_INTEGERS)
+    for code, (name, bits, signed) in CIA301_INTEGERS.items():
+        lo, hi = (-2**(bits - 1), 2**(bits - 1) - 1) if signed else (0, 2**bits - 1)
+        e = _entry(code)
+        for v in (lo, hi, (lo + hi) // 2):
+            check_range(e, v, str(v), "set x")
+        for v in (lo - 1, hi + 1):
+            with pytest.raises(InputError, match=f"does not fit .*{name}"):
+                check_range(e, v, str(v), "set x")
+
+
+def test_readable_and_writable_follow_the_access_type():
+    """CiA 306 access types: const and ro are read-only, wo write-only, rw/rwr/rww both. An
+    access type the tool does not know is neither: mctune reads or writes no object whose access
+    it cannot tell (an EDS from another tool, a typo)."""
+    expect = {"const": (True, False), "ro": (True, False), "wo": (False, True), "rw": (True, True),
+              "rwr": (True, True), "rww": (True, True)}
+    for at, (r, w) in expect.items():
+        e = _entry(0x07, at)
+        assert (e.readable, e.writable) == (r, w), at
+    for at in ("-", "0", "c", "con", "cons", "none", "x"):
+        e = _entry(0x07, at)
+        assert not e.readable and not e.writable, at

@@ -1,4 +1,5 @@
 /* The drive's sequencing, protection and bookkeeping, driven through the host HAL port. */
+#include <float.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -812,6 +813,152 @@ static void test_protect_overspeed(void **st)
     assert_fault(&r, MC_FAULT_OVERSPEED);
 }
 
+/* The flying-start catch's longest wait for the current to rest (mc/catch.h): where the diodes
+ * conduct, their current comes in pulses a sixth of a turn apart, and 2.5 of them at
+ * omega_ug = Vdc / (sqrt3 psi_pm) are enough; at least 1 ms. The wait is the smallest number of
+ * periods covering that, not more: a longer wait lets a coasting rotor turn further (and the
+ * catch's time-out grow) before the catch even starts. The thesis motor (5.2 ms) and a low-flux
+ * motor whose pulses come faster than the 1 ms floor. */
+static void test_catch_wait_bounded(void **st)
+{
+    (void)st;
+    static mc_drive_built_t b;
+    mc_drive_cfg_t cfg;
+    mc_param_err_t err;
+    const float psi[2] = {NAN, 0.05f};   /* NAN: the motor's 0.34305 Wb */
+    const double want[2] = {5.18e-3, 1e-3};
+    for (int k = 0; k < 2; ++k) {
+        mc_drive_cfg_default(&cfg);
+        cfg.est.psi_pm = psi[k];
+        assert_true(mc_drive_build(&cfg, &b, &err));
+        const double ts = (double)b.blk.ts;
+        const double psi_pm = k == 0 ? (double)b.p.motor_psi_pm_wb : (double)psi[k];
+        const double w_ug = (double)b.p.hw_vdc_nominal_v / (sqrt(3.0) * psi_pm);
+        const double wait = fmax(2.5 * (3.14159265358979 / 3.0) / w_ug, 1e-3);
+        assert_float_equal(wait, want[k], 0.01e-3);
+        const double n = (double)b.blk.flying.n_wait_max;
+        assert_true(n * ts >= wait * (1.0 - 1e-6));        /* covers the wait ... */
+        assert_true((n - 1.0) * ts < wait * (1.0 + 1e-6)); /* ... by less than a period */
+        assert_true(b.blk.flying.n_wait_max < b.blk.flying.n_gap_max);
+    }
+}
+
+/* The offset calibration's plausibility (offset_calibration fault, mc/offset_cal.h): a channel
+ * whose mean lies within hw.adc_offset_tol of mid-scale is calibrated away, one a count beyond
+ * it faults, on every phase and both sides, at the period a good calibration finishes (the
+ * whole average is needed to judge it), with the outputs never switched on. */
+static void test_offset_cal_limit_every_phase(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    const float tol = r.d.cfg->blk.offs.tol;
+    const int inside = (int)floorf(tol), outside = inside + 1;
+    assert_true((float)inside <= tol && (float)outside > tol);
+    const int max = (int)r.d.cfg->p.control_offset_cal_samples + 20;
+    /* a centred ADC: the period the calibration ends */
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    int n_good = 0;
+    while (mc_drive_state(&r.d) == MC_STATE_OFFSET_CAL || n_good == 0) {
+        run(&r, 1);
+        assert_true(++n_good < max);
+    }
+    assert_int_equal(mc_drive_faults(&r.d), 0u);
+    for (int ph = 0; ph < 3; ++ph) {
+        for (int side = -1; side <= 1; side += 2) {
+            for (int out = 0; out <= 1; ++out) {
+                rig_init(&r);
+                r.adc.sample.i[ph] = (uint16_t)((int)r.adc.sample.i[ph] + side * (out ? outside : inside));
+                command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+                int n = 0;
+                while (mc_drive_state(&r.d) == MC_STATE_OFFSET_CAL || n == 0) {
+                    assert_false(hal_pwm_enabled(&r.pwm));
+                    run(&r, 1);
+                    assert_true(++n < max);
+                }
+                assert_int_equal(n, n_good);
+                if (out) {
+                    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+                    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_OFFSET_CAL);
+                    assert_false(hal_pwm_enabled(&r.pwm));
+                } else {
+                    assert_int_not_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+                    assert_int_equal(mc_drive_faults(&r.d), 0u);
+                    assert_float_equal(r.d.offs.offset[ph], r.d.cfg->blk.offs.nominal + (float)(side * inside), 1e-3f);
+                }
+            }
+        }
+    }
+}
+
+/* The configuration's range check (config fault): control.ts_s exactly at either end of its
+ * table range is taken (the drive calibrates and runs), a float step beyond either end is
+ * refused with the range named, and an enable then faults config at once, outputs off. */
+static void test_config_range_ends(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const mc_param_info_t *e = &mc_param_table[MC_PARAM_control_ts_s];
+    const float ends[2] = {e->min, e->max}, beyond[2] = {nextafterf(e->min, 0.0f), nextafterf(e->max, 1.0f)};
+    for (int k = 0; k < 2; ++k) {
+        rig_init(&r);
+        r.cfg.p.control_ts_s = ends[k];
+        assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        set_inputs(&r, 0.0f, 0.0f, 300.0f);
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 2);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_int_equal(mc_drive_faults(&r.d), 0u);
+
+        rig_init(&r);
+        r.cfg.p.control_ts_s = beyond[k];
+        assert_false(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        const mc_param_err_t *err = mc_drive_config_error(&r.d);
+        assert_int_equal(err->kind, MC_PERR_RANGE);
+        assert_int_equal(err->param, MC_PARAM_control_ts_s);
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_CONFIG);
+        assert_false(hal_pwm_enabled(&r.pwm));
+    }
+}
+
+/* The modulator's guard (numeric fault): whatever makes the voltage non-finite (here the q
+ * integrator of the current loop, as a bug or a corrupted state would), the duties never reach
+ * the PWM: the period that computes them faults numeric alone and switches the outputs off.
+ * The largest values short of that (the integrator at +-FLT_MAX, or +-inf, which the loop
+ * clamps) are only a voltage at its limit: finite duties within [0, 1], no numeric fault. */
+static void test_numeric_guard(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const float bad[5] = {FLT_MAX, -FLT_MAX, INFINITY, -INFINITY, NAN};
+    for (int k = 0; k < 5; ++k) {
+        rig_init(&r);
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 1.0f);
+        run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 5);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_true(hal_pwm_enabled(&r.pwm));
+        r.d.cc.pi_q.integ = bad[k];
+        run(&r, 1);
+        if (!isnan(bad[k])) {
+            assert_int_equal(mc_drive_faults(&r.d), 0u);
+            assert_true(hal_pwm_enabled(&r.pwm));
+            for (int ph = 0; ph < 3; ++ph) {
+                assert_true(r.pwm.shadow[ph] >= 0.0f && r.pwm.shadow[ph] <= 1.0f);
+            }
+        } else {
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+            assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_NUMERIC);
+            assert_false(hal_pwm_enabled(&r.pwm));
+            for (int ph = 0; ph < 3; ++ph) {
+                assert_true(isfinite(r.pwm.shadow[ph]));
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -837,6 +984,10 @@ int main(void)
         cmocka_unit_test(test_param_write_rule_follows),
         cmocka_unit_test(test_protect_overrun),
         cmocka_unit_test(test_protect_current_sum),
+        cmocka_unit_test(test_catch_wait_bounded),
+        cmocka_unit_test(test_offset_cal_limit_every_phase),
+        cmocka_unit_test(test_config_range_ends),
+        cmocka_unit_test(test_numeric_guard),
         cmocka_unit_test(test_protect_tracking),
         cmocka_unit_test(test_protect_stall),
         cmocka_unit_test(test_protect_overspeed),

@@ -38,6 +38,16 @@ static uint8_t *blk(hal_nvm_t *n, uint32_t b)
 {
     return &n->mem[b * n->block_size];
 }
+static uint32_t le32(const uint8_t *b)
+{
+    return (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
+}
+static void put_le32(uint8_t *b, uint32_t w)
+{
+    for (int k = 0; k < 4; ++k) {
+        b[k] = (uint8_t)(w >> (8 * k));
+    }
+}
 static mc_flux_map_t maps[NSETS];
 static mc_drive_cfg_t sets[NSETS];
 static mc_flux_map_t got_map;
@@ -493,6 +503,69 @@ static void test_erase_restores_defaults(void **state)
     assert_true(same_cfg(&got, c, false));
 }
 
+/* A defaults head (what an erase commits) claims no records: one with a parameter or a model
+ * length (its header CRC valid, so only the length checks can tell) is not a defaults copy but a
+ * damaged one, and the slot's contents are not trusted: CORRUPT, never EMPTY (which would apply
+ * the defaults as if the user had restored them). */
+static void test_defaults_head_with_records_refused(void **state)
+{
+    (void)state;
+    nvm_init(&nvm);
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    assert_int_equal(mc_pstore_save(&nvm, make_cfg(1, 3, 3), work, sizeof work, NULL), MC_PSTORE_OK);
+    assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_OK);
+    assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
+    assert_true(info.defaults);
+    snap = nvm;
+    uint8_t *h = blk(&nvm, info.slot == 0 ? 0u : s1);
+    assert_int_equal(le32(h + 12), MC_PSTORE_FLAG_DEFAULTS);
+    assert_int_equal(le32(h + 16), 0u);
+    assert_int_equal(le32(h + 20), 0u);
+    /* byte 16: the parameter record's length, 20: the model's; each alone, then both */
+    const uint32_t lens[3][2] = {{MC_STORE_PARAMS_MAX, 0u}, {0u, 32u}, {MC_STORE_PARAMS_MAX, 32u}};
+    for (int k = 0; k < 3; ++k) {
+        nvm = snap;
+        put_le32(h + 16, lens[k][0]);
+        put_le32(h + 20, lens[k][1]);
+        put_le32(h + 28, mc_crc32(h, 28u));
+        assert_int_equal(load(&got, &info), MC_PSTORE_CORRUPT);
+        assert_false(info.defaults);
+        assert_int_equal(info.slot, -1);
+    }
+}
+
+/* The smallest slot the store takes holds the parameter record and the model without a map
+ * (780 + 32 bytes after the 40-byte header and marker): a device of two 832-byte sectors
+ * (792 bytes of payload a slot) is refused before anything is written; one of two 856-byte
+ * sectors (816) takes a set, without its map, and loads it back. */
+static void test_slot_too_small_refused(void **state)
+{
+    (void)state;
+    static const hal_nvm_region_t small_r[1] = {{0u, 832u, 2u, 0u}}, fits_r[1] = {{0u, 856u, 2u, 0u}};
+    static const hal_nvm_geometry_t small = {2u * 832u, 8u, 1u, small_r}, fits = {2u * 856u, 8u, 1u, fits_r};
+    mc_pstore_geom_t g;
+    mc_pstore_info_t info;
+    mc_drive_cfg_t got;
+    const mc_drive_cfg_t *a = make_cfg(5, 3, 3);
+    assert_true(hal_host_nvm_init_geom(&nvm, &small, 0u, 2u));
+    assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_TOO_LARGE);
+    assert_int_equal(g.payload_max, 792u);
+    assert_true(g.payload_max < MC_STORE_PARAMS_MAX + 32u);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_TOO_LARGE);
+    assert_int_equal(nvm.steps, 0u);   /* nothing erased, nothing written */
+    assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_TOO_LARGE);
+    assert_int_equal(load(&got, &info), MC_PSTORE_TOO_LARGE);
+
+    assert_true(hal_host_nvm_init_geom(&nvm, &fits, 0u, 2u));
+    assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);
+    assert_int_equal(g.payload_max, MC_STORE_PARAMS_MAX + 32u + 4u);
+    assert_int_equal(g.map_cells_max, 0u);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_MAP_DROPPED);
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, a, true));
+}
+
 /* A dead device (after a cut, before power-on): every call fails at once. */
 static void test_failing_device(void **state)
 {
@@ -706,6 +779,8 @@ int main(void)
         cmocka_unit_test(test_reordered_records_refused),
         cmocka_unit_test(test_spliced_records_refused),
         cmocka_unit_test(test_erase_restores_defaults),
+        cmocka_unit_test(test_defaults_head_with_records_refused),
+        cmocka_unit_test(test_slot_too_small_refused),
         cmocka_unit_test(test_failing_device),
         cmocka_unit_test(test_power_cut_at_every_step),
         cmocka_unit_test(test_double_cuts),

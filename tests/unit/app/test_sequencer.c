@@ -429,6 +429,51 @@ static void test_step3_timeout(void **st)
     assert_false(hal_pwm_enabled(&r.pwm));
 }
 
+/* Step I's current limit (init_pos fault): the pulse program fails on the current VECTOR's
+ * magnitude |i_ab| beyond control.i_trip_a, which the phase over-current check (the largest phase
+ * current) does not see at 30 deg between two phases: there |i_ab| = 2/sqrt3 of the largest phase
+ * current. One sample of such a vector in the middle of Step I: 2 % beyond the limit faults
+ * init_pos in that very period (outputs off, no other fault); 2 % inside it does not, and the
+ * start goes on to RUN. */
+static void test_step1_current_limit(void **st)
+{
+    (void)st;
+    static rig_t r;
+    for (int out = 0; out <= 1; ++out) {
+        rig_init(&r, 0.7);
+        command(&r, true);
+        step(&r, 1);
+        run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+        assert_int_equal(r.d.seq.step, MC_INIT_STEP1);
+        step(&r, 8);
+        assert_int_equal(r.d.seq.step, MC_INIT_STEP1);
+        const double i_trip = (double)r.d.cfg->p.control_i_trip_a;
+        const double mag = (out ? 1.02 : 0.98) * i_trip;   /* |i_ab| */
+        const double ia = mag * sqrt(3.0) / 2.0, ib = -ia;     /* i_c = 0, 30 deg from phase a */
+        assert_true(ia < 0.9 * i_trip);                        /* every phase well inside */
+        hal_host_pwm_latch(&r.pwm);
+        sample(&r);
+        r.adc.sample.i[0] = counts(&r.d, ia);
+        r.adc.sample.i[1] = counts(&r.d, ib);
+        r.adc.sample.i[2] = counts(&r.d, 0.0);
+        mc_drive_isr(&r.d);
+        plant_period(&r);
+        if (out) {
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+            assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_INIT_POS);
+            assert_false(hal_pwm_enabled(&r.pwm));
+        } else {
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+            assert_int_equal(mc_drive_faults(&r.d), 0u);
+            run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+            run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
+            run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP3, 5000);
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+            assert_int_equal(mc_drive_faults(&r.d), 0u);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -441,6 +486,7 @@ int main(void)
         cmocka_unit_test(test_fault_in_every_step),
         cmocka_unit_test(test_repeated_enable_disable),
         cmocka_unit_test(test_step3_timeout),
+        cmocka_unit_test(test_step1_current_limit),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

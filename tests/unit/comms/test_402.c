@@ -553,6 +553,57 @@ static void test_faults(void **state)
     assert_int_equal(s.od.error_code, 0x8400u);
 }
 
+/* The error code (0x603F) names the fault that put the drive in Fault. With a reaction, the one
+ * that started it, not one that came during it: over-speed holds the field weakening (a
+ * reaction), an over-current trips meanwhile and the drive ends in FAULT with both bits; the
+ * code stays over-speed's, although over-current's bit is the lower one (which 14 without a
+ * reaction reports). Without a reaction, always the new fault's, whatever code was shown. */
+static void test_fault_code_names_the_first_fault(void **state)
+{
+    (void)state;
+    start();
+    to_enabled();
+    s.od.target_velocity = 500;
+    step_n(50);
+    tm.state = MC_STATE_FAULT_REACTION;
+    tm.faults = MC_FAULT_OVERSPEED;
+    step_n(1);
+    assert_int_equal(s.state, MC_402_FAULT_REACTION_ACTIVE);
+    assert_int_equal(s.od.error_code, 0x8400u);
+    tm.faults = MC_FAULT_OVERSPEED | MC_FAULT_OVERCURRENT;   /* during the reaction */
+    step_n(2);
+    assert_int_equal(s.od.error_code, 0x8400u);
+    tm.state = MC_STATE_FAULT;
+    step_n(1);
+    assert_int_equal(s.state, MC_402_FAULT);
+    assert_int_equal(sw(), 0x0218);
+    assert_int_equal(s.od.error_code, 0x8400u);
+    /* the same two faults at once without a reaction: the lower bit's code */
+    tm.state = MC_STATE_IDLE;
+    tm.faults = 0u;
+    assert_int_equal(cw(0x00), 0x0218);
+    assert_int_equal(cw(0x80), 0x0240);
+    to_enabled();
+    tm.state = MC_STATE_FAULT;
+    tm.faults = MC_FAULT_OVERSPEED | MC_FAULT_OVERCURRENT;
+    step_n(1);
+    assert_int_equal(s.od.error_code, 0x2310u);
+    /* a state word corrupted in Fault starts over (Not ready, Switch on disabled) with the last
+     * error's code still shown (0x603F: the last error); the next fault, without a reaction,
+     * reports its own code, not that stale one */
+    s.state = (mc_402_state_t)99;
+    tm.state = MC_STATE_IDLE;
+    tm.faults = 0u;
+    assert_int_equal(cw(0x00), 0x0240);
+    assert_int_equal(s.od.error_code, 0x2310u);
+    to_enabled();
+    tm.state = MC_STATE_FAULT;
+    tm.faults = MC_FAULT_STALL;
+    step_n(1);
+    assert_int_equal(sw(), 0x0218);
+    assert_int_equal(s.od.error_code, 0x7121u);
+}
+
 /* pv: start-up hold, ramp rates, units, velocity actual, target reached, clamp, halt. */
 static void test_profile_velocity(void **state)
 {
@@ -1014,6 +1065,7 @@ int main(void)
         cmocka_unit_test(test_quick_stop_options),
         cmocka_unit_test(test_disable_operation_shutdown),
         cmocka_unit_test(test_faults),
+        cmocka_unit_test(test_fault_code_names_the_first_fault),
         cmocka_unit_test(test_profile_velocity),
         cmocka_unit_test(test_cyclic_velocity),
         cmocka_unit_test(test_torque_modes),

@@ -164,6 +164,38 @@ static void test_tpdo_timing(void **state)
     assert_false(take_id(0x285u, &f));
 }
 
+/* mc_co_pdo_read/write serve the four PDO ranges only (0x1400.., 0x1600.., 0x1800.., 0x1A00..,
+ * MC_CO_PDO_N each): an index beside a range, below 0x1400 or between two ranges, is no PDO
+ * object (NO_OBJECT) and a write to it changes no PDO, whoever routes it there. The first index
+ * of each range is one. */
+static void test_pdo_index_ranges(void **state)
+{
+    (void)state;
+    rig_init();
+    static const uint16_t none[] = {0x0000u, 0x1000u, 0x1017u, 0x1200u, 0x13FFu,
+                                    0x1400u + MC_CO_PDO_N, 0x15FFu, 0x1600u + MC_CO_PDO_N, 0x17FFu,
+                                    0x1800u + MC_CO_PDO_N, 0x19FFu, 0x1A00u + MC_CO_PDO_N, 0x1BFFu, 0xFFFFu};
+    static mc_co_t before;
+    before = rig.co;
+    for (size_t k = 0; k < sizeof none / sizeof none[0]; ++k) {
+        for (uint8_t sub = 0u; sub <= 2u; ++sub) {
+            uint32_t v = 0xA5A5A5A5u;
+            assert_int_equal(mc_co_pdo_read(&rig.co, none[k], sub, &v), MC_SDO_ABORT_NO_OBJECT);
+            assert_int_equal(v, 0xA5A5A5A5u);
+            assert_int_equal(mc_co_pdo_write(&rig.co, none[k], sub, 0u), MC_SDO_ABORT_NO_OBJECT);
+        }
+    }
+    assert_memory_equal(rig.co.rpdo, before.rpdo, sizeof before.rpdo);
+    assert_memory_equal(rig.co.tpdo, before.tpdo, sizeof before.tpdo);
+    static const uint16_t first[] = {0x1400u, 0x1600u, 0x1800u, 0x1A00u};
+    static const uint32_t sub0[] = {2u, 2u, 6u, 2u};   /* highest sub; a mapping's entries */
+    for (size_t k = 0; k < 4; ++k) {
+        uint32_t v = 0u;
+        assert_int_equal(mc_co_pdo_read(&rig.co, first[k], 0u, &v), 0u);
+        assert_int_equal(v, sub0[k]);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -171,6 +203,7 @@ int main(void)
         cmocka_unit_test(test_mapping_procedure),
         cmocka_unit_test(test_rpdo),
         cmocka_unit_test(test_tpdo_timing),
+        cmocka_unit_test(test_pdo_index_ranges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

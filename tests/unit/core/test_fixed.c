@@ -224,6 +224,39 @@ static void test_pi(void **st)
     assert_true(mc_pi_q15_step(&p15, -8192) < 29491);
 }
 
+/* A gain whose products leave int64 (kp_eff = kp 2^shift far beyond the error's range): the
+ * proportional term saturates, it must never wrap. Any error of either sign then drives the
+ * output to the limit of its own sign in one step (a bang-bang, never an inverted output), from
+ * the smallest error to full scale, for both formats. */
+static void test_pi_high_gain_saturates(void **st)
+{
+    (void)st;
+    const mc_pi_q15_cfg_t c15 = {.kp = 32767, .ki_ts = 32767, .shift = 40, .out_min = -29491, .out_max = 29491};
+    const mc_pi_q31_cfg_t c31 = {.kp = 2147483647, .ki_ts = 2147483647, .shift = 40,
+                                 .out_min = -1932735283, .out_max = 1932735283};
+    const int32_t e15[] = {1, 3, 1000, 32767};
+    const int64_t e31[] = {1, 200, 1073741824, 2147483647};
+    for (int k = 0; k < 4; ++k) {
+        for (int sign = -1; sign <= 1; sign += 2) {
+            mc_pi_q15_t p15;
+            mc_pi_q31_t p31;
+            mc_pi_q15_init(&p15, &c15);
+            mc_pi_q31_init(&p31, &c31);
+            const mc_q15_t u15 = mc_pi_q15_step(&p15, (mc_q15_t)(sign * e15[k]));
+            const mc_q31_t u31 = mc_pi_q31_step(&p31, (mc_q31_t)(sign * e31[k]));
+            assert_int_equal(u15, sign > 0 ? c15.out_max : c15.out_min);
+            assert_int_equal(u31, sign > 0 ? c31.out_max : c31.out_min);
+        }
+    }
+    /* the most negative error too (|INT_MIN| > INT_MAX) */
+    mc_pi_q15_t p15;
+    mc_pi_q31_t p31;
+    mc_pi_q15_init(&p15, &c15);
+    mc_pi_q31_init(&p31, &c31);
+    assert_int_equal(mc_pi_q15_step(&p15, INT16_MIN), c15.out_min);
+    assert_int_equal(mc_pi_q31_step(&p31, INT32_MIN), c31.out_min);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -232,6 +265,7 @@ int main(void)
         cmocka_unit_test(test_clarke_park),
         cmocka_unit_test(test_svpwm),
         cmocka_unit_test(test_pi),
+        cmocka_unit_test(test_pi_high_gain_saturates),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

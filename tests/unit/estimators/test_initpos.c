@@ -223,6 +223,59 @@ static void test_noise_and_failures(void **st)
     assert_false(mc_initpos_start(&s, &c));
 }
 
+/* The engine with a log of its calls: the last one that switched a pulse, the first one that
+ * spent a cost evaluation (the search), and the periods of each direction's pulses. */
+typedef struct {
+    mc_initpos_t s;
+    int n, pulses, last_pulse, first_search, gap_run, gaps;
+} ip_watch_t;
+
+static mc_ip_status_t step_watch(void *e, mc_ab_t i, float vdc, mc_abc_t *d)
+{
+    ip_watch_t *w = (ip_watch_t *)e;
+    const mc_ip_status_t st = mc_initpos_step(&w->s, i, vdc, d);
+    w->n++;
+    if (d->a != 0.0f || d->b != 0.0f || d->c != 0.0f) {
+        w->gaps += w->pulses > 0 && w->gap_run > 0;   /* a zero-vector run between two pulses */
+        w->gap_run = 0;
+        w->pulses++;
+        w->last_pulse = w->n;
+    } else {
+        w->gap_run++;
+    }
+    if (w->first_search == 0 && w->s.evals > 0) {
+        w->first_search = w->n;
+    }
+    return st;
+}
+
+/* The pulse program's timing, exactly: n_dir directions of 4m periods each, a zero-vector gap
+ * (at least gap_min, until the current has decayed) BETWEEN two directions only, and the search
+ * right after the last pulse: its interval's end sample is the next call. A gap after the last
+ * direction would only delay Step I (the search runs with the outputs off anyway). */
+static void test_pulse_program_length(void **st)
+{
+    (void)st;
+    for (int nd = 1; nd <= 3; ++nd) {
+        mc_initpos_cfg_t c = ip_cfg(MC_IP_COST_LINEAR, 5);
+        c.n_dir = nd;
+        ip_watch_t w;
+        memset(&w, 0, sizeof w);
+        plant_t p;
+        plant_init(&p, 0, 30.0);
+        assert_true(mc_initpos_start(&w.s, &c));
+        mc_ip_status_t stt;
+        plant_run(&p, step_watch, &w, 600, &stt);
+        assert_int_equal(stt, MC_IP_DONE);
+        assert_int_equal(w.pulses, nd * 4 * c.m);
+        assert_int_equal(w.gaps, nd - 1);
+        assert_true(w.last_pulse >= nd * 4 * c.m + (nd - 1) * c.gap_min);
+        assert_int_equal(w.first_search, w.last_pulse + 1);
+        assert_int_equal(w.s.prog.n_rec, nd * c.m);
+        assert_int_equal(w.s.prog.run.n_seg, 3 * nd + (nd - 1));   /* V, -V twice as long, V; gaps */
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -231,6 +284,7 @@ int main(void)
         cmocka_unit_test(test_linear_sweep),
         cmocka_unit_test(test_saturating_table),
         cmocka_unit_test(test_noise_and_failures),
+        cmocka_unit_test(test_pulse_program_length),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
