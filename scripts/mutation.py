@@ -407,6 +407,7 @@ def main() -> int:
     ap.add_argument("--no-tce", action="store_true", help="C: do not compile a mutant alone first to set apart the ones that do not build, the equivalent and the duplicate")
     ap.add_argument("--resume", action="store_true", help="reuse the results in OUT/journal.jsonl of mutants whose file has not changed since")
     ap.add_argument("--retest-survivors", action="store_true", help="with --resume: test the journal's survivors again (after new tests)")
+    ap.add_argument("--summarize", action="store_true", help="write summary.json and report.md from OUT/journal.jsonl as it stands (a run stopped early, or shards' journals put together), test nothing")
     ap.add_argument("--shard", help="I/N: only the I-th of N interleaved parts of the mutants (1-based), for several machines")
     ap.add_argument("--equivalent", default="scripts/mutation_equivalent.txt")
     ap.add_argument("--must-kill", help="file of file:line:mutated line that must be killed (fails otherwise)")
@@ -474,6 +475,22 @@ def main() -> int:
     def mkey(m):
         return f"{m['file']}@{fhash[m['file']]}:{m['line']}:{m['mutated']}"
     journal = out / "journal.jsonl"
+    if a.summarize:
+        index = {mkey(m): m for f in files for m in all_mutants[f]}
+        results = []
+        for ln in (journal.read_text().splitlines() if journal.exists() else []):
+            r = json.loads(ln)
+            if r.get("key") in index:
+                results.append(dict(index[r["key"]], **{k: r[k] for k in ("status", "by", "reason", "of", "seconds") if k in r}))
+        results.sort(key=lambda m: (m["file"], m["line"], m["mutated"]))
+        summary = summarize(results, files, a, generated, lang, time.monotonic() - t_start)
+        summary["from_journal"] = True
+        (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+        (out / "report.md").write_text(report(summary))
+        t = summary["totals"]
+        print(f"mutation: {t['killed']} killed, {t['survived']} survived, {t['equivalent']} equivalent, {t['duplicate']} duplicate, "
+              f"{t['no_compile']} not compiling (from {journal}): score {t['score']:.1f} % {t['ci95']}")
+        return 0
     done_before: dict[str, dict] = {}
     if a.resume and journal.exists():
         for ln in journal.read_text().splitlines():
