@@ -283,8 +283,8 @@ class CRunner:
     def stages(self, rel: str, line: int | None = None) -> list[list[str]]:
         if self.cov is not None and line is not None:
             kind, first = self.cov.tests_for(rel, line, self.tests)
-            if kind == "line":
-                # only the tests that execute the line can tell the mutant from the original
+            if kind == "function":
+                # only the tests that enter the function can tell the mutant from the original
                 return [first]
             return [first, [t for t in self.tests if t not in first]]
         layer = Path(rel).parent.name
@@ -577,10 +577,10 @@ def main() -> int:
             runner.apply(m, m["file"])
         if getattr(runner, "cov", None) is not None:
             kind, tests = runner.cov.tests_for(m["file"], m["line"], runner.tests)
-            if kind == "line" and not tests:
-                # no test executes the line: the mutant survives every test without a build
+            if kind == "function" and not tests:
+                # no test enters the function: the mutant survives every test without a build
                 runner.apply(None, m["file"])
-                m.update(status="survived", reason="no test executes the line",
+                m.update(status="survived", reason="no test enters the function",
                          seconds=round(time.monotonic() - t0, 1))
                 return
         deadline = t0 + a.timeout
@@ -728,7 +728,7 @@ def report(s) -> str:
          f"Commit {s['commit']}, {s['date']}, seed {s['seed']}, sample {s['sample'] or 'all'} of {s['generated']} mutants, "
          f"{s['seconds']/60:.1f} min ({s['seconds_per_tested_mutant']} s a built and tested mutant).", "",
          f"**{t['killed']} killed** ({t['timeouts']} of them by the time limit of {s['timeout_s']:.0f} s), "
-         f"**{t['survived']} survived** ({t['not_covered']} on lines no test executes), {t['equivalent']} equivalent, "
+         f"**{t['survived']} survived** ({t['not_covered']} in functions no test enters), {t['equivalent']} equivalent, "
          f"{t['duplicate']} duplicate, {t['no_compile']} not compiling: "
          f"score {t['score']:.1f} % of the non-equivalent, non-duplicate mutants that build.", "",
          f"95 % interval of the score (Wilson): {t['ci95']} %." if t.get("ci95") else "", "",

@@ -1,11 +1,13 @@
 """Per-test line coverage and trivially-equivalent mutants for the mutation run (docs/testing.md).
 
-Coverage: the copy of the tree is built once more with gcc's --coverage on the C code (-O0, so a
-line's count is the line's), every test runs alone, and gcov says which lines of which firmware
-source it executed. A mutant then runs only the tests that execute its line: a test that never
-reaches the line runs the same program with and without the mutant, so it cannot kill it, and a
-line no test executes is a survivor without a build. Lines gcov does not count (declarations,
-initialisers, continuation lines) fall back to every test that executes the file, then the rest.
+Coverage: the copy of the tree is built once more with gcc's --coverage on the C code (-O0), every
+test runs alone, and gcov says which functions and lines of which firmware source it executed. A
+mutant then runs only the tests that enter the function holding its line (those that execute the
+line first): a test that never enters the function runs the same program with and without the
+mutant, so it cannot kill it, and a function no test enters holds survivors that need no build.
+The function, not the line, decides, because gcov books some lines to others (a static table's
+declaration line counted only where another object was built). A line outside every function (a
+file-scope table) runs the tests that execute the file, then all the others.
 
 TCE (trivial compiler equivalence, Papadakis et al., ICSE 2015): the mutated file is compiled
 alone with its library's own command; a mutant whose object code is byte-identical to the
@@ -34,25 +36,33 @@ def tree_key(src: Path, files: list[str]) -> str:
 
 
 class Coverage:
-    """{test: {source file (repo-relative): set(lines executed)}}, executable lines, durations."""
+    """{test: {source file (repo-relative): set(lines executed)}}, the functions (first and last
+    line) each test entered, the functions of each file, the tests' durations."""
 
     def __init__(self, data: dict):
         self.hits = {t: {f: set(ls) for f, ls in fs.items()} for t, fs in data["hits"].items()}
-        self.executable = {f: set(ls) for f, ls in data["executable"].items()}
+        self.fhits = {t: {f: set(ls) for f, ls in fs.items()} for t, fs in data["fhits"].items()}
+        self.functions = {f: [tuple(x) for x in fs] for f, fs in data["functions"].items()}
         self.seconds = data["seconds"]
 
     def tests_for(self, rel: str, line: int, tests: list[str]) -> tuple[str, list[str]]:
-        """('line', tests executing the line) when gcov counts the line (maybe empty: not
-        covered), else ('file', tests executing any line of the file)."""
+        """('function', the tests that enter the function holding the line: first those gcov says
+        execute the line, then the others, each group fastest first; empty: no test enters it),
+        or ('file', the tests that execute any line of the file) for a line outside every
+        function (a file-scope table, a declaration). The function, not the line, decides: gcov
+        books some lines (a static table's declaration, a wrapped condition) to another line."""
         order = sorted(tests, key=lambda t: (self.seconds.get(t, 1e9), t))
-        if line in self.executable.get(rel, ()):
-            return "line", [t for t in order if line in self.hits.get(t, {}).get(rel, ())]
-        return "file", [t for t in order if self.hits.get(t, {}).get(rel)]
+        fn = next((f for f in self.functions.get(rel, ()) if f[0] <= line <= f[1]), None)
+        if fn is None:
+            return "file", [t for t in order if self.hits.get(t, {}).get(rel)]
+        enter = [t for t in order if fn[0] in self.fhits.get(t, {}).get(rel, ())]
+        first = [t for t in enter if line in self.hits.get(t, {}).get(rel, ())]
+        return "function", first + [t for t in enter if t not in first]
 
 
 def build_coverage(src: Path, work: Path, tests: list[str], sources: list[str], key: str,
                    log=print) -> Coverage:
-    cache = work / f"coverage.{key}.json.gz"
+    cache = work / f"coverage.{key}.v2.json.gz"   # v2: functions
     if cache.exists():
         return Coverage(json.loads(gzip.decompress(cache.read_bytes())))
     bdir = work / "cov"
@@ -66,7 +76,8 @@ def build_coverage(src: Path, work: Path, tests: list[str], sources: list[str], 
     subprocess.run(["ninja", "-C", str(bdir)], check=True, stdout=subprocess.DEVNULL)
     srcset = {str((src / f).resolve()): f for f in sources}
     hits: dict[str, dict[str, list[int]]] = {}
-    executable: dict[str, set[int]] = {}
+    fhits: dict[str, dict[str, list[int]]] = {}
+    functions: dict[str, set[tuple[int, int]]] = {}
     seconds: dict[str, float] = {}
     t_all = time.monotonic()
     for i, t in enumerate(tests):
@@ -79,22 +90,27 @@ def build_coverage(src: Path, work: Path, tests: list[str], sources: list[str], 
         if r.returncode != 0:
             raise SystemExit(f"mutation: {t} fails in the coverage build:\n{r.stdout[-2000:]}")
         mine: dict[str, set[int]] = {}
-        for f, ex, hit in gcov_lines(bdir, srcset):
-            executable.setdefault(f, set()).update(ex)
+        fmine: dict[str, set[int]] = {}
+        for f, hit, fns in gcov_lines(bdir, srcset):
             mine.setdefault(f, set()).update(hit)
+            for (a, b, n) in fns:
+                functions.setdefault(f, set()).add((a, b))
+                if n > 0:
+                    fmine.setdefault(f, set()).add(a)
         hits[t] = {f: sorted(ls) for f, ls in mine.items() if ls}
+        fhits[t] = {f: sorted(ls) for f, ls in fmine.items() if ls}
         log(f"mutation: coverage [{i + 1}/{len(tests)}] {t} ({seconds[t]:.1f} s, "
             f"{sum(len(v) for v in hits[t].values())} firmware lines; "
             f"{(time.monotonic() - t_all) / 60:.1f} min)")
-    data = {"hits": hits, "executable": {f: sorted(v) for f, v in executable.items()},
+    data = {"hits": hits, "fhits": fhits, "functions": {f: sorted(v) for f, v in functions.items()},
             "seconds": seconds}
     cache.write_bytes(gzip.compress(json.dumps(data).encode()))
     return Coverage(data)
 
 
 def gcov_lines(bdir: Path, srcset: dict[str, str]):
-    """(repo-relative file, executable lines, executed lines) for every firmware source an
-    object written since the last clean executed (its .gcda exists)."""
+    """(repo-relative file, executed lines, [(first line, last line, calls) a function]) for
+    every firmware source an object written since the last clean executed (its .gcda exists)."""
     by_dir: dict[Path, list[Path]] = {}
     for g in bdir.rglob("*.gcda"):
         by_dir.setdefault(g.parent, []).append(g)
@@ -113,9 +129,9 @@ def gcov_lines(bdir: Path, srcset: dict[str, str]):
                 rel = srcset.get(path)
                 if rel is None:
                     continue
-                ex = {ln["line_number"] for ln in f["lines"]}
                 hit = {ln["line_number"] for ln in f["lines"] if ln["count"] > 0}
-                yield rel, ex, hit
+                fns = [(fn["start_line"], fn["end_line"], fn["execution_count"]) for fn in f.get("functions", [])]
+                yield rel, hit, fns
 
 
 class TCE:
