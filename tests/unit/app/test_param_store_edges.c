@@ -5,12 +5,17 @@
  *   - the largest map geometry() reports on devices just large enough for the set: it is the
  *     largest map a save keeps, 0 when not even a 2 x 2 map fits;
  *   - a save refused by its setup (work buffer too small, device too small) touches nothing;
+ *   - the write unit's limits (16 to 4096 bytes accepted, 8192 refused; a refused device reports
+ *     no layout); a header CRC with any bit flipped; a model record of another version and a
+ *     version 1 parameter record with a position past its table, every CRC valid: refused;
+ *   - a read that fails while a save looks for the copy a load returns: nothing written;
  *   - an NVM call that fails in the middle of a save (a payload write whose status is lost, a
  *     write that fails, a unit that does not program): the save is an error at once, never a
  *     success, and the set committed before still loads.
  * The host NVM model (hal_host) is the device; the faults are put in between the store and it by
- * the linker (--wrap of hal_nvm_read / write / erase, tests/unit/app/CMakeLists.txt): the firmware
- * calls the wrappers below, which count the calls and inject the faults, then call the model. */
+ * the linker (--wrap of hal_nvm_read / write / erase / write_unit, tests/unit/app/CMakeLists.txt):
+ * the firmware calls the wrappers below, which count the calls and inject the faults, then call
+ * the model. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -40,8 +45,10 @@ typedef struct {
     uint32_t failed_at;        /* calls at the failure, 0: none yet                           */
     uint32_t stuck_at;         /* a device byte (nvm.mem index) that never programs: it reads
                                   0xFF whatever is written; UINT32_MAX: none                   */
+    uint32_t reads;            /* read calls since fault_arm()                                */
+    uint32_t fail_read;        /* this read call (1: the first) fails, nothing read; 0: none   */
 } fault_t;
-static fault_t fault = {0u, 0u, 0u, false, 0u, UINT32_MAX};   /* no fault */
+static fault_t fault = {0u, 0u, 0u, false, 0u, UINT32_MAX, 0u, 0u};   /* no fault */
 /* The write unit the device reports, 0: the host model's (8). A larger one (a multiple of 8) is
  * enforced here as a device with that unit would: a write at another offset or length fails. */
 static uint32_t unit;
@@ -53,7 +60,14 @@ uint32_t __wrap_hal_nvm_write_unit(const hal_nvm_t *nvm)
 
 static void fault_arm(uint32_t fail_write, bool carried_out, uint32_t stuck_at)
 {
-    fault = (fault_t){0u, 0u, fail_write, carried_out, 0u, stuck_at};
+    fault = (fault_t){0u, 0u, fail_write, carried_out, 0u, stuck_at, 0u, 0u};
+}
+
+/* no fault but the n-th read call from now failing */
+static void fault_read(uint32_t n)
+{
+    fault_arm(0u, false, UINT32_MAX);
+    fault.fail_read = n;
 }
 
 static void count_call(void)
@@ -64,6 +78,10 @@ static void count_call(void)
 bool __wrap_hal_nvm_read(const hal_nvm_t *nvm, uint32_t block, uint32_t offset, void *data, uint32_t len)
 {
     count_call();
+    if (++fault.reads == fault.fail_read) {
+        fault.failed_at = fault.calls;
+        return false;
+    }
     return __real_hal_nvm_read(nvm, block, offset, data, len);
 }
 
@@ -399,6 +417,231 @@ static void test_write_units_above_8(void **state)
     }
 }
 
+/* The write unit's limits: a power of two up to 4096 bytes. At 4096 (header, marker and the
+ * records' padding each a whole unit: 8 KiB before the records) the largest set is stored and
+ * comes back; 8192, a unit not a power of two (24) and a block that is not whole units are
+ * refused (BAD_ARGS) by geometry, save, load and erase before any NVM step. A refused geometry
+ * reports no layout (every field 0), even right after a valid one. (param_store.c:90, the
+ * upper limit; :138, the layout of a refused device.) */
+static void test_write_unit_limits(void **state)
+{
+    (void)state;
+    nvm_blocks(4096u, 16u);
+    unit = 4096u;
+    mc_pstore_geom_t g;
+    assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_OK);
+    const uint32_t need = (2u * 4096u + (MC_STORE_PARAMS_MAX + MC_STORE_MODEL_MAX + 4095u) / 4096u * 4096u) / 4096u;
+    assert_int_equal(g.slot_first[1], 8u);
+    assert_int_equal(g.slot_blocks, need);
+    assert_int_equal(g.payload_max, (need - 2u) * 4096u);
+    assert_int_equal(g.map_cells_max, MC_FLUX_MAP_MAX * MC_FLUX_MAP_MAX);
+    const mc_drive_cfg_t *a = make_cfg(0, MC_FLUX_MAP_MAX, MC_FLUX_MAP_MAX);
+    mc_pstore_info_t info;
+    mc_drive_cfg_t got;
+    assert_int_equal(mc_pstore_save(&nvm, a, big, 8192u, &info), MC_PSTORE_OK);
+    assert_int_equal(load_with(big, 8192u, &got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg(&got, a, false));
+    for (uint32_t k = 0u; k < 4096u; ++k) {
+        assert_int_equal(nvm.mem[4096u + k], (k & 1u) != 0u ? 0xA5 : 0x5A);   /* the marker */
+    }
+
+    const struct {
+        uint32_t block, unit;
+    } bad[] = {{8192u, 8192u}, {4096u, 24u}, {4100u, 8u}};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        nvm_blocks(4096u, 4u);
+        unit = 0u;
+        assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);   /* a valid layout first */
+        assert_int_not_equal(g.slot_first[1], 0u);
+        nvm_blocks(bad[i].block, 8u);
+        unit = bad[i].unit;
+        assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_BAD_ARGS);
+        assert_int_equal(g.slot_first[0], 0u);
+        assert_int_equal(g.slot_first[1], 0u);
+        assert_int_equal(g.slot_blocks, 0u);
+        assert_int_equal(g.payload_max, 0u);
+        assert_int_equal(g.map_cells_max, 0u);
+        const mc_drive_cfg_t *b = make_cfg(1, 3, 3);
+        assert_int_equal(mc_pstore_save(&nvm, b, big, sizeof big, &info), MC_PSTORE_BAD_ARGS);
+        assert_int_equal(load_with(big, sizeof big, &got, &info), MC_PSTORE_BAD_ARGS);
+        assert_int_equal(mc_pstore_erase(&nvm, big, sizeof big), MC_PSTORE_BAD_ARGS);
+        assert_int_equal(nvm.steps, 0u);
+    }
+}
+
+/* ---- copies that check in part: a and b committed, b the newest ---------------------------- */
+
+static const mc_drive_cfg_t *ca, *cb;
+static uint8_t *slot1;   /* b's copy on flash */
+
+static void two_copies(void)
+{
+    hal_host_nvm_init(&nvm);
+    ca = make_cfg(0, 4, 5);
+    cb = make_cfg(1, 6, 3);
+    assert_int_equal(mc_pstore_save(&nvm, ca, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 0 */
+    assert_int_equal(mc_pstore_save(&nvm, cb, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 1 */
+    mc_pstore_geom_t g;
+    (void)mc_pstore_geometry(&nvm, &g);
+    slot1 = nvm.mem + g.slot_first[1] * nvm.block_size;
+    snap = nvm;
+}
+
+/* load gives a (the newest copy refused) or b (taken) */
+static void loads(const mc_drive_cfg_t *want)
+{
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    assert_int_equal(load(&got, &info), want == ca ? MC_PSTORE_FELL_BACK : MC_PSTORE_OK);
+    assert_int_equal(info.slot, want == ca ? 0 : 1);
+    assert_true(same_cfg(&got, want, false));
+}
+
+static void put32(uint8_t *b, uint32_t w)
+{
+    for (int k = 0; k < 4; ++k) {
+        b[k] = (uint8_t)(w >> (8 * k));
+    }
+}
+
+/* b's copy rewritten with these records under a header of this format, every CRC valid: the
+ * copy a writer of such records would have committed (format 1: the records' CRC words in the
+ * payload CRC, 2: not). */
+static void forge_b(const uint8_t *pr, uint32_t pl, const uint8_t *mr, uint32_t ml, uint32_t format)
+{
+    static uint8_t crc_in[MC_STORE_PARAMS_MAX + MC_STORE_MODEL_MAX];
+    memset(slot1 + PAYLOAD_AT, 0xFF, round8(pl + ml));
+    memcpy(slot1 + PAYLOAD_AT, pr, pl);
+    memcpy(slot1 + PAYLOAD_AT + pl, mr, ml);
+    const uint32_t cut = format == 1u ? 0u : 4u;
+    memcpy(crc_in, pr, pl - cut);
+    memcpy(crc_in + pl - cut, mr, ml - cut);
+    put32(slot1 + 4, format);
+    put32(slot1 + 16, pl);
+    put32(slot1 + 20, ml);
+    put32(slot1 + 24, mc_crc32(crc_in, pl + ml - 2u * cut));
+    put32(slot1 + 28, mc_crc32(slot1, 28u));
+}
+
+static void close_record(uint8_t *r, uint32_t len)
+{
+    put32(r + len - 4u, mc_crc32(r, len - 4u));
+}
+
+/* Any bit of the newest copy's header CRC flipped (above or below the right value): the header
+ * does not check, the older copy is returned. (param_store.c:535, the header CRC compare.) */
+static void test_header_crc_any_bit(void **state)
+{
+    (void)state;
+    two_copies();
+    loads(cb);
+    for (int bit = 0; bit < 32; ++bit) {
+        nvm = snap;
+        slot1[28 + bit / 8] ^= (uint8_t)(1u << (bit % 8));
+        loads(ca);
+    }
+}
+
+/* The model record's version: a copy whose model record is of another version (0, 2), with every
+ * CRC of the copy valid, is refused like mc_store_model_decode refuses the record; the same
+ * forging with version 1 loads (format 1 and 2 headers). (param_store.c:437.) */
+static void test_model_record_other_version(void **state)
+{
+    (void)state;
+    two_copies();
+    static uint8_t pr[MC_STORE_PARAMS_MAX], mr[MC_STORE_MODEL_MAX];
+    const uint32_t pl = (uint32_t)mc_store_params_encode(&cb->p, pr, sizeof pr);
+    const uint32_t ml = (uint32_t)mc_store_model_encode(&cb->est, mr, sizeof mr);
+    for (uint32_t format = 1u; format <= 2u; ++format) {
+        nvm = snap;
+        forge_b(pr, pl, mr, ml, format);
+        loads(cb);
+    }
+    const uint32_t versions[] = {0u, MC_STORE_VERSION + 1u};
+    for (size_t i = 0; i < 2u; ++i) {
+        put32(mr + 4, versions[i]);
+        close_record(mr, ml);
+        mc_est_model_t m;
+        assert_int_not_equal(mc_store_model_decode(mr, ml, &m, &got_map), MC_STORE_OK);
+        nvm = snap;
+        forge_b(pr, pl, mr, ml, MC_PSTORE_FORMAT);
+        loads(ca);
+    }
+}
+
+/* A version 1 parameter record (as main at 5265cfe wrote it: positions in the frozen table of
+ * MC_STORE_V1_COUNT) holding a position past that table is damaged: the copy is refused; the same
+ * record with the table's last position loads. (param_store.c:418.) */
+static void test_v1_record_position_past_the_table(void **state)
+{
+    (void)state;
+    two_copies();
+    static uint8_t mr[MC_STORE_MODEL_MAX];
+    const uint32_t ml = (uint32_t)mc_store_model_encode(&cb->est, mr, sizeof mr);
+    const uint32_t last[] = {MC_STORE_V1_COUNT - 1u, MC_STORE_V1_COUNT, 0x7FFFFFFFu};
+    for (size_t i = 0; i < 3u; ++i) {
+        /* two derived entries (their values unused): position 0 and last[i] */
+        uint8_t pr[4u * (5u + 2u * 2u)];
+        const uint32_t w[] = {MC_STORE_MAGIC_PARAMS, 1u, MC_STORE_V1_TABLE, 2u,
+                              0u | MC_STORE_V1_AUTO, 0u, last[i] | MC_STORE_V1_AUTO, 0u};
+        for (int k = 0; k < 8; ++k) {
+            put32(pr + 4 * k, w[k]);
+        }
+        close_record(pr, sizeof pr);
+        nvm = snap;
+        forge_b(pr, sizeof pr, mr, ml, 1u);
+        mc_drive_cfg_t got;
+        mc_pstore_info_t info;
+        const mc_pstore_status_t st = load(&got, &info);
+        if (last[i] < MC_STORE_V1_COUNT) {
+            assert_int_equal(st, MC_PSTORE_OK);
+            assert_int_equal(info.slot, 1);
+            assert_true(info.params.other_table);
+            assert_int_equal(info.params.dropped, 0u);
+            assert_int_equal(info.params.kept + info.params.unknown, 2u);
+        } else {
+            assert_int_equal(st, MC_PSTORE_FELL_BACK);
+            assert_int_equal(info.slot, 0);
+            assert_true(same_cfg(&got, ca, false));
+        }
+    }
+}
+
+/* A read that fails while a save or an erase looks for the copy a load returns (a header, or a
+ * copy's records): it is an error at once, before any erase or write, so that the copy a load
+ * returns is never overwritten on a guess; a load is an error and leaves cfg as it was.
+ * (param_store.c:721, the save's check of that search.) */
+static void test_read_failure_before_a_save(void **state)
+{
+    (void)state;
+    /* only a committed (slot 0): a save over a would lose the only set */
+    hal_host_nvm_init(&nvm);
+    const mc_drive_cfg_t *a = make_cfg(0, 4, 5), *b = make_cfg(1, 6, 3);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
+    snap = nvm;
+    for (uint32_t n = 1u; n <= 4u; ++n) {   /* slot 0's header, slot 1's, a's first records */
+        nvm = snap;
+        fault_read(n);
+        assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, NULL), MC_PSTORE_NVM_ERROR);
+        assert_int_equal(fault.calls, fault.failed_at);
+        nvm = snap;
+        fault_read(n);
+        assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_NVM_ERROR);
+        assert_int_equal(fault.calls, fault.failed_at);
+        nvm = snap;
+        fault_read(n);
+        mc_drive_cfg_t got = *b;
+        assert_int_equal(mc_pstore_load(&nvm, &got, &got_map, work, sizeof work, NULL), MC_PSTORE_NVM_ERROR);
+        assert_memory_equal(&got, b, sizeof got);
+        assert_int_equal(nvm.steps, snap.steps);
+        assert_memory_equal(nvm.mem, snap.mem, sizeof nvm.mem);
+        fault_arm(0u, false, UINT32_MAX);
+        mc_drive_cfg_t now;
+        assert_int_equal(load(&now, NULL), MC_PSTORE_OK);
+        assert_true(same_cfg(&now, a, false));
+    }
+}
+
 /* ---- a failing call in the middle of a save ------------------------------------------------ */
 
 static const mc_drive_cfg_t *fa, *fb;   /* fa committed in slot 0; fb saved over slot 1 */
@@ -511,6 +754,11 @@ int main(void)
         cmocka_unit_test_setup(test_map_cells_on_small_devices, no_fault),
         cmocka_unit_test_setup(test_refused_setup_touches_nothing, no_fault),
         cmocka_unit_test_setup(test_write_units_above_8, no_fault),
+        cmocka_unit_test_setup(test_write_unit_limits, no_fault),
+        cmocka_unit_test_setup(test_header_crc_any_bit, no_fault),
+        cmocka_unit_test_setup(test_model_record_other_version, no_fault),
+        cmocka_unit_test_setup(test_v1_record_position_past_the_table, no_fault),
+        cmocka_unit_test_setup(test_read_failure_before_a_save, no_fault),
         cmocka_unit_test_setup(test_failed_payload_write_is_not_a_success, no_fault),
         cmocka_unit_test_setup(test_failed_payload_write_ends_the_save, no_fault),
         cmocka_unit_test_setup(test_unprogrammed_byte_fails_the_read_back, no_fault),
