@@ -1080,6 +1080,17 @@ static void test_pole_pairs_out_of_range(void **state)
         step_n(1);
         assert_int_equal(s.od.velocity_actual, -v1);
     }
+    /* a count in 1..999 is taken as it is */
+    static const int good[] = {1, 2, 5, 998, 999};
+    for (size_t k = 0; k < sizeof good / sizeof good[0]; ++k) {
+        start();
+        mc_402_cfg_t c = CFG;
+        c.pole_pairs = good[k];
+        mc_402_init(&s, &c);
+        tm.omega = 100.0f * (float)good[k];
+        step_n(1);
+        assert_int_equal(s.od.velocity_actual, v1);
+    }
 }
 
 /* Disable voltage (9) or a quick stop with option 0 during a disable-operation ramp (5 with
@@ -1272,6 +1283,113 @@ static void test_pv_halt_reached_is_stopped(void **state)
     assert_true(cmd.enable);
 }
 
+/* Fault is latched (§6.3: only the fault reset leaves it): a fault the drive reports meanwhile,
+ * a new FAULT after it had forgotten the first or a fault reaction, changes neither the state
+ * nor 0x603F (the fault that put the drive in Fault), and the command stays off. */
+static void test_fault_latched_keeps_its_code(void **state)
+{
+    (void)state;
+    start();
+    to_enabled();
+    s.od.target_velocity = 300;
+    step_n(100);
+    tm.state = MC_STATE_FAULT;
+    tm.faults = MC_FAULT_OVERCURRENT;
+    step_n(1);
+    assert_int_equal(sw(), 0x0218);
+    assert_int_equal(s.od.error_code, 0x2310u);
+    tm.state = MC_STATE_IDLE;   /* the drive forgets once disabled */
+    tm.faults = 0u;
+    step_n(5);
+    static const mc_state_t next[2] = {MC_STATE_FAULT, MC_STATE_FAULT_REACTION};
+    for (int k = 0; k < 2; ++k) {
+        tm.state = next[k];
+        tm.faults = MC_FAULT_STALL;
+        for (int n = 0; n < 5; ++n) {
+            step_n(1);
+            assert_int_equal(sw(), 0x0218);
+            assert_int_equal(s.od.error_code, 0x2310u);
+            assert_false(cmd.enable);
+        }
+        tm.state = MC_STATE_IDLE;
+        tm.faults = 0u;
+        step_n(2);
+    }
+    assert_int_equal(cw(0x80), 0x0240);   /* 15 */
+    assert_int_equal(s.od.error_code, 0u);
+}
+
+/* While the drive starts up (offset calibration, initial position) the ramps hold at 0 in every
+ * mode: the command and 0x606B / 0x6074 carry no velocity or torque before the drive controls
+ * the motor, whatever the targets. */
+static void test_startup_holds_the_demands(void **state)
+{
+    (void)state;
+    static const int8_t modes[4] = {MC_402_MODE_PV, MC_402_MODE_CSV, MC_402_MODE_TQ, MC_402_MODE_CST};
+    for (int m = 0; m < 4; ++m) {
+        start();
+        s.od.mode = modes[m];
+        s.od.target_velocity = 500;
+        s.od.target_torque = 300;
+        s.od.torque_offset = 50;
+        s.od.velocity_offset = 50;
+        drv.startup = 40;
+        to_enabled();
+        for (int k = 0; k < 38; ++k) {
+            step_n(1);
+            assert_true(cmd.enable);
+            assert_true(cmd.speed_ref == 0.0f && cmd.torque_ref == 0.0f);
+            assert_int_equal(s.od.velocity_demand, 0);
+            assert_int_equal(s.od.torque_demand, 0);
+        }
+        step_n(20);
+        assert_int_equal(s.od.statusword & 0xC000u, 0x4000u);
+        assert_true(m < 2 ? speed_rpm() > 1.0f : cmd.torque_ref > 0.5f);
+    }
+}
+
+/* Target reached (bit 10) describes a drive pursuing its target: disable operation at once
+ * (0x605C = 0) leaves Switched on without it in that very step, the drive's telemetry still
+ * showing RUN and the rotor still at the target. */
+static void test_not_reached_when_switched_on(void **state)
+{
+    (void)state;
+    static const int8_t modes[4] = {MC_402_MODE_PV, MC_402_MODE_CSV, MC_402_MODE_TQ, MC_402_MODE_CST};
+    for (int m = 0; m < 4; ++m) {
+        start();
+        s.od.mode = modes[m];
+        s.od.disable_op_option = 0;
+        s.od.target_velocity = 300;
+        to_enabled();
+        step_n(600);
+        assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
+        assert_int_equal(tm.state, MC_STATE_RUN);
+        assert_int_equal(cw(0x07), 0x0233);
+        assert_int_equal(s.od.statusword & 0x0400u, 0u);
+    }
+}
+
+/* Halt is for pv and tq only: in csv and cst the master owns the trajectory, so bit 10 stays
+ * what it is without halt (at the target: set), not "stopped". */
+static void test_cyclic_modes_ignore_halt_in_bit10(void **state)
+{
+    (void)state;
+    start();
+    s.od.mode = MC_402_MODE_CSV;
+    to_enabled();
+    s.od.target_velocity = 300;
+    step_n(50);
+    s.od.controlword = 0x010F;
+    step_n(50);
+    assert_int_equal(s.od.velocity_demand, 300);
+    assert_int_equal(s.od.statusword & 0x1400u, 0x1400u);   /* reached; follows the command */
+    s.od.mode = MC_402_MODE_CST;
+    s.od.target_torque = 200;
+    step_n(1);
+    assert_int_equal(s.od.torque_demand, 200);
+    assert_int_equal(s.od.statusword & 0x1400u, 0x1400u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1295,6 +1413,10 @@ int main(void)
         cmocka_unit_test(test_torque_demand_0_when_disabled),
         cmocka_unit_test(test_not_reached_during_startup),
         cmocka_unit_test(test_pv_halt_reached_is_stopped),
+        cmocka_unit_test(test_fault_latched_keeps_its_code),
+        cmocka_unit_test(test_startup_holds_the_demands),
+        cmocka_unit_test(test_not_reached_when_switched_on),
+        cmocka_unit_test(test_cyclic_modes_ignore_halt_in_bit10),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
