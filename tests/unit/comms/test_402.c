@@ -1390,6 +1390,29 @@ static void test_cyclic_modes_ignore_halt_in_bit10(void **state)
     assert_int_equal(s.od.statusword & 0x1400u, 0x1400u);
 }
 
+/* Bit 15 says the drive's start-up runs (OFFSET_CAL, INIT_POS) while this block enables it: not
+ * in the step that enables a drive still reporting IDLE (nothing runs yet), then through the
+ * start-up, and no longer in RUN (bit 14 then). */
+static void test_startup_bit15_follows_the_drive(void **state)
+{
+    (void)state;
+    start();
+    drv.startup = 10;
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_int_equal(cw(0x07), 0x0233);
+    assert_int_equal(tm.state, MC_STATE_IDLE);
+    assert_int_equal(cw(0x0F), 0x0237);   /* 4: the command goes out, the drive still IDLE */
+    assert_true(cmd.enable);
+    assert_int_equal(s.od.statusword & 0xC000u, 0u);
+    step_n(1);
+    assert_int_equal(tm.state, MC_STATE_OFFSET_CAL);
+    step_n(1);
+    assert_int_equal(s.od.statusword & 0xC000u, 0x8000u);
+    step_n(15);
+    assert_int_equal(tm.state, MC_STATE_RUN);
+    assert_int_equal(s.od.statusword & 0xC000u, 0x4000u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1417,6 +1440,7 @@ int main(void)
         cmocka_unit_test(test_startup_holds_the_demands),
         cmocka_unit_test(test_not_reached_when_switched_on),
         cmocka_unit_test(test_cyclic_modes_ignore_halt_in_bit10),
+        cmocka_unit_test(test_startup_bit15_follows_the_drive),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
