@@ -8,6 +8,7 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <limits.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <cmocka.h>
@@ -1056,6 +1057,362 @@ static void test_extremes(void **state)
     assert_true(isfinite(cmd.speed_ref));
 }
 
+/* A pole pair count that is not one (0, negative, 1000 or more) reads as 1: the actual values
+ * keep the rotor's direction. A negative count taken as is would invert 0x606C and 0x6077, and
+ * a master closing its loop on them would drive the motor away from its target. */
+static void test_pole_pairs_out_of_range(void **state)
+{
+    (void)state;
+    static const int bad[] = {0, -1, -5, INT_MIN, 1000, INT_MAX};
+    const int32_t v1 = (int32_t)lrintf(100.0f * RPM);   /* 100 rad/s el with 1 pole pair: 955 rpm */
+    const int16_t t1 = (int16_t)lrintf(1.5f * 0.343f * 6.0f / 29.7f * 1000.0f);   /* (2.9), i_d = 0 */
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+        start();
+        mc_402_cfg_t c = CFG;
+        c.pole_pairs = bad[k];
+        mc_402_init(&s, &c);
+        tm.omega = 100.0f;
+        tm.i_dq.q = 6.0f;
+        step_n(1);
+        assert_int_equal(s.od.velocity_actual, v1);
+        assert_int_equal(s.od.torque_actual, t1);
+        tm.omega = -100.0f;
+        step_n(1);
+        assert_int_equal(s.od.velocity_actual, -v1);
+    }
+    /* a count in 1..999 is taken as it is */
+    static const int good[] = {1, 2, 5, 998, 999};
+    for (size_t k = 0; k < sizeof good / sizeof good[0]; ++k) {
+        start();
+        mc_402_cfg_t c = CFG;
+        c.pole_pairs = good[k];
+        mc_402_init(&s, &c);
+        tm.omega = 100.0f * (float)good[k];
+        step_n(1);
+        assert_int_equal(s.od.velocity_actual, v1);
+    }
+}
+
+/* Disable voltage (9) or a quick stop with option 0 during a disable-operation ramp (5 with
+ * 0x605C = 1) ends that ramp for good. Left running, it would complete into Switched on once the
+ * coasting rotor stops (closing the "main contactor" and showing 0x0233 without a command). A
+ * drive enabled again while the rotor still turns picks it up and goes on to its target. */
+static void test_ramp_down_cut_short(void **state)
+{
+    (void)state;
+    for (int how = 0; how < 4; ++how) {
+        start();
+        s.od.profile_decel = 1000u;
+        s.od.quick_stop_option = 0;
+        to_enabled();
+        s.od.target_velocity = 300;
+        step_n(400);
+        assert_int_equal(cw(0x07), 0x0237);   /* 5: ramping down in OE */
+        step_n(50);
+        assert_true(speed_rpm() > 200.0f);
+        assert_int_equal(cw((how & 1) == 0 ? 0x00 : 0x02), 0x0240);   /* 9, or 11 with option 0 */
+        assert_false(cmd.enable);
+        step_n(20);
+        if (how < 2) {
+            /* the rotor coasts to a stop; Switch on disabled throughout, past the ramp's bound */
+            tm.omega = 0.0f;
+            for (int k = 0; k < 1500; ++k) {
+                step_n(1);
+                assert_int_equal(sw(), 0x0240);
+                assert_false(cmd.enable);
+            }
+            to_enabled();
+            step_n(100);
+            assert_true(fabsf(speed_rpm() - 100.0f) < 2.0f);   /* up from 0 toward 300 */
+        } else {
+            /* enabled again at once, the rotor still at 250 rpm: on from there to the target
+             * (a flying restart, test_run_entry) */
+            drv.follow = false;
+            tm.omega = PP * 250.0f / RPM;
+            to_enabled();
+            step_n(2);
+            drv.follow = true;
+            assert_true(fabsf(speed_rpm() - 251.0f) < 1.5f);
+            step_n(100);
+            assert_true(fabsf(speed_rpm() - 300.0f) < 1.0f);
+            step_n(1500);
+            assert_int_equal(sw(), 0x0237);
+            assert_true(fabsf(speed_rpm() - 300.0f) < 1.0f);
+        }
+        assert_int_equal(sw(), 0x0237);
+    }
+}
+
+/* 0x605C and 0x605B: 0 stops at once, any other value (1, and the manufacturer range below 0 a
+ * caller may set on this block directly) ramps down on 0x6084 first, in Operation enabled. */
+static void test_stop_option_codes_other_than_0(void **state)
+{
+    (void)state;
+    static const int16_t opts[] = {1, -1, INT16_MIN};
+    for (size_t k = 0; k < sizeof opts / sizeof opts[0]; ++k) {
+        for (int shutdown = 0; shutdown < 2; ++shutdown) {
+            start();
+            s.od.profile_decel = 1000u;
+            if (shutdown) {
+                s.od.shutdown_option = opts[k];
+            } else {
+                s.od.disable_op_option = opts[k];
+            }
+            to_enabled();
+            s.od.target_velocity = 300;
+            step_n(400);
+            assert_int_equal(cw(shutdown ? 0x06 : 0x07), 0x0237);   /* still OE, ramping */
+            assert_true(cmd.enable);
+            step_n(99);
+            assert_true(fabsf(speed_rpm() - 200.0f) < 2.0f);
+            step_n(350);
+            assert_int_equal(sw(), shutdown ? 0x0221 : 0x0233);   /* 8 / 5 once stopped */
+            assert_false(cmd.enable);
+        }
+    }
+}
+
+/* Disable operation (0x605C = 0) and enable operation again between two steps
+ * (mc_402_controlword, the drive's telemetry still showing RUN): the drive was disabled, so the
+ * enable restarts it from zero torque on 0x6087, not with the torque it had before. */
+static void test_reenable_in_one_batch_restarts_the_ramp(void **state)
+{
+    (void)state;
+    start();
+    s.od.mode = MC_402_MODE_TQ;
+    s.od.disable_op_option = 0;
+    s.od.torque_slope = 1000u;
+    to_enabled();
+    s.od.target_torque = 500;
+    step_n(600);
+    assert_int_equal(s.od.torque_demand, 500);
+    assert_int_equal(tm.state, MC_STATE_RUN);
+    s.od.controlword = 0x07;
+    mc_402_controlword(&s, &tm, &cmd);
+    assert_int_equal(sw(), 0x0233);
+    assert_false(cmd.enable);
+    s.od.controlword = 0x0F;
+    mc_402_controlword(&s, &tm, &cmd);
+    assert_int_equal(sw(), 0x0237);
+    assert_true(cmd.enable);
+    assert_true(cmd.torque_ref == 0.0f);
+    assert_int_equal(s.od.torque_demand, 0);
+    step_n(100);
+    assert_true(abs(s.od.torque_demand - 100) <= 1);   /* on the slope from 0 */
+}
+
+/* 0x6074 torque demand reads 0 while the drive is not enabled (disable voltage, Fault), in a
+ * torque mode (its ramp) and in a speed mode (the speed loop's torque) alike. */
+static void test_torque_demand_0_when_disabled(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 2; ++m) {
+        start();
+        s.od.mode = m == 0 ? MC_402_MODE_TQ : MC_402_MODE_PV;
+        to_enabled();
+        s.od.target_torque = 500;
+        s.od.target_velocity = 500;
+        tm.torque_ref = 5.94f;   /* the speed loop asks for 200 per-mille */
+        step_n(200);
+        assert_true(s.od.torque_demand >= 200);
+        assert_int_equal(cw(0x00), 0x0240);   /* 9 */
+        assert_int_equal(s.od.torque_demand, 0);
+        step_n(5);
+        assert_int_equal(s.od.torque_demand, 0);
+        to_enabled();
+        step_n(200);
+        assert_true(s.od.torque_demand >= 200);
+        tm.state = MC_STATE_FAULT;   /* 14 */
+        tm.faults = MC_FAULT_OVERCURRENT;
+        step_n(1);
+        assert_int_equal(sw(), 0x0218);
+        assert_int_equal(s.od.torque_demand, 0);
+    }
+}
+
+/* Target reached (bit 10) is never set while the drive starts up (offset calibration, initial
+ * position): the drive does not control the motor yet, even with a target of 0 and the rotor at
+ * rest. Once in RUN, it is set after the window time (pv, csv) or at once (tq, cst). */
+static void test_not_reached_during_startup(void **state)
+{
+    (void)state;
+    static const int8_t modes[4] = {MC_402_MODE_PV, MC_402_MODE_CSV, MC_402_MODE_TQ, MC_402_MODE_CST};
+    for (int m = 0; m < 4; ++m) {
+        start();
+        s.od.mode = modes[m];
+        drv.startup = 40;
+        to_enabled();
+        for (int k = 0; k < 38; ++k) {
+            step_n(1);
+            assert_true(cmd.enable);
+            assert_int_equal(s.od.statusword & 0xC400u, 0x8000u);   /* starting, not reached */
+        }
+        step_n(3);
+        assert_int_equal(s.od.statusword & 0xC000u, 0x4000u);   /* RUN */
+        step_n(15);
+        assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
+    }
+}
+
+/* Halt in pv: target reached means stopped, |velocity actual| <= 0x606F for 0x6070, not the
+ * velocity window around the (zero) target: a rotor held at 50 rpm by its load is not stopped,
+ * although 0x606D (here 100 rpm) would take it as at 0. */
+static void test_pv_halt_reached_is_stopped(void **state)
+{
+    (void)state;
+    start();
+    s.od.velocity_window = 100u;
+    s.od.profile_decel = 3000u;
+    to_enabled();
+    s.od.target_velocity = 300;
+    step_n(400);
+    assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
+    s.od.controlword = 0x010F;
+    step_n(110);   /* the ramp is at 0 */
+    assert_int_equal(s.od.velocity_demand, 0);
+    drv.follow = false;
+    tm.omega = PP * 50.0f / RPM;
+    step_n(100);
+    assert_int_equal(s.od.statusword & 0x1400u, 0u);   /* not stopped: not reached, speed not 0 */
+    tm.omega = PP * 5.0f / RPM;
+    step_n(5);
+    assert_int_equal(s.od.statusword & 0x1400u, 0u);   /* below 0x606F, not yet for 0x6070 */
+    step_n(10);
+    assert_int_equal(s.od.statusword & 0x1400u, 0x1400u);
+    assert_int_equal(sw(), 0x0237);
+    assert_true(cmd.enable);
+}
+
+/* Fault is latched (§6.3: only the fault reset leaves it): a fault the drive reports meanwhile,
+ * a new FAULT after it had forgotten the first or a fault reaction, changes neither the state
+ * nor 0x603F (the fault that put the drive in Fault), and the command stays off. */
+static void test_fault_latched_keeps_its_code(void **state)
+{
+    (void)state;
+    start();
+    to_enabled();
+    s.od.target_velocity = 300;
+    step_n(100);
+    tm.state = MC_STATE_FAULT;
+    tm.faults = MC_FAULT_OVERCURRENT;
+    step_n(1);
+    assert_int_equal(sw(), 0x0218);
+    assert_int_equal(s.od.error_code, 0x2310u);
+    tm.state = MC_STATE_IDLE;   /* the drive forgets once disabled */
+    tm.faults = 0u;
+    step_n(5);
+    static const mc_state_t next[2] = {MC_STATE_FAULT, MC_STATE_FAULT_REACTION};
+    for (int k = 0; k < 2; ++k) {
+        tm.state = next[k];
+        tm.faults = MC_FAULT_STALL;
+        for (int n = 0; n < 5; ++n) {
+            step_n(1);
+            assert_int_equal(sw(), 0x0218);
+            assert_int_equal(s.od.error_code, 0x2310u);
+            assert_false(cmd.enable);
+        }
+        tm.state = MC_STATE_IDLE;
+        tm.faults = 0u;
+        step_n(2);
+    }
+    assert_int_equal(cw(0x80), 0x0240);   /* 15 */
+    assert_int_equal(s.od.error_code, 0u);
+}
+
+/* While the drive starts up (offset calibration, initial position) the ramps hold at 0 in every
+ * mode: the command and 0x606B / 0x6074 carry no velocity or torque before the drive controls
+ * the motor, whatever the targets. */
+static void test_startup_holds_the_demands(void **state)
+{
+    (void)state;
+    static const int8_t modes[4] = {MC_402_MODE_PV, MC_402_MODE_CSV, MC_402_MODE_TQ, MC_402_MODE_CST};
+    for (int m = 0; m < 4; ++m) {
+        start();
+        s.od.mode = modes[m];
+        s.od.target_velocity = 500;
+        s.od.target_torque = 300;
+        s.od.torque_offset = 50;
+        s.od.velocity_offset = 50;
+        drv.startup = 40;
+        to_enabled();
+        for (int k = 0; k < 38; ++k) {
+            step_n(1);
+            assert_true(cmd.enable);
+            assert_true(cmd.speed_ref == 0.0f && cmd.torque_ref == 0.0f);
+            assert_int_equal(s.od.velocity_demand, 0);
+            assert_int_equal(s.od.torque_demand, 0);
+        }
+        step_n(20);
+        assert_int_equal(s.od.statusword & 0xC000u, 0x4000u);
+        assert_true(m < 2 ? speed_rpm() > 1.0f : cmd.torque_ref > 0.5f);
+    }
+}
+
+/* Target reached (bit 10) describes a drive pursuing its target: disable operation at once
+ * (0x605C = 0) leaves Switched on without it in that very step, the drive's telemetry still
+ * showing RUN and the rotor still at the target. */
+static void test_not_reached_when_switched_on(void **state)
+{
+    (void)state;
+    static const int8_t modes[4] = {MC_402_MODE_PV, MC_402_MODE_CSV, MC_402_MODE_TQ, MC_402_MODE_CST};
+    for (int m = 0; m < 4; ++m) {
+        start();
+        s.od.mode = modes[m];
+        s.od.disable_op_option = 0;
+        s.od.target_velocity = 300;
+        to_enabled();
+        step_n(600);
+        assert_int_equal(s.od.statusword & 0x0400u, 0x0400u);
+        assert_int_equal(tm.state, MC_STATE_RUN);
+        assert_int_equal(cw(0x07), 0x0233);
+        assert_int_equal(s.od.statusword & 0x0400u, 0u);
+    }
+}
+
+/* Halt is for pv and tq only: in csv and cst the master owns the trajectory, so bit 10 stays
+ * what it is without halt (at the target: set), not "stopped". */
+static void test_cyclic_modes_ignore_halt_in_bit10(void **state)
+{
+    (void)state;
+    start();
+    s.od.mode = MC_402_MODE_CSV;
+    to_enabled();
+    s.od.target_velocity = 300;
+    step_n(50);
+    s.od.controlword = 0x010F;
+    step_n(50);
+    assert_int_equal(s.od.velocity_demand, 300);
+    assert_int_equal(s.od.statusword & 0x1400u, 0x1400u);   /* reached; follows the command */
+    s.od.mode = MC_402_MODE_CST;
+    s.od.target_torque = 200;
+    step_n(1);
+    assert_int_equal(s.od.torque_demand, 200);
+    assert_int_equal(s.od.statusword & 0x1400u, 0x1400u);
+}
+
+/* Bit 15 says the drive's start-up runs (OFFSET_CAL, INIT_POS) while this block enables it: not
+ * in the step that enables a drive still reporting IDLE (nothing runs yet), then through the
+ * start-up, and no longer in RUN (bit 14 then). */
+static void test_startup_bit15_follows_the_drive(void **state)
+{
+    (void)state;
+    start();
+    drv.startup = 10;
+    assert_int_equal(cw(0x06), 0x0221);
+    assert_int_equal(cw(0x07), 0x0233);
+    assert_int_equal(tm.state, MC_STATE_IDLE);
+    assert_int_equal(cw(0x0F), 0x0237);   /* 4: the command goes out, the drive still IDLE */
+    assert_true(cmd.enable);
+    assert_int_equal(s.od.statusword & 0xC000u, 0u);
+    step_n(1);
+    assert_int_equal(tm.state, MC_STATE_OFFSET_CAL);
+    step_n(1);
+    assert_int_equal(s.od.statusword & 0xC000u, 0x8000u);
+    step_n(15);
+    assert_int_equal(tm.state, MC_STATE_RUN);
+    assert_int_equal(s.od.statusword & 0xC000u, 0x4000u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1072,6 +1429,18 @@ int main(void)
         cmocka_unit_test(test_mode_change),
         cmocka_unit_test(test_run_entry),
         cmocka_unit_test(test_extremes),
+        cmocka_unit_test(test_pole_pairs_out_of_range),
+        cmocka_unit_test(test_ramp_down_cut_short),
+        cmocka_unit_test(test_stop_option_codes_other_than_0),
+        cmocka_unit_test(test_reenable_in_one_batch_restarts_the_ramp),
+        cmocka_unit_test(test_torque_demand_0_when_disabled),
+        cmocka_unit_test(test_not_reached_during_startup),
+        cmocka_unit_test(test_pv_halt_reached_is_stopped),
+        cmocka_unit_test(test_fault_latched_keeps_its_code),
+        cmocka_unit_test(test_startup_holds_the_demands),
+        cmocka_unit_test(test_not_reached_when_switched_on),
+        cmocka_unit_test(test_cyclic_modes_ignore_halt_in_bit10),
+        cmocka_unit_test(test_startup_bit15_follows_the_drive),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
