@@ -70,6 +70,34 @@ static void test_hard_trips(void **st)
     assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
 }
 
+/* A code beyond the configured span (hw.adc_bits below the port's 16-bit word: a converter set to
+ * more bits or left-aligned data) measures no current either: it trips as the upper rail on every
+ * phase, in its first period, whatever the float currents say; the code just below the rail does
+ * not, however long. */
+static void test_adc_code_beyond_span(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const mc_abc_t zero = {0.0f, 0.0f, 0.0f};
+    const uint16_t beyond[] = {(uint16_t)(c.adc_max + 1), 0x8000u, 0xFFF0u, 0xFFFFu};
+    for (int k = 0; k < 3; ++k) {
+        for (size_t b = 0; b < sizeof beyond / sizeof beyond[0]; ++b) {
+            mc_protect_t s;
+            mc_protect_reset(&s, &c, 0.0f);
+            hal_adc_sample_t raw = mid();
+            raw.i[k] = beyond[b];
+            assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), MC_FAULT_OVERCURRENT);
+        }
+        mc_protect_t s;
+        mc_protect_reset(&s, &c, 0.0f);
+        hal_adc_sample_t raw = mid();
+        raw.i[k] = (uint16_t)(c.adc_max - 1);
+        for (int n = 0; n < 100; ++n) {
+            assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), 0u);
+        }
+    }
+}
+
 /* The over-current trip level on every phase and both signs, the other two phases carrying the
  * return current (the sum stays zero): a float step beyond i_trip trips in the period it is seen
  * (detection time: one period, no persistence), i_trip itself and a little below never do. */
@@ -668,6 +696,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hard_trips),
+        cmocka_unit_test(test_adc_code_beyond_span),
         cmocka_unit_test(test_overcurrent_every_phase),
         cmocka_unit_test(test_running_checks),
         cmocka_unit_test(test_residual),
