@@ -194,6 +194,127 @@ static void test_model_decode_without_map_storage(void **state)
     assert_memory_equal(&r, &before, sizeof r);
 }
 
+/* a record's word: little-endian */
+static void put_le(size_t at, uint32_t w)
+{
+    for (int k = 0; k < 4; ++k) {
+        buf[at + (size_t)k] = (uint8_t)(w >> (8 * k));
+    }
+}
+
+/* A model record with an n_d x n_q map sealed by hand (the encoder refuses the grids a damaged or
+ * foreign record may claim); cells k: psi_d = 0.2 + 0.01 k, psi_q = -0.003 k. Its length. */
+static size_t model_record(uint32_t nd, uint32_t nq)
+{
+    const uint32_t head[13] = {MC_STORE_MAGIC_MODEL, MC_STORE_VERSION, mc_f32_bits(0.4f), mc_f32_bits(0.0105f),
+                               mc_f32_bits(0.0129f), mc_f32_bits(0.343f), 1u, nd, nq, mc_f32_bits(-10.0f),
+                               mc_f32_bits(5.0f), mc_f32_bits(-8.0f), mc_f32_bits(4.0f)};
+    size_t at = 0u;
+    for (int k = 0; k < 13; ++k, at += 4u) {
+        put_le(at, head[k]);
+    }
+    const size_t cells = (size_t)nd * nq;
+    for (size_t k = 0; k < 2u * cells; ++k, at += 4u) {
+        const float v = k < cells ? 0.2f + 0.01f * (float)k : -0.003f * (float)(k - cells);
+        put_le(at, mc_f32_bits(v));
+    }
+    put_le(at, mc_crc32(buf, at));
+    return at + 4u;
+}
+
+/* The map's grid needs two points per axis to interpolate and has at most MC_FLUX_MAP_MAX: a
+ * record claiming 0 or 1 or MAX + 1 on either axis, its CRC right, is refused by decode and view;
+ * the smallest (2 x 2, 2 x 3, 3 x 2) and the long thin (2 x MAX, MAX x 2) grids are read. */
+static void test_model_grid_dimensions(void **state)
+{
+    (void)state;
+    static mc_flux_map_t out, place;
+    const uint32_t bad[][2] = {{0u, 3u}, {1u, 3u}, {3u, 0u}, {3u, 1u}, {1u, 1u}, {0u, 0u},
+                               {MC_FLUX_MAP_MAX + 1u, 2u}, {2u, MC_FLUX_MAP_MAX + 1u}};
+    for (size_t b = 0; b < sizeof bad / sizeof bad[0]; ++b) {
+        const size_t n = model_record(bad[b][0], bad[b][1]);
+        mc_est_model_t r = {0};
+        assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_BAD_SIZE);
+        assert_int_equal(mc_store_model_view(buf, n, &r, &out), MC_STORE_BAD_SIZE);
+        assert_null(r.map);
+    }
+    const uint32_t good[][2] = {{2u, 2u}, {2u, 3u}, {3u, 2u}, {2u, MC_FLUX_MAP_MAX}, {MC_FLUX_MAP_MAX, 2u}};
+    for (size_t g = 0; g < sizeof good / sizeof good[0]; ++g) {
+        const size_t n = model_record(good[g][0], good[g][1]);
+        mc_est_model_t r = {0};
+        assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_OK);
+        assert_ptr_equal(r.map, &out);
+        assert_int_equal(out.n_d, (int)good[g][0]);
+        assert_int_equal(out.n_q, (int)good[g][1]);
+        assert_true(out.did == 5.0f && out.diq == 4.0f);
+        const size_t cells = (size_t)good[g][0] * good[g][1];
+        assert_true(out.psi_d[cells - 1u] == 0.2f + 0.01f * (float)(cells - 1u));
+        assert_true(out.psi_q[cells - 1u] == -0.003f * (float)(cells - 1u));
+        place = out;
+        assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_OK);
+        assert_ptr_equal(r.map, &place);
+    }
+}
+
+/* The map in place must have the record's grid exactly: a map whose dimensions differ either way
+ * on either axis (its cells the record's, so only the dimension tells) describes another grid and
+ * is refused, as is one whose origin or step differs either way. */
+static void test_model_view_other_grid(void **state)
+{
+    (void)state;
+    static mc_flux_map_t good, place;
+    const size_t n = model_record(4u, 5u);
+    mc_est_model_t r = {0};
+    assert_int_equal(mc_store_model_decode(buf, n, &r, &good), MC_STORE_OK);
+    place = good;
+    assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_OK);
+    for (int axis = 0; axis < 2; ++axis) {
+        for (int d = -1; d <= 1; d += 2) {
+            place = good;
+            if (axis == 0) {
+                place.n_d += d;
+            } else {
+                place.n_q += d;
+            }
+            r.map = NULL;
+            assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_MAP_MISMATCH);
+            assert_null(r.map);
+        }
+    }
+    for (int f = 0; f < 4; ++f) {
+        for (int d = -1; d <= 1; d += 2) {
+            place = good;
+            float *x = f == 0 ? &place.id0 : f == 1 ? &place.did : f == 2 ? &place.iq0 : &place.diq;
+            *x = mc_bits_f32((uint32_t)((int64_t)mc_f32_bits(*x) + d));   /* one ulp either way */
+            assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_MAP_MISMATCH);
+        }
+    }
+}
+
+/* What a model slot holds says itself: erased memory is "nothing stored" (the image boots on the
+ * parameters' motor model), another record's magic and another version are told apart from a
+ * damaged record, by decode and view alike; nothing is changed. */
+static void test_model_slot_status(void **state)
+{
+    (void)state;
+    static mc_flux_map_t out;
+    const size_t n = model_record(3u, 3u);
+    mc_est_model_t r = {0};
+    const mc_est_model_t before = r;
+    memset(buf, 0xFF, n);
+    assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_EMPTY);
+    assert_int_equal(mc_store_model_view(buf, n, &r, &out), MC_STORE_EMPTY);
+    model_record(3u, 3u);
+    put_le(0u, MC_STORE_MAGIC_PARAMS);
+    assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_BAD_MAGIC);
+    assert_int_equal(mc_store_model_view(buf, n, &r, &out), MC_STORE_BAD_MAGIC);
+    model_record(3u, 3u);
+    put_le(4u, MC_STORE_VERSION + 1u);
+    assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_BAD_VERSION);
+    assert_int_equal(mc_store_model_view(buf, n, &r, &out), MC_STORE_BAD_VERSION);
+    assert_memory_equal(&r, &before, sizeof r);
+}
+
 /* A version 1 record holds positions; one outside the frozen table of 95 (a damaged word, or the
  * largest a word can carry once its derived mark is off) names no parameter: key 0, which the
  * NVM store refuses. */
@@ -244,6 +365,9 @@ int main(void)
         cmocka_unit_test(test_decode_reads_within_n),
         cmocka_unit_test(test_decode_writes_within_grid),
         cmocka_unit_test(test_model_decode_without_map_storage),
+        cmocka_unit_test(test_model_grid_dimensions),
+        cmocka_unit_test(test_model_view_other_grid),
+        cmocka_unit_test(test_model_slot_status),
         cmocka_unit_test(test_v1_key_outside_frozen_table),
         cmocka_unit_test(test_report_none_dropped),
     };
