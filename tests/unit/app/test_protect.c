@@ -441,6 +441,34 @@ static void test_sensor_limits(void **st)
     assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, nextafterf(c.vdc_min, 0.0f)), MC_FAULT_UNDERVOLTAGE);
 }
 
+/* A persisting condition is a level, not an edge: once the current sum has been out of its
+ * tolerance for i_sum_n periods the fault is returned in every further period it stays out, so a
+ * trip of higher priority (the link voltage) in exactly the i_sum_n-th period does not hide it:
+ * the next period reports it; one period back within the tolerance ends it. */
+static void test_sensor_fault_persists(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const hal_adc_sample_t raw = mid();
+    const mc_abc_t off = {1.5f, 0.0f, 0.0f}, zero = {0.0f, 0.0f, 0.0f};
+    mc_protect_t s;
+    mc_protect_reset(&s, &c, 0.0f);
+    for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+    }
+    for (int n = 0; n < 50; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), MC_FAULT_CURRENT_SENSOR);
+    }
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), 0u);
+    /* masked in its i_sum_n-th period, reported in the next */
+    mc_protect_reset(&s, &c, 0.0f);
+    for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+    }
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 401.0f), MC_FAULT_OVERVOLTAGE);
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), MC_FAULT_CURRENT_SENSOR);
+}
+
 /* Over-speed at its limit (either sign) never, one float step beyond at once. */
 static void test_overspeed_limit(void **st)
 {
@@ -704,6 +732,7 @@ int main(void)
         cmocka_unit_test(test_speed_mode_checks),
         cmocka_unit_test(test_torque_plausibility),
         cmocka_unit_test(test_sensor_limits),
+        cmocka_unit_test(test_sensor_fault_persists),
         cmocka_unit_test(test_overspeed_limit),
         cmocka_unit_test(test_tracking_limit),
         cmocka_unit_test(test_lock_limits),
