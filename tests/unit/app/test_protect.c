@@ -591,7 +591,7 @@ static void test_lock_limits(void **st)
 
 /* Stall next to its limits: the torque at stall_torque (either sign), no speed, the speed loop
  * asking for speed: after exactly stall_n periods; the speed at stall_speed, the torque a float
- * step below stall_torque, the reference at stall_speed, or torque mode: never. */
+ * step below stall_torque, the reference at or below stall_speed, or torque mode: never. */
 static void test_stall_limits(void **st)
 {
     (void)st;
@@ -622,6 +622,15 @@ static void test_stall_limits(void **st)
         in.speed_ref = sg * c.stall_speed / (float)c.pole_pairs;
         mc_protect_reset(&s, &c, in.omega);
         assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        /* a reference below the stall speed (0: holding a load at standstill with full torque,
+         * half of it: creeping) is the speed loop doing its job: never */
+        const float below[] = {0.0f, 0.5f * c.stall_speed / (float)c.pole_pairs};
+        for (int b = 0; b < 2; ++b) {
+            in = base;
+            in.speed_ref = sg * below[b];
+            mc_protect_reset(&s, &c, in.omega);
+            assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        }
         in = base;
         in.speed_mode = false;
         mc_protect_reset(&s, &c, in.omega);
