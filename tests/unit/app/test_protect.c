@@ -638,6 +638,40 @@ static void test_stall_limits(void **st)
     }
 }
 
+/* A reset (a new start, a retry) gives every detector its whole persistence again: a condition
+ * held for all but one period before it counts from zero after it, for the sensor sum and the
+ * stall alike (a carried count would trip a retry in its first period). */
+static void test_reset_restarts_persistence(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const hal_adc_sample_t raw = mid();
+    const mc_abc_t off = {1.5f, 0.0f, 0.0f};
+    mc_protect_t s;
+    mc_protect_reset(&s, &c, 0.0f);
+    for (int pass = 0; pass < 2; ++pass) {
+        for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+            assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+        }
+        mc_protect_reset(&s, &c, 0.0f);
+    }
+    for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+    }
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), MC_FAULT_CURRENT_SENSOR);
+
+    mc_protect_in_t in = steady(&c, 0.0f, 5.0f);
+    in.speed_mode = true;
+    in.speed_ref = 100.0f;
+    in.torque_ref = c.stall_torque;
+    int n = 0;
+    mc_protect_reset(&s, &c, 0.0f);
+    assert_int_equal(run_for(&s, &c, &in, (int)c.stall_n - 1, &n), 0u);
+    mc_protect_reset(&s, &c, 0.0f);
+    assert_int_equal(run_for(&s, &c, &in, (int)c.stall_n - 1, &n), 0u);
+    assert_int_equal(run_for(&s, &c, &in, 1, &n), MC_FAULT_STALL);
+}
+
 /* The detection times of the configuration the drive builds from its default parameters (the
  * sensorless estimator: the lock checks on), in seconds against the protection.*_time_s they
  * come from: loss of lock (the raw speed reversed: the 20 Hz average needs ~1.3 ms to say so)
@@ -746,6 +780,7 @@ int main(void)
         cmocka_unit_test(test_tracking_limit),
         cmocka_unit_test(test_lock_limits),
         cmocka_unit_test(test_stall_limits),
+        cmocka_unit_test(test_reset_restarts_persistence),
         cmocka_unit_test(test_built_detection_times),
         cmocka_unit_test(test_reactions),
     };
