@@ -70,6 +70,34 @@ static void test_hard_trips(void **st)
     assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
 }
 
+/* A code beyond the configured span (hw.adc_bits below the port's 16-bit word: a converter set to
+ * more bits or left-aligned data) measures no current either: it trips as the upper rail on every
+ * phase, in its first period, whatever the float currents say; the code just below the rail does
+ * not, however long. */
+static void test_adc_code_beyond_span(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const mc_abc_t zero = {0.0f, 0.0f, 0.0f};
+    const uint16_t beyond[] = {(uint16_t)(c.adc_max + 1), 0x8000u, 0xFFF0u, 0xFFFFu};
+    for (int k = 0; k < 3; ++k) {
+        for (size_t b = 0; b < sizeof beyond / sizeof beyond[0]; ++b) {
+            mc_protect_t s;
+            mc_protect_reset(&s, &c, 0.0f);
+            hal_adc_sample_t raw = mid();
+            raw.i[k] = beyond[b];
+            assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), MC_FAULT_OVERCURRENT);
+        }
+        mc_protect_t s;
+        mc_protect_reset(&s, &c, 0.0f);
+        hal_adc_sample_t raw = mid();
+        raw.i[k] = (uint16_t)(c.adc_max - 1);
+        for (int n = 0; n < 100; ++n) {
+            assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), 0u);
+        }
+    }
+}
+
 /* The over-current trip level on every phase and both signs, the other two phases carrying the
  * return current (the sum stays zero): a float step beyond i_trip trips in the period it is seen
  * (detection time: one period, no persistence), i_trip itself and a little below never do. */
@@ -413,6 +441,34 @@ static void test_sensor_limits(void **st)
     assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, nextafterf(c.vdc_min, 0.0f)), MC_FAULT_UNDERVOLTAGE);
 }
 
+/* A persisting condition is a level, not an edge: once the current sum has been out of its
+ * tolerance for i_sum_n periods the fault is returned in every further period it stays out, so a
+ * trip of higher priority (the link voltage) in exactly the i_sum_n-th period does not hide it:
+ * the next period reports it; one period back within the tolerance ends it. */
+static void test_sensor_fault_persists(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const hal_adc_sample_t raw = mid();
+    const mc_abc_t off = {1.5f, 0.0f, 0.0f}, zero = {0.0f, 0.0f, 0.0f};
+    mc_protect_t s;
+    mc_protect_reset(&s, &c, 0.0f);
+    for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+    }
+    for (int n = 0; n < 50; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), MC_FAULT_CURRENT_SENSOR);
+    }
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, zero, 300.0f), 0u);
+    /* masked in its i_sum_n-th period, reported in the next */
+    mc_protect_reset(&s, &c, 0.0f);
+    for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+    }
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 401.0f), MC_FAULT_OVERVOLTAGE);
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), MC_FAULT_CURRENT_SENSOR);
+}
+
 /* Over-speed at its limit (either sign) never, one float step beyond at once. */
 static void test_overspeed_limit(void **st)
 {
@@ -535,7 +591,7 @@ static void test_lock_limits(void **st)
 
 /* Stall next to its limits: the torque at stall_torque (either sign), no speed, the speed loop
  * asking for speed: after exactly stall_n periods; the speed at stall_speed, the torque a float
- * step below stall_torque, the reference at stall_speed, or torque mode: never. */
+ * step below stall_torque, the reference at or below stall_speed, or torque mode: never. */
 static void test_stall_limits(void **st)
 {
     (void)st;
@@ -566,11 +622,54 @@ static void test_stall_limits(void **st)
         in.speed_ref = sg * c.stall_speed / (float)c.pole_pairs;
         mc_protect_reset(&s, &c, in.omega);
         assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        /* a reference below the stall speed (0: holding a load at standstill with full torque,
+         * half of it: creeping) is the speed loop doing its job: never */
+        const float below[] = {0.0f, 0.5f * c.stall_speed / (float)c.pole_pairs};
+        for (int b = 0; b < 2; ++b) {
+            in = base;
+            in.speed_ref = sg * below[b];
+            mc_protect_reset(&s, &c, in.omega);
+            assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        }
         in = base;
         in.speed_mode = false;
         mc_protect_reset(&s, &c, in.omega);
         assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
     }
+}
+
+/* A reset (a new start, a retry) gives every detector its whole persistence again: a condition
+ * held for all but one period before it counts from zero after it, for the sensor sum and the
+ * stall alike (a carried count would trip a retry in its first period). */
+static void test_reset_restarts_persistence(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    const hal_adc_sample_t raw = mid();
+    const mc_abc_t off = {1.5f, 0.0f, 0.0f};
+    mc_protect_t s;
+    mc_protect_reset(&s, &c, 0.0f);
+    for (int pass = 0; pass < 2; ++pass) {
+        for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+            assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+        }
+        mc_protect_reset(&s, &c, 0.0f);
+    }
+    for (uint32_t n = 1u; n < c.i_sum_n; ++n) {
+        assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), 0u);
+    }
+    assert_int_equal(mc_protect_sensors(&s, &c, &raw, off, 300.0f), MC_FAULT_CURRENT_SENSOR);
+
+    mc_protect_in_t in = steady(&c, 0.0f, 5.0f);
+    in.speed_mode = true;
+    in.speed_ref = 100.0f;
+    in.torque_ref = c.stall_torque;
+    int n = 0;
+    mc_protect_reset(&s, &c, 0.0f);
+    assert_int_equal(run_for(&s, &c, &in, (int)c.stall_n - 1, &n), 0u);
+    mc_protect_reset(&s, &c, 0.0f);
+    assert_int_equal(run_for(&s, &c, &in, (int)c.stall_n - 1, &n), 0u);
+    assert_int_equal(run_for(&s, &c, &in, 1, &n), MC_FAULT_STALL);
 }
 
 /* The detection times of the configuration the drive builds from its default parameters (the
@@ -668,6 +767,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hard_trips),
+        cmocka_unit_test(test_adc_code_beyond_span),
         cmocka_unit_test(test_overcurrent_every_phase),
         cmocka_unit_test(test_running_checks),
         cmocka_unit_test(test_residual),
@@ -675,10 +775,12 @@ int main(void)
         cmocka_unit_test(test_speed_mode_checks),
         cmocka_unit_test(test_torque_plausibility),
         cmocka_unit_test(test_sensor_limits),
+        cmocka_unit_test(test_sensor_fault_persists),
         cmocka_unit_test(test_overspeed_limit),
         cmocka_unit_test(test_tracking_limit),
         cmocka_unit_test(test_lock_limits),
         cmocka_unit_test(test_stall_limits),
+        cmocka_unit_test(test_reset_restarts_persistence),
         cmocka_unit_test(test_built_detection_times),
         cmocka_unit_test(test_reactions),
     };
