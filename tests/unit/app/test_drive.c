@@ -719,6 +719,41 @@ static void test_protect_overrun(void **st)
     assert_fault(&r, MC_FAULT_OVERRUN);
 }
 
+/* The outputs go off at rest: every phase's duty at 50 % (zero line-to-line voltage), so the
+ * duties a later enable (or a port that ignores the gate enable) starts from drive no current.
+ * A trip out of RUN with a torque-producing voltage latched, and a disable out of RUN. */
+static void assert_rest_duties(const rig_t *r)
+{
+    assert_false(hal_pwm_enabled(&r->pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_float_equal(r->pwm.shadow[k], 0.5f, 0.0f);
+    }
+}
+
+static void test_outputs_off_at_rest(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_running(&r);   /* 1 A, 3 A in d, q: duties away from 50 % on the phases */
+    float spread = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        spread = fmaxf(spread, fabsf(r.pwm.shadow[k] - 0.5f));
+    }
+    assert_true(spread > 1e-3f);
+    r.adc.sample.overrun = true;   /* a trip: the port's overrun flag */
+    hal_host_pwm_latch(&r.pwm);
+    mc_drive_isr(&r.d);
+    assert_fault(&r, MC_FAULT_OVERRUN);
+    assert_rest_duties(&r);
+    r.adc.sample.overrun = false;
+
+    rig_running(&r);
+    command(&r, false, MC_MODE_CURRENT, 1.0f, 3.0f);   /* a disable */
+    run_plant(&r, 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    assert_rest_duties(&r);
+}
+
 /* A channel whose reading drifts away (the three no longer sum to zero) trips after exactly the
  * persistence (protection.i_sum_time_s), and not before. */
 static void test_protect_current_sum(void **st)
@@ -983,6 +1018,7 @@ int main(void)
         cmocka_unit_test(test_param_write_standstill_idle),
         cmocka_unit_test(test_param_write_rule_follows),
         cmocka_unit_test(test_protect_overrun),
+        cmocka_unit_test(test_outputs_off_at_rest),
         cmocka_unit_test(test_protect_current_sum),
         cmocka_unit_test(test_catch_wait_bounded),
         cmocka_unit_test(test_offset_cal_limit_every_phase),
