@@ -474,6 +474,44 @@ static void test_step1_current_limit(void **st)
     }
 }
 
+/* The polarity re-check's bookkeeping is per enable (mc/drive.h: "since the enable"): with
+ * polarity_check = at_start and the given angle (no Step II), each RUN entry gets its at_start
+ * check(s) a settling time in, and a new enable starts the counters, the verdict and the
+ * at_start budget (three tries) from zero, so a drive enabled again is checked again. */
+static void test_polarity_recheck_per_enable(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.2);
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_init_pos, "given", NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_polarity_check, "at_start", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    const mc_polcheck_cfg_t *pc = &r.d.cfg->blk.pol;
+    assert_true(pc->at_start && pc->inject && !pc->three_step && pc->start_n > 0u);
+    uint32_t seen[2] = {0u, 0u};
+    for (int cyc = 0; cyc < 2; ++cyc) {
+        const mc_drive_cmd_t on = {.enable = true, .mode = MC_MODE_CURRENT, .theta_init = 0.2f};
+        mc_drive_command(&r.d, &on);
+        step(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
+        assert_int_equal(mc_drive_telemetry(&r.d)->polarity_checks, 0u);
+        assert_int_equal(mc_drive_telemetry(&r.d)->polarity_flips, 0u);
+        assert_int_equal(mc_drive_telemetry(&r.d)->polarity_last, 0);
+        run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 1000);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        step(&r, (int)(4u * pc->start_n));
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        seen[cyc] = mc_drive_telemetry(&r.d)->polarity_checks;
+        print_message("enable %d: %u checks, last verdict %d\n", cyc, (unsigned)seen[cyc],
+                      mc_drive_telemetry(&r.d)->polarity_last);
+        assert_true(seen[cyc] >= 1u);
+        command(&r, false);
+        step(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    }
+    assert_int_equal(seen[1], seen[0]);   /* the second enable is checked as the first was */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -487,6 +525,7 @@ int main(void)
         cmocka_unit_test(test_repeated_enable_disable),
         cmocka_unit_test(test_step3_timeout),
         cmocka_unit_test(test_step1_current_limit),
+        cmocka_unit_test(test_polarity_recheck_per_enable),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
