@@ -474,6 +474,39 @@ static void test_step1_current_limit(void **st)
     }
 }
 
+/* Step III's pipeline starts one period after Step II ends: in the period Step II's program
+ * finishes, its last duties (V(000), the pulse's current decaying with zero voltage) are the
+ * ones latched, and the control pipeline's (50 % +- the injection) come from the next period,
+ * so that the estimator's first Step III sample pairs the currents with a voltage that acted
+ * over a whole period of its own. */
+static void test_step3_starts_a_period_after_step2(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.7);
+    command(&r, true);
+    step(&r, 1);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+    const uint32_t writes = r.pwm.writes;
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
+    assert_true(r.pwm.writes > writes);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+    assert_int_equal(r.d.seq.ticks, 1u);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_float_equal(r.pwm.shadow[k], 0.0f, 0.0f);
+    }
+    step(&r, 1);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_true(fabsf(r.pwm.shadow[k] - 0.5f) < 0.2f);   /* the pipeline's: near 50 % */
+        assert_float_equal(mc_drive_telemetry(&r.d)->duty[k], r.pwm.shadow[k], 0.0f);
+    }
+}
+
 /* The polarity re-check's bookkeeping is per enable (mc/drive.h: "since the enable"): with
  * polarity_check = at_start and the given angle (no Step II), each RUN entry gets its at_start
  * check(s) a settling time in, and a new enable starts the counters, the verdict and the
@@ -525,6 +558,7 @@ int main(void)
         cmocka_unit_test(test_repeated_enable_disable),
         cmocka_unit_test(test_step3_timeout),
         cmocka_unit_test(test_step1_current_limit),
+        cmocka_unit_test(test_step3_starts_a_period_after_step2),
         cmocka_unit_test(test_polarity_recheck_per_enable),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
