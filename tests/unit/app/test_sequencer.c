@@ -474,6 +474,42 @@ static void test_step1_current_limit(void **st)
     }
 }
 
+/* Fail-safe at Step I's start: a pulse program that refuses its configuration (here Step I's
+ * m = 0, which the parameter ranges never let through: the built configuration corrupted in
+ * RAM) faults config at the calibration's end, in that period, and the outputs never come on
+ * for it (not a Step I that fails a period later with them on). */
+static void test_step1_refused_faults_config(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.7);
+    /* the configuration in force lives in the rig's link (a non-const object) */
+    mc_drive_built_t *live = (mc_drive_built_t *)(uintptr_t)r.d.cfg;
+    const int m = live->blk.step1.m;
+    live->blk.step1.m = 0;
+    command(&r, true);
+    bool on = false;
+    int n = 0;
+    while (mc_drive_state(&r.d) != MC_STATE_FAULT && n < 1000) {
+        step(&r, 1);
+        on = on || hal_pwm_enabled(&r.pwm);
+        ++n;
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_CONFIG);
+    assert_int_equal(n, (int)r.d.cfg->blk.offs.samples);   /* the calibration's last sample */
+    assert_false(on);
+    /* a configuration fault is not cleared by disable + enable (a rejected configuration
+     * never runs) */
+    command(&r, false);
+    step(&r, 1);
+    command(&r, true);
+    step(&r, 200);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    live->blk.step1.m = m;
+}
+
 /* Step III's pipeline starts one period after Step II ends: in the period Step II's program
  * finishes, its last duties (V(000), the pulse's current decaying with zero voltage) are the
  * ones latched, and the control pipeline's (50 % +- the injection) come from the next period,
@@ -558,6 +594,7 @@ int main(void)
         cmocka_unit_test(test_repeated_enable_disable),
         cmocka_unit_test(test_step3_timeout),
         cmocka_unit_test(test_step1_current_limit),
+        cmocka_unit_test(test_step1_refused_faults_config),
         cmocka_unit_test(test_step3_starts_a_period_after_step2),
         cmocka_unit_test(test_polarity_recheck_per_enable),
     };
