@@ -848,6 +848,55 @@ static void test_protect_overspeed(void **st)
     assert_fault(&r, MC_FAULT_OVERSPEED);
 }
 
+/* An angle-sensor drive enabled on a rotor at 1500 rpm (line-to-line back-EMF ~430 V peak,
+ * beyond the 300 V link: the diodes would conduct). With overmodulation (control.u_loop > 1,
+ * the default) the field-weakening entry runs: its first corner is latched during the
+ * calibration with the outputs off, and they come on with it at RUN's entry. With u_loop = 1
+ * (no overmodulation) there is no entry law: no duty is written while calibrating, and RUN's
+ * own first duties come on a period after the entry. */
+static void test_sensor_entry_corner_needs_overmod(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const uint32_t step = 80000u * 1500u / 60u / 10000u;   /* counts per period at 1500 rpm */
+    for (int overmod = 1; overmod >= 0; --overmod) {
+        rig_init(&r);
+        if (!overmod) {
+            assert_true(mc_param_set(&r.cfg.p, MC_PARAM_control_u_loop, 1.0f, NULL));
+            assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        }
+        assert_true(r.d.cfg->blk.fw_entry.overmod == (overmod != 0));
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        const uint32_t writes = r.pwm.writes;
+        int n = 0;
+        for (; n < 1000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+            r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+            if (n > 0) {
+                assert_false(hal_pwm_enabled(&r.pwm));   /* calibrating: outputs off */
+            }
+            run(&r, 1);
+            if (!overmod && mc_drive_state(&r.d) == MC_STATE_OFFSET_CAL) {
+                assert_int_equal(r.pwm.writes, writes);   /* nothing latched */
+            }
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_int_equal(mc_drive_faults(&r.d), 0u);
+        if (overmod) {
+            assert_true(r.d.entry.corner);
+            assert_true(hal_pwm_enabled(&r.pwm));     /* on at once, with the corner */
+        } else {
+            assert_false(r.d.entry.corner);
+            /* the entry period's writes: the 50 % rest, then the pipeline's first duties, which
+             * act from the next period, with the outputs */
+            assert_int_equal(r.pwm.writes - writes, 2u);
+            assert_false(hal_pwm_enabled(&r.pwm));
+            r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+            run(&r, 1);
+            assert_true(hal_pwm_enabled(&r.pwm));
+        }
+    }
+}
+
 /* The flying-start catch's longest wait for the current to rest (mc/catch.h): where the diodes
  * conduct, their current comes in pulses a sixth of a turn apart, and 2.5 of them at
  * omega_ug = Vdc / (sqrt3 psi_pm) are enough; at least 1 ms. The wait is the smallest number of
@@ -1021,6 +1070,7 @@ int main(void)
         cmocka_unit_test(test_outputs_off_at_rest),
         cmocka_unit_test(test_protect_current_sum),
         cmocka_unit_test(test_catch_wait_bounded),
+        cmocka_unit_test(test_sensor_entry_corner_needs_overmod),
         cmocka_unit_test(test_offset_cal_limit_every_phase),
         cmocka_unit_test(test_config_range_ends),
         cmocka_unit_test(test_numeric_guard),
