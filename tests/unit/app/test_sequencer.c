@@ -1,7 +1,7 @@
 /* The startup sequencer alone (mc/sequencer.h), then the drive's startup driven through the host
- * HAL with a small salient RL plant at standstill: the full IDLE -> OFFSET_CAL -> INIT_POS
- * (I, II, III) -> RUN path, a fault in the middle of every step, timeouts, and repeated
- * enable/disable. */
+ * HAL with a small salient RL plant at standstill (turning for the catch): the full IDLE ->
+ * OFFSET_CAL -> INIT_POS (I, II, III) -> RUN path, a fault in the middle of every step,
+ * timeouts, repeated enable/disable, and the catch of a turning rotor. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -134,6 +134,7 @@ static void test_seq_extreme_timeouts(void **st)
 #define RS 0.4
 #define TS 1e-4
 #define PI_D 3.14159265358979323846
+#define PSI_PM 0.34305
 
 typedef struct {
     hal_pwm_t pwm;
@@ -143,7 +144,8 @@ typedef struct {
     mc_drive_cfg_t cfg;
     mc_drive_link_t link;
     mc_drive_t d;
-    double theta_r;        /* rotor angle (standstill) */
+    double theta_r;        /* rotor angle */
+    double omega_r;        /* rotor speed [rad/s el] (0: standstill; test_catch_turning) */
     double id, iq;         /* plant currents */
     double i_force;        /* added to phase a (A) to provoke an over-current */
 } rig_t;
@@ -153,8 +155,9 @@ static uint16_t counts(const mc_drive_t *d, double amps)
     return (uint16_t)lrint(d->cfg->blk.offs.nominal + amps / d->cfg->blk.offs.amps_per_count);
 }
 
-/* One PWM period of a salient RL machine at standstill with the latched duties (exact enough
- * with 10 sub-steps); zero voltage with the outputs off. */
+/* One PWM period of a salient RL machine at standstill (or turning at omega_r, with its
+ * back-EMF) with the latched duties (exact enough with 10 sub-steps); with the outputs off the
+ * current collapses (below the uncontrolled-generation speed the diodes block). */
 static void plant_period(rig_t *r)
 {
     double ua = 0, ub = 0, uc = 0;
@@ -164,11 +167,16 @@ static void plant_period(rig_t *r)
         uc = (r->pwm.active[2] - 0.5) * 300.0;
     }
     const double ual = (2.0 * ua - ub - uc) / 3.0, ube = (ub - uc) / sqrt(3.0);
-    const double c = cos(r->theta_r), s = sin(r->theta_r);
-    const double ud = c * ual + s * ube, uq = -s * ual + c * ube;
+    const double w = r->omega_r;
     for (int k = 0; k < 10; ++k) {
-        r->id += TS / 10 * (ud - RS * r->id) / LD;
-        r->iq += TS / 10 * (uq - RS * r->iq) / LQ;
+        /* a turning rotor: the back-EMF w psi_pm on q and the speed voltages */
+        const double c = cos(r->theta_r), s = sin(r->theta_r);
+        const double ud = c * ual + s * ube, uq = -s * ual + c * ube;
+        const double did = (ud - RS * r->id + w * LQ * r->iq) / LD;
+        const double diq = (uq - RS * r->iq - w * (LD * r->id + PSI_PM)) / LQ;
+        r->id += TS / 10 * did;
+        r->iq += TS / 10 * diq;
+        r->theta_r += w * TS / 10;
     }
     if (!r->pwm.enabled) {
         r->id = r->iq = 0.0;   /* diodes: the current collapses within the period */
@@ -474,6 +482,48 @@ static void test_step1_current_limit(void **st)
     }
 }
 
+/* The flying-start catch on a turning rotor (50 rad/s el, below half of the injection's N1,
+ * where the polarity re-check could run) hands RUN the caught angle and speed, and RUN starts
+ * without a polarity re-check: the catch measured the speed's sign. With the same device drop
+ * (hw.device_drop_v = 1 V) a rotor the probe calls standing starts RUN from the given angle
+ * with the re-check as at_start (the drop makes 'standing' unsure): the contrast. */
+static void test_catch_turning_no_recheck(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const double w[2] = {50.0, 0.0};
+    for (int k = 0; k < 2; ++k) {
+        rig_init(&r, 0.7);
+        r.omega_r = w[k];
+        assert_true(mc_param_set(&r.cfg.p, MC_PARAM_startup_catch, 1.0f, NULL));
+        assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_init_pos, "given", NULL));
+        assert_true(mc_param_set(&r.cfg.p, MC_PARAM_hw_device_drop_v, 1.0f, NULL));
+        assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        const mc_polcheck_cfg_t *pc = &r.d.cfg->blk.pol;
+        assert_true(pc->enable && pc->inject && !pc->at_start && w[0] < 0.5 * (double)pc->omega_n1);
+        command(&r, true);
+        step(&r, 1);
+        run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 1000);
+        assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+        run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_CATCH, 2000);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_int_equal(mc_drive_faults(&r.d), 0u);
+        if (k == 0) {
+            /* caught: the estimate at the rotor's angle and speed */
+            assert_true(fabs(remainder((double)r.d.tm.theta1 - r.theta_r, 2.0 * PI_D)) < 0.2);
+            assert_true(fabs((double)r.d.tm.c2 - w[0]) < 0.1 * w[0]);
+        }
+        step(&r, (int)(4u * pc->start_n));
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        print_message("omega %.0f: %u polarity checks\n", w[k], (unsigned)mc_drive_telemetry(&r.d)->polarity_checks);
+        if (k == 0) {
+            assert_int_equal(mc_drive_telemetry(&r.d)->polarity_checks, 0u);
+        } else {
+            assert_true(mc_drive_telemetry(&r.d)->polarity_checks >= 1u);
+        }
+    }
+}
+
 /* Fail-safe at Step I's start: a pulse program that refuses its configuration (here Step I's
  * m = 0, which the parameter ranges never let through: the built configuration corrupted in
  * RAM) faults config at the calibration's end, in that period, and the outputs never come on
@@ -594,6 +644,7 @@ int main(void)
         cmocka_unit_test(test_repeated_enable_disable),
         cmocka_unit_test(test_step3_timeout),
         cmocka_unit_test(test_step1_current_limit),
+        cmocka_unit_test(test_catch_turning_no_recheck),
         cmocka_unit_test(test_step1_refused_faults_config),
         cmocka_unit_test(test_step3_starts_a_period_after_step2),
         cmocka_unit_test(test_polarity_recheck_per_enable),
