@@ -359,7 +359,8 @@ static void lose_lock(rig_t *r)
 /* The recovery budget (protection.retries) is per enable: with one retry, a loss of lock in
  * each of two enables recovers (outputs off, the catch). On this dead rig the catch finds the
  * rotor standing, which after a recovery with the given angle is no angle to trust: the reason
- * is latched then (mc/catch.h, MC_CATCH_STALE). */
+ * is latched then (mc/catch.h, MC_CATCH_STALE). The telemetry's recoveries and their reasons
+ * start from none at every enable. */
 static void test_recovery_budget_per_enable(void **st)
 {
     (void)st;
@@ -371,6 +372,9 @@ static void test_recovery_budget_per_enable(void **st)
     assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
     for (int cyc = 0; cyc < 2; ++cyc) {
         enable_iq(&r, 0.5f, 0.0f);
+        /* the telemetry's recovery record is this enable's too */
+        assert_int_equal(mc_drive_telemetry(&r.d)->recoveries, 0u);
+        assert_int_equal(mc_drive_telemetry(&r.d)->recovered_from, 0u);
         run(&r, 1000);
         lose_lock(&r);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);   /* recovering: the catch */
