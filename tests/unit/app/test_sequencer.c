@@ -379,7 +379,12 @@ static void test_fault_in_every_step(void **st)
         step(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
         assert_int_equal(mc_drive_faults(&r.d), 0u);
+        /* the last start's results (Steps I and II) are not this enable's */
         assert_float_equal(r.d.tm.theta1, 0.0f, 0.0f);
+        assert_float_equal(r.d.tm.theta2, 0.0f, 0.0f);
+        assert_float_equal(r.d.tm.c1, 0.0f, 0.0f);
+        assert_float_equal(r.d.tm.c2, 0.0f, 0.0f);
+        assert_false(r.d.tm.pol_flip);
         run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
         run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
         run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
