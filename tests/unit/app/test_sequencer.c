@@ -563,6 +563,37 @@ static void test_catch_handover_bumpless(void **st)
     assert_true(dth < 3.0 * PI_D / 180.0);
 }
 
+/* startup.polarity = dvi runs the dual-voltage injection for Step II (mc/polarity.h: +V n,
+ * -V n, a gap, -V n, +V n, with n = startup.dvi_n): its length grows by four periods per
+ * period of dvi_n. The generalized detection (the default) does not read dvi_n. */
+static int step2_periods(const char *method, float dvi_n)
+{
+    static rig_t r;
+    rig_init(&r, 0.7);
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_polarity, method, NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_startup_dvi_n, dvi_n, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    command(&r, true);
+    step(&r, 1);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP2);
+    const int n = run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 200);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+    return n;
+}
+
+static void test_step2_method_chosen(void **st)
+{
+    (void)st;
+    const int d3 = step2_periods("dvi", 3.0f), d6 = step2_periods("dvi", 6.0f);
+    const int g3 = step2_periods("generalized", 3.0f), g6 = step2_periods("generalized", 6.0f);
+    print_message("Step II periods: dvi n=3 %d, n=6 %d; generalized %d, %d\n", d3, d6, g3, g6);
+    assert_int_equal(d6 - d3, 4 * 3);
+    assert_int_equal(g6, g3);
+}
+
 /* Fail-safe at Step I's start: a pulse program that refuses its configuration (here Step I's
  * m = 0, which the parameter ranges never let through: the built configuration corrupted in
  * RAM) faults config at the calibration's end, in that period, and the outputs never come on
@@ -685,6 +716,7 @@ int main(void)
         cmocka_unit_test(test_step1_current_limit),
         cmocka_unit_test(test_catch_turning_no_recheck),
         cmocka_unit_test(test_catch_handover_bumpless),
+        cmocka_unit_test(test_step2_method_chosen),
         cmocka_unit_test(test_step1_refused_faults_config),
         cmocka_unit_test(test_step3_starts_a_period_after_step2),
         cmocka_unit_test(test_polarity_recheck_per_enable),
