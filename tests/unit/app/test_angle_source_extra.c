@@ -309,6 +309,91 @@ static void test_lock_loss_detected_without_injection(void **st)
     assert_true(n >= r.d.cfg->blk.prot.lock_n);
 }
 
+/* With protection.lock_action = recover the same loss of lock is not a fault: in that period the
+ * outputs go off and the duties latched for the catch's first pulse are V(000) (every phase at
+ * 0: the lower switches short the windings, the back-EMF alone drives the probe current), the
+ * state is the catch, and the reason is counted as recovered from. */
+static void test_lock_loss_recovers_with_v000(void **st)
+{
+    (void)st;
+    static rig_t r;
+    test_hold_omega = 0.0f;
+    rig_init(&r, "test_hold");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    enable_iq(&r, 0.5f, 0.0f);
+    run(&r, 1000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    test_hold_raw_offset = 500.0f;
+    const uint32_t limit = r.d.cfg->blk.prot.lock_n + 100u;
+    uint32_t n = 0u;
+    while (mc_drive_state(&r.d) == MC_STATE_RUN && n < limit) {
+        run(&r, 1);
+        ++n;
+    }
+    test_hold_raw_offset = 0.0f;
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+    assert_int_equal(mc_drive_faults(&r.d), 0u);
+    assert_int_equal(mc_drive_telemetry(&r.d)->recoveries, 1u);
+    assert_int_equal(mc_drive_telemetry(&r.d)->recovered_from, MC_FAULT_LOSS_OF_LOCK);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_float_equal(r.pwm.shadow[k], 0.0f, 0.0f);
+        assert_float_equal(mc_drive_telemetry(&r.d)->duty[k], 0.0f, 0.0f);
+    }
+}
+
+/* Loses the lock (the raw speed 500 rad/s off the output) until the drive leaves RUN. */
+static void lose_lock(rig_t *r)
+{
+    const uint32_t limit = r->d.cfg->blk.prot.lock_n + 100u;
+    test_hold_raw_offset = 500.0f;
+    for (uint32_t n = 0u; mc_drive_state(&r->d) == MC_STATE_RUN && n < limit; ++n) {
+        run(r, 1);
+    }
+    test_hold_raw_offset = 0.0f;
+}
+
+/* The recovery budget (protection.retries) is per enable: with one retry, a loss of lock in
+ * each of two enables recovers (outputs off, the catch). On this dead rig the catch finds the
+ * rotor standing, which after a recovery with the given angle is no angle to trust: the reason
+ * is latched then (mc/catch.h, MC_CATCH_STALE). The telemetry's recoveries and their reasons
+ * start from none at every enable. */
+static void test_recovery_budget_per_enable(void **st)
+{
+    (void)st;
+    static rig_t r;
+    test_hold_omega = 0.0f;
+    rig_init(&r, "test_hold");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_protection_retries, 1.0f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    for (int cyc = 0; cyc < 2; ++cyc) {
+        enable_iq(&r, 0.5f, 0.0f);
+        /* the telemetry's recovery record is this enable's too */
+        assert_int_equal(mc_drive_telemetry(&r.d)->recoveries, 0u);
+        assert_int_equal(mc_drive_telemetry(&r.d)->recovered_from, 0u);
+        run(&r, 1000);
+        lose_lock(&r);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);   /* recovering: the catch */
+        assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+        assert_int_equal(mc_drive_telemetry(&r.d)->recoveries, 1u);
+        assert_false(hal_pwm_enabled(&r.pwm));
+        for (int n = 0; n < 1000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_LOSS_OF_LOCK);
+        assert_false(hal_pwm_enabled(&r.pwm));
+        const mc_drive_cmd_t off = {.enable = false, .mode = MC_MODE_CURRENT};
+        mc_drive_command(&r.d, &off);
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    }
+}
+
 /* cfg_of gives the configuration the running source holds; cfg_equal compares two by their
  * fields (not their bytes) and tells a changed one apart. */
 static void test_cfg_of_and_equal(void **st)
@@ -345,6 +430,8 @@ int main(void)
         cmocka_unit_test(test_checks_follow_capabilities),
         cmocka_unit_test(test_build_error_reaches_the_drive),
         cmocka_unit_test(test_lock_loss_detected_without_injection),
+        cmocka_unit_test(test_lock_loss_recovers_with_v000),
+        cmocka_unit_test(test_recovery_budget_per_enable),
         cmocka_unit_test(test_cfg_of_and_equal),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

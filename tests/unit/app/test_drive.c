@@ -719,6 +719,41 @@ static void test_protect_overrun(void **st)
     assert_fault(&r, MC_FAULT_OVERRUN);
 }
 
+/* The outputs go off at rest: every phase's duty at 50 % (zero line-to-line voltage), so the
+ * duties a later enable (or a port that ignores the gate enable) starts from drive no current.
+ * A trip out of RUN with a torque-producing voltage latched, and a disable out of RUN. */
+static void assert_rest_duties(const rig_t *r)
+{
+    assert_false(hal_pwm_enabled(&r->pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_float_equal(r->pwm.shadow[k], 0.5f, 0.0f);
+    }
+}
+
+static void test_outputs_off_at_rest(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_running(&r);   /* 1 A, 3 A in d, q: duties away from 50 % on the phases */
+    float spread = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        spread = fmaxf(spread, fabsf(r.pwm.shadow[k] - 0.5f));
+    }
+    assert_true(spread > 1e-3f);
+    r.adc.sample.overrun = true;   /* a trip: the port's overrun flag */
+    hal_host_pwm_latch(&r.pwm);
+    mc_drive_isr(&r.d);
+    assert_fault(&r, MC_FAULT_OVERRUN);
+    assert_rest_duties(&r);
+    r.adc.sample.overrun = false;
+
+    rig_running(&r);
+    command(&r, false, MC_MODE_CURRENT, 1.0f, 3.0f);   /* a disable */
+    run_plant(&r, 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    assert_rest_duties(&r);
+}
+
 /* A channel whose reading drifts away (the three no longer sum to zero) trips after exactly the
  * persistence (protection.i_sum_time_s), and not before. */
 static void test_protect_current_sum(void **st)
@@ -811,6 +846,55 @@ static void test_protect_overspeed(void **st)
         run(&r, 1);
     }
     assert_fault(&r, MC_FAULT_OVERSPEED);
+}
+
+/* An angle-sensor drive enabled on a rotor at 1500 rpm (line-to-line back-EMF ~430 V peak,
+ * beyond the 300 V link: the diodes would conduct). With overmodulation (control.u_loop > 1,
+ * the default) the field-weakening entry runs: its first corner is latched during the
+ * calibration with the outputs off, and they come on with it at RUN's entry. With u_loop = 1
+ * (no overmodulation) there is no entry law: no duty is written while calibrating, and RUN's
+ * own first duties come on a period after the entry. */
+static void test_sensor_entry_corner_needs_overmod(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const uint32_t step = 80000u * 1500u / 60u / 10000u;   /* counts per period at 1500 rpm */
+    for (int overmod = 1; overmod >= 0; --overmod) {
+        rig_init(&r);
+        if (!overmod) {
+            assert_true(mc_param_set(&r.cfg.p, MC_PARAM_control_u_loop, 1.0f, NULL));
+            assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        }
+        assert_true(r.d.cfg->blk.fw_entry.overmod == (overmod != 0));
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        const uint32_t writes = r.pwm.writes;
+        int n = 0;
+        for (; n < 1000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+            r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+            if (n > 0) {
+                assert_false(hal_pwm_enabled(&r.pwm));   /* calibrating: outputs off */
+            }
+            run(&r, 1);
+            if (!overmod && mc_drive_state(&r.d) == MC_STATE_OFFSET_CAL) {
+                assert_int_equal(r.pwm.writes, writes);   /* nothing latched */
+            }
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_int_equal(mc_drive_faults(&r.d), 0u);
+        if (overmod) {
+            assert_true(r.d.entry.corner);
+            assert_true(hal_pwm_enabled(&r.pwm));     /* on at once, with the corner */
+        } else {
+            assert_false(r.d.entry.corner);
+            /* the entry period's writes: the 50 % rest, then the pipeline's first duties, which
+             * act from the next period, with the outputs */
+            assert_int_equal(r.pwm.writes - writes, 2u);
+            assert_false(hal_pwm_enabled(&r.pwm));
+            r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+            run(&r, 1);
+            assert_true(hal_pwm_enabled(&r.pwm));
+        }
+    }
 }
 
 /* The flying-start catch's longest wait for the current to rest (mc/catch.h): where the diodes
@@ -983,8 +1067,10 @@ int main(void)
         cmocka_unit_test(test_param_write_standstill_idle),
         cmocka_unit_test(test_param_write_rule_follows),
         cmocka_unit_test(test_protect_overrun),
+        cmocka_unit_test(test_outputs_off_at_rest),
         cmocka_unit_test(test_protect_current_sum),
         cmocka_unit_test(test_catch_wait_bounded),
+        cmocka_unit_test(test_sensor_entry_corner_needs_overmod),
         cmocka_unit_test(test_offset_cal_limit_every_phase),
         cmocka_unit_test(test_config_range_ends),
         cmocka_unit_test(test_numeric_guard),

@@ -1,7 +1,7 @@
 /* The startup sequencer alone (mc/sequencer.h), then the drive's startup driven through the host
- * HAL with a small salient RL plant at standstill: the full IDLE -> OFFSET_CAL -> INIT_POS
- * (I, II, III) -> RUN path, a fault in the middle of every step, timeouts, and repeated
- * enable/disable. */
+ * HAL with a small salient RL plant at standstill (turning for the catch): the full IDLE ->
+ * OFFSET_CAL -> INIT_POS (I, II, III) -> RUN path, a fault in the middle of every step,
+ * timeouts, repeated enable/disable, and the catch of a turning rotor. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -134,6 +134,7 @@ static void test_seq_extreme_timeouts(void **st)
 #define RS 0.4
 #define TS 1e-4
 #define PI_D 3.14159265358979323846
+#define PSI_PM 0.34305
 
 typedef struct {
     hal_pwm_t pwm;
@@ -143,7 +144,8 @@ typedef struct {
     mc_drive_cfg_t cfg;
     mc_drive_link_t link;
     mc_drive_t d;
-    double theta_r;        /* rotor angle (standstill) */
+    double theta_r;        /* rotor angle */
+    double omega_r;        /* rotor speed [rad/s el] (0: standstill; test_catch_turning) */
     double id, iq;         /* plant currents */
     double i_force;        /* added to phase a (A) to provoke an over-current */
 } rig_t;
@@ -153,8 +155,9 @@ static uint16_t counts(const mc_drive_t *d, double amps)
     return (uint16_t)lrint(d->cfg->blk.offs.nominal + amps / d->cfg->blk.offs.amps_per_count);
 }
 
-/* One PWM period of a salient RL machine at standstill with the latched duties (exact enough
- * with 10 sub-steps); zero voltage with the outputs off. */
+/* One PWM period of a salient RL machine at standstill (or turning at omega_r, with its
+ * back-EMF) with the latched duties (exact enough with 10 sub-steps); with the outputs off the
+ * current collapses (below the uncontrolled-generation speed the diodes block). */
 static void plant_period(rig_t *r)
 {
     double ua = 0, ub = 0, uc = 0;
@@ -164,11 +167,16 @@ static void plant_period(rig_t *r)
         uc = (r->pwm.active[2] - 0.5) * 300.0;
     }
     const double ual = (2.0 * ua - ub - uc) / 3.0, ube = (ub - uc) / sqrt(3.0);
-    const double c = cos(r->theta_r), s = sin(r->theta_r);
-    const double ud = c * ual + s * ube, uq = -s * ual + c * ube;
+    const double w = r->omega_r;
     for (int k = 0; k < 10; ++k) {
-        r->id += TS / 10 * (ud - RS * r->id) / LD;
-        r->iq += TS / 10 * (uq - RS * r->iq) / LQ;
+        /* a turning rotor: the back-EMF w psi_pm on q and the speed voltages */
+        const double c = cos(r->theta_r), s = sin(r->theta_r);
+        const double ud = c * ual + s * ube, uq = -s * ual + c * ube;
+        const double did = (ud - RS * r->id + w * LQ * r->iq) / LD;
+        const double diq = (uq - RS * r->iq - w * (LD * r->id + PSI_PM)) / LQ;
+        r->id += TS / 10 * did;
+        r->iq += TS / 10 * diq;
+        r->theta_r += w * TS / 10;
     }
     if (!r->pwm.enabled) {
         r->id = r->iq = 0.0;   /* diodes: the current collapses within the period */
@@ -371,7 +379,12 @@ static void test_fault_in_every_step(void **st)
         step(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
         assert_int_equal(mc_drive_faults(&r.d), 0u);
+        /* the last start's results (Steps I and II) are not this enable's */
         assert_float_equal(r.d.tm.theta1, 0.0f, 0.0f);
+        assert_float_equal(r.d.tm.theta2, 0.0f, 0.0f);
+        assert_float_equal(r.d.tm.c1, 0.0f, 0.0f);
+        assert_float_equal(r.d.tm.c2, 0.0f, 0.0f);
+        assert_false(r.d.tm.pol_flip);
         run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
         run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
         run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
@@ -474,6 +487,220 @@ static void test_step1_current_limit(void **st)
     }
 }
 
+/* The flying-start catch on a turning rotor (50 rad/s el, below half of the injection's N1,
+ * where the polarity re-check could run) hands RUN the caught angle and speed, and RUN starts
+ * without a polarity re-check: the catch measured the speed's sign. With the same device drop
+ * (hw.device_drop_v = 1 V) a rotor the probe calls standing starts RUN from the given angle
+ * with the re-check as at_start (the drop makes 'standing' unsure): the contrast. */
+static void test_catch_turning_no_recheck(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const double w[2] = {50.0, 0.0};
+    for (int k = 0; k < 2; ++k) {
+        rig_init(&r, 0.7);
+        r.omega_r = w[k];
+        assert_true(mc_param_set(&r.cfg.p, MC_PARAM_startup_catch, 1.0f, NULL));
+        assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_init_pos, "given", NULL));
+        assert_true(mc_param_set(&r.cfg.p, MC_PARAM_hw_device_drop_v, 1.0f, NULL));
+        assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        const mc_polcheck_cfg_t *pc = &r.d.cfg->blk.pol;
+        assert_true(pc->enable && pc->inject && !pc->at_start && w[0] < 0.5 * (double)pc->omega_n1);
+        command(&r, true);
+        step(&r, 1);
+        run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 1000);
+        assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+        run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_CATCH, 2000);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_int_equal(mc_drive_faults(&r.d), 0u);
+        if (k == 0) {
+            /* caught: the estimate at the rotor's angle and speed */
+            assert_true(fabs(remainder((double)r.d.tm.theta1 - r.theta_r, 2.0 * PI_D)) < 0.2);
+            assert_true(fabs((double)r.d.tm.c2 - w[0]) < 0.1 * w[0]);
+        }
+        step(&r, (int)(4u * pc->start_n));
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        print_message("omega %.0f: %u polarity checks\n", w[k], (unsigned)mc_drive_telemetry(&r.d)->polarity_checks);
+        if (k == 0) {
+            assert_int_equal(mc_drive_telemetry(&r.d)->polarity_checks, 0u);
+        } else {
+            assert_true(mc_drive_telemetry(&r.d)->polarity_checks >= 1u);
+        }
+    }
+}
+
+/* The hand-over from the catch to the estimator is bumpless at speed: at 300 rad/s el a
+ * calibration of 128 samples spans whole half-periods, so the catch's end redoes the offsets
+ * over them ((O.1), mc_offsets_at_speed) and moves the last sample (both axes) as the new
+ * offsets give it; the estimator's first sample pair is then the true current change, and the
+ * speed estimate stays within 2 % of the rotor's through the first 5 ms of RUN, the angle
+ * within 3 deg. */
+static void test_catch_handover_bumpless(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.7);
+    r.omega_r = 300.0;
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_startup_catch, 1.0f, NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_init_pos, "given", NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_control_offset_cal_samples, 128.0f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    command(&r, true);
+    step(&r, 1);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 1000);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_CATCH, 2000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_int_equal(mc_drive_faults(&r.d), 0u);
+    double dw = 0.0, dth = 0.0;
+    for (int k = 0; k < 50; ++k) {
+        dw = fmax(dw, fabs((double)r.d.tm.omega - r.omega_r));
+        dth = fmax(dth, fabs(remainder((double)r.d.tm.theta - r.theta_r, 2.0 * PI_D)));
+        step(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    }
+    print_message("after the catch: speed within %.2f rad/s el, angle within %.2f deg\n", dw, dth * 180.0 / PI_D);
+    assert_true(dw < 0.02 * r.omega_r);
+    assert_true(dth < 3.0 * PI_D / 180.0);
+}
+
+/* startup.polarity = dvi runs the dual-voltage injection for Step II (mc/polarity.h: +V n,
+ * -V n, a gap, -V n, +V n, with n = startup.dvi_n): its length grows by four periods per
+ * period of dvi_n. The generalized detection (the default) does not read dvi_n. */
+static int step2_periods(const char *method, float dvi_n)
+{
+    static rig_t r;
+    rig_init(&r, 0.7);
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_polarity, method, NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_startup_dvi_n, dvi_n, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    command(&r, true);
+    step(&r, 1);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP2);
+    const int n = run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 200);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+    return n;
+}
+
+static void test_step2_method_chosen(void **st)
+{
+    (void)st;
+    const int d3 = step2_periods("dvi", 3.0f), d6 = step2_periods("dvi", 6.0f);
+    const int g3 = step2_periods("generalized", 3.0f), g6 = step2_periods("generalized", 6.0f);
+    print_message("Step II periods: dvi n=3 %d, n=6 %d; generalized %d, %d\n", d3, d6, g3, g6);
+    assert_int_equal(d6 - d3, 4 * 3);
+    assert_int_equal(g6, g3);
+}
+
+/* Fail-safe at Step I's start: a pulse program that refuses its configuration (here Step I's
+ * m = 0, which the parameter ranges never let through: the built configuration corrupted in
+ * RAM) faults config at the calibration's end, in that period, and the outputs never come on
+ * for it (not a Step I that fails a period later with them on). */
+static void test_step1_refused_faults_config(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.7);
+    /* the configuration in force lives in the rig's link (a non-const object) */
+    mc_drive_built_t *live = (mc_drive_built_t *)(uintptr_t)r.d.cfg;
+    const int m = live->blk.step1.m;
+    live->blk.step1.m = 0;
+    command(&r, true);
+    bool on = false;
+    int n = 0;
+    while (mc_drive_state(&r.d) != MC_STATE_FAULT && n < 1000) {
+        step(&r, 1);
+        on = on || hal_pwm_enabled(&r.pwm);
+        ++n;
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_CONFIG);
+    assert_int_equal(n, (int)r.d.cfg->blk.offs.samples);   /* the calibration's last sample */
+    assert_false(on);
+    /* a configuration fault is not cleared by disable + enable (a rejected configuration
+     * never runs) */
+    command(&r, false);
+    step(&r, 1);
+    command(&r, true);
+    step(&r, 200);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    live->blk.step1.m = m;
+}
+
+/* Step III's pipeline starts one period after Step II ends: in the period Step II's program
+ * finishes, its last duties (V(000), the pulse's current decaying with zero voltage) are the
+ * ones latched, and the control pipeline's (50 % +- the injection) come from the next period,
+ * so that the estimator's first Step III sample pairs the currents with a voltage that acted
+ * over a whole period of its own. */
+static void test_step3_starts_a_period_after_step2(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.7);
+    command(&r, true);
+    step(&r, 1);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+    const uint32_t writes = r.pwm.writes;
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
+    assert_true(r.pwm.writes > writes);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+    assert_int_equal(r.d.seq.ticks, 1u);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_float_equal(r.pwm.shadow[k], 0.0f, 0.0f);
+    }
+    step(&r, 1);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_true(fabsf(r.pwm.shadow[k] - 0.5f) < 0.2f);   /* the pipeline's: near 50 % */
+        assert_float_equal(mc_drive_telemetry(&r.d)->duty[k], r.pwm.shadow[k], 0.0f);
+    }
+}
+
+/* The polarity re-check's bookkeeping is per enable (mc/drive.h: "since the enable"): with
+ * polarity_check = at_start and the given angle (no Step II), each RUN entry gets its at_start
+ * check(s) a settling time in, and a new enable starts the counters, the verdict and the
+ * at_start budget (three tries) from zero, so a drive enabled again is checked again. */
+static void test_polarity_recheck_per_enable(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r, 0.2);
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_init_pos, "given", NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_polarity_check, "at_start", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    const mc_polcheck_cfg_t *pc = &r.d.cfg->blk.pol;
+    assert_true(pc->at_start && pc->inject && !pc->three_step && pc->start_n > 0u);
+    uint32_t seen[2] = {0u, 0u};
+    for (int cyc = 0; cyc < 2; ++cyc) {
+        const mc_drive_cmd_t on = {.enable = true, .mode = MC_MODE_CURRENT, .theta_init = 0.2f};
+        mc_drive_command(&r.d, &on);
+        step(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_OFFSET_CAL);
+        assert_int_equal(mc_drive_telemetry(&r.d)->polarity_checks, 0u);
+        assert_int_equal(mc_drive_telemetry(&r.d)->polarity_flips, 0u);
+        assert_int_equal(mc_drive_telemetry(&r.d)->polarity_last, 0);
+        run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 1000);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        step(&r, (int)(4u * pc->start_n));
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        seen[cyc] = mc_drive_telemetry(&r.d)->polarity_checks;
+        print_message("enable %d: %u checks, last verdict %d\n", cyc, (unsigned)seen[cyc],
+                      mc_drive_telemetry(&r.d)->polarity_last);
+        assert_true(seen[cyc] >= 1u);
+        command(&r, false);
+        step(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    }
+    assert_int_equal(seen[1], seen[0]);   /* the second enable is checked as the first was */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -487,6 +714,12 @@ int main(void)
         cmocka_unit_test(test_repeated_enable_disable),
         cmocka_unit_test(test_step3_timeout),
         cmocka_unit_test(test_step1_current_limit),
+        cmocka_unit_test(test_catch_turning_no_recheck),
+        cmocka_unit_test(test_catch_handover_bumpless),
+        cmocka_unit_test(test_step2_method_chosen),
+        cmocka_unit_test(test_step1_refused_faults_config),
+        cmocka_unit_test(test_step3_starts_a_period_after_step2),
+        cmocka_unit_test(test_polarity_recheck_per_enable),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
