@@ -308,6 +308,50 @@ static void test_boot_partial_reported(void **state)
     assert_int_equal(sdo_read(0x1003, 1, &a), MC_EMCY_PARAMS_LOST | ((uint32_t)k1 << 16));
 }
 
+/* The PDO communication parameters' numbers (transmission type, inhibit time, event timer, SYNC
+ * start value) are described as the device takes them: the declared maximum is accepted and the
+ * next value refused "value too high" (where the type holds it), with the PDO invalid (as the
+ * CiA 301 procedure asks); the times carry the units the EDS and the tools show (inhibit time in
+ * 100 us, event timer in ms, §7.5.2.35). */
+static void test_pdo_comm_ranges_and_units(void **state)
+{
+    (void)state;
+    rig_init();
+    static const uint16_t comm[] = {0x1400u, 0x1403u, 0x1800u, 0x1803u};
+    for (size_t k = 0; k < sizeof comm / sizeof comm[0]; ++k) {
+        const uint16_t idx = comm[k];
+        uint32_t a;
+        const uint32_t cob = sdo_read(idx, 1, &a);
+        assert_int_equal(a, 0u);
+        assert_int_equal(sdo_write(idx, 1, cob | 0x80000000u, 4), 0u);
+        static const uint8_t subs[] = {2u, 3u, 5u, 6u};
+        for (size_t j = 0; j < sizeof subs / sizeof subs[0]; ++j) {
+            mc_co_entry_t e;
+            bool miss = false;
+            if (!mc_co_od_lookup(idx, subs[j], &e, &miss)) {
+                assert_true(miss);
+                assert_true(idx < 0x1800u && subs[j] > 2u);   /* an RPDO has no timers here */
+                continue;
+            }
+            const uint32_t n = e.type == MC_CO_U8 ? 1u : 2u;
+            const int64_t type_max = n == 1u ? 255 : 65535;
+            assert_true(e.max > 0 && e.max <= type_max);
+            if (subs[j] == 2u) {
+                assert_int_equal(e.max, 255);   /* 254/255: event-driven, the CiA 301 top types */
+            }
+            assert_int_equal(sdo_write(idx, subs[j], (uint32_t)e.max, n), 0u);
+            if (e.max < type_max) {
+                assert_int_equal(sdo_write(idx, subs[j], (uint32_t)e.max + 1u, n), MC_SDO_ABORT_VALUE_HIGH);
+            }
+            if (subs[j] == 3u) {
+                assert_string_equal(e.unit, "100 us");
+            } else if (subs[j] == 5u) {
+                assert_string_equal(e.unit, "ms");
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -318,6 +362,7 @@ int main(void)
         cmocka_unit_test(test_scope_upload),
         cmocka_unit_test(test_segmented_size_mismatch),
         cmocka_unit_test(test_reset_node_reloads),
+        cmocka_unit_test(test_pdo_comm_ranges_and_units),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
