@@ -337,10 +337,32 @@ static void test_drive_side(void **st)
     assert_int_equal(mc_catch_entry_corner(&c, 0.0f, NAN, (float)VDC, u_land), -1);
 }
 
+/* (C.4) on a more salient machine (Lq/Ld = 1.4: the wrong sign misses by |2 - Lq/Ld| = 0.6 of
+ * the end rotation, less than the thesis motor's 0.77): above base speed pulse 1 alone still
+ * decides the sign, and angle and speed are right. */
+static void test_single_pulse_salient(void **st)
+{
+    (void)st;
+    const double lq = 12.9e-3, ld = lq / 1.4;
+    for (int sg = -1; sg <= 1; sg += 2) {
+        for (int a = 0; a < 4; ++a) {
+            const double w = sg * 1500.0 * 2.0 * PI_D / 60.0 * 5.0, th0 = -2.5 + 1.4 * a;
+            const outcome_t o = run_catch(ld, lq, w, th0);
+            assert_int_equal(o.st, MC_IP_DONE);
+            assert_true(o.c.moving);
+            if (!o.c.single || ang_err_deg(o.c.theta, o.th_true) > 2.0 || fabs(o.c.omega - w) > 0.05 * fabs(w)) {
+                fail_msg("%g rad/s, th0 %g: single %d, theta err %g deg, omega %g", w, th0, (int)o.c.single,
+                         ang_err_deg(o.c.theta, o.th_true), (double)o.c.omega);
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_angle_and_speed_both_signs),
+        cmocka_unit_test(test_single_pulse_salient),
         cmocka_unit_test(test_standstill),
         cmocka_unit_test(test_single_pulse_falls_back),
         cmocka_unit_test(test_passive_sign_from_the_diodes),
