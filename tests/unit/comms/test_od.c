@@ -395,6 +395,31 @@ static void test_boot_falls_back_to_older_copy(void **state)
     assert_int_equal(sdo_read(0x2FF1, 0, &a), (uint32_t)MC_PSTORE_FELL_BACK);
 }
 
+/* The error history 0x1003 lists the newest entry first and keeps the older ones below it: a
+ * partial boot after a reset communication (the history survives it) pushes the previous boot's
+ * entry to sub-index 2. */
+static void test_boot_partial_history_order(void **state)
+{
+    (void)state;
+    rig_init();
+    const int k1 = mc_param_find("estimator.k1"), k2 = mc_param_find("control.current_bw_hz");
+    memset(&rig.co, 0, sizeof rig.co);
+    rig_start(MC_PSTORE_PARTIAL);
+    mc_store_report_t rep = {.kept = 90u, .dropped = 1u, .first = (int16_t)k1, .reason = MC_STORE_DROP_RANGE,
+                             .other_table = true};
+    mc_co_set_boot_report(&rig.co, &rep);
+    mc_co_step(&rig.co, rig.now);
+    rep.first = (int16_t)k2;
+    mc_co_set_boot_report(&rig.co, &rep);
+    nmt(0x82u);   /* reset communication: boot-up again, with the second report */
+    mc_co_step(&rig.co, rig.now);
+    drain();
+    uint32_t a;
+    assert_int_equal(sdo_read(0x1003, 0, &a), 2u);
+    assert_int_equal(sdo_read(0x1003, 1, &a), MC_EMCY_PARAMS_LOST | ((uint32_t)k2 << 16));
+    assert_int_equal(sdo_read(0x1003, 2, &a), MC_EMCY_PARAMS_LOST | ((uint32_t)k1 << 16));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -407,6 +432,7 @@ int main(void)
         cmocka_unit_test(test_reset_node_reloads),
         cmocka_unit_test(test_pdo_comm_ranges_and_units),
         cmocka_unit_test(test_boot_falls_back_to_older_copy),
+        cmocka_unit_test(test_boot_partial_history_order),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
