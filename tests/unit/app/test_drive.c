@@ -1016,6 +1016,19 @@ static void test_slew_d_axis(void **st)
     }
 }
 
+/* A configuration the drive takes leaves no error behind: kind NONE, and no parameter named
+ * (ids -1, "none", as mc_param_err_t documents; the image and the simulator print them). */
+static void test_config_error_none_after_good_init(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    const mc_param_err_t *e = mc_drive_config_error(&r.d);
+    assert_int_equal(e->kind, MC_PERR_NONE);
+    assert_int_equal(e->param, -1);
+    assert_int_equal(e->param2, -1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1050,6 +1063,7 @@ int main(void)
         cmocka_unit_test(test_protect_overspeed),
         cmocka_unit_test(test_telemetry_duties_are_the_pwm_duties),
         cmocka_unit_test(test_slew_d_axis),
+        cmocka_unit_test(test_config_error_none_after_good_init),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
