@@ -420,6 +420,29 @@ static void test_boot_partial_history_order(void **state)
     assert_int_equal(sdo_read(0x1003, 2, &a), MC_EMCY_PARAMS_LOST | ((uint32_t)k1 << 16));
 }
 
+/* A mapping object's number of entries (sub 0) is described from 0: 0 is the first step of the
+ * CiA 301 mapping procedure (§7.5.2.36), so the declared minimum must be what the device takes,
+ * for the RPDO and the TPDO mappings alike (the PDO made invalid first). */
+static void test_pdo_map_count_from_zero(void **state)
+{
+    (void)state;
+    rig_init();
+    static const uint16_t maps[] = {0x1600u, 0x1A00u};
+    for (size_t k = 0; k < 2; ++k) {
+        mc_co_entry_t e;
+        bool miss = false;
+        assert_true(mc_co_od_lookup(maps[k], 0u, &e, &miss));
+        const uint16_t comm = (uint16_t)(maps[k] - 0x200u);
+        uint32_t a;
+        const uint32_t cob = sdo_read(comm, 1, &a);
+        assert_int_equal(sdo_write(comm, 1, cob | 0x80000000u, 4), 0u);
+        assert_int_equal(sdo_write(maps[k], 0, 0u, 1), 0u);   /* the device takes 0 ... */
+        assert_int_equal(sdo_read(maps[k], 0, &a), 0u);
+        assert_true(e.min <= 0);                                /* ... and so does its description */
+        assert_true(e.max >= 1);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -433,6 +456,7 @@ int main(void)
         cmocka_unit_test(test_pdo_comm_ranges_and_units),
         cmocka_unit_test(test_boot_falls_back_to_older_copy),
         cmocka_unit_test(test_boot_partial_history_order),
+        cmocka_unit_test(test_pdo_map_count_from_zero),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
