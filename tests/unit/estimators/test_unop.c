@@ -550,6 +550,34 @@ static void test_cost_derivatives_alone(void **st)
     assert_near(g[0], fd, 0.02 * fabs(fd) + 1e-4);
 }
 
+/* The cost the estimator reports (s.cost: the telemetry's est_cost) is the cost at the estimate it
+ * returns, also when the search stops right after a step (one iteration here), not the cost at
+ * the start of that step. No regularisation (k1 = k2 = 0), so mc_unop_cost re-evaluates it. */
+static void test_reported_cost_is_at_the_estimate(void **st)
+{
+    (void)st;
+    const double om = RPM_TO_WE(400.0);
+    mc_unop_cfg_t cfg = sun_cfg(NULL, 1);
+    cfg.iter_max = 1;
+    cfg.k1 = 0.0f;
+    cfg.k2 = 0.0f;
+    mc_unop_t s;
+    mc_unop_init(&s, &cfg);
+    dsample_t d;
+    double thk;
+    dgen_sample(&cfg, &TRAJ_RUN, 1.0, om, 1, &d, &thk);
+    const mc_angle_in_t in = to_in(&d);
+    const float th0 = (float)(thk + 25.0 * DEG), om0 = (float)(om + 40.0);
+    const float c0 = mc_unop_cost(&s, &in, th0, om0, 0, 0, 0, 0, NULL, NULL);
+    mc_unop_reset(&s, th0, om0);
+    mc_angle_out_t out;
+    mc_unop_step(&s, &in, &out);
+    assert_int_equal(s.iters, 1);
+    const float c1 = mc_unop_cost(&s, &in, s.theta, s.omega, 0, 0, 0, 0, NULL, NULL);
+    assert_true(c1 < 0.5f * c0);   /* the step moved: the two costs are far apart */
+    assert_near(s.cost, c1, 1e-3 * c1 + 1e-6);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -563,6 +591,7 @@ int main(void)
         cmocka_unit_test(test_regularisation_lag),
         cmocka_unit_test(test_modified_newton_descends),
         cmocka_unit_test(test_cost_derivatives_alone),
+        cmocka_unit_test(test_reported_cost_is_at_the_estimate),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
