@@ -1043,6 +1043,76 @@ static void test_numeric_guard(void **st)
     }
 }
 
+/* The telemetry's three duties are the ones handed to the PWM (phase by phase, every period):
+ * a scope or the CAN telemetry (channels duty_a..c) must show what the bridge is told. */
+static void test_telemetry_duties_are_the_pwm_duties(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    command(&r, true, MC_MODE_CURRENT, -1.0f, 3.0f);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    int differ = 0;
+    for (int k = 0; k < 40; ++k) {
+        run(&r, 1);
+        const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+        for (int ph = 0; ph < 3; ++ph) {
+            assert_true(tm->duty[ph] == r.pwm.shadow[ph]);
+        }
+        differ += fabsf(tm->duty[1] - tm->duty[2]) > 1e-4f;
+    }
+    assert_true(differ > 0);   /* the phases' duties are not all equal: the check can tell them apart */
+}
+
+/* The d-axis reference is slew-limited like the q-axis one, in both directions: a step of id
+ * moves one slew step per period; a move shorter than a step passes exactly. */
+static void test_slew_d_axis(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    const float step = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
+    command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+    run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 2);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_true(mc_drive_telemetry(&r.d)->i_ref.d == 0.0f);
+    /* a step down (flux weakening) and back up: one slew step per period */
+    const float targets[] = {-20.0f * step, 0.0f};
+    for (size_t t = 0; t < 2; ++t) {
+        command(&r, true, MC_MODE_CURRENT, targets[t], 0.0f);
+        float prev = mc_drive_telemetry(&r.d)->i_ref.d;
+        for (int k = 0; k < 5; ++k) {
+            run(&r, 1);
+            const float got = mc_drive_telemetry(&r.d)->i_ref.d;
+            assert_float_equal(got, prev + copysignf(step, targets[t] - prev), 1e-5f);
+            assert_true(mc_drive_telemetry(&r.d)->i_ref.q == 0.0f);
+            prev = got;
+        }
+    }
+    /* moves shorter than a step, up and down: exactly the command */
+    const float moves[] = {0.5f, -0.9f, 0.3f};
+    for (size_t k = 0; k < 3; ++k) {
+        const float target = mc_drive_telemetry(&r.d)->i_ref.d + moves[k] * step;
+        command(&r, true, MC_MODE_CURRENT, target, 0.0f);
+        run(&r, 1);
+        assert_true(mc_drive_telemetry(&r.d)->i_ref.d == target);
+    }
+}
+
+/* A configuration the drive takes leaves no error behind: kind NONE, and no parameter named
+ * (ids -1, "none", as mc_param_err_t documents; the image and the simulator print them). */
+static void test_config_error_none_after_good_init(void **st)
+{
+    (void)st;
+    static rig_t r;
+    rig_init(&r);
+    const mc_param_err_t *e = mc_drive_config_error(&r.d);
+    assert_int_equal(e->kind, MC_PERR_NONE);
+    assert_int_equal(e->param, -1);
+    assert_int_equal(e->param2, -1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1077,6 +1147,9 @@ int main(void)
         cmocka_unit_test(test_protect_tracking),
         cmocka_unit_test(test_protect_stall),
         cmocka_unit_test(test_protect_overspeed),
+        cmocka_unit_test(test_telemetry_duties_are_the_pwm_duties),
+        cmocka_unit_test(test_slew_d_axis),
+        cmocka_unit_test(test_config_error_none_after_good_init),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

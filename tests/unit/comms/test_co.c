@@ -230,6 +230,76 @@ static void test_segmented_download(void **state)
     assert_int_equal(word(&f), 300u);
 }
 
+/* A segmented download whose initiate does not indicate the size (s = 0, §7.2.4.3.3) is taken at
+ * whatever length the segments bring; one that indicates a size the segments do not match is
+ * aborted "length does not match" and the object keeps its value. */
+static void test_segmented_download_size(void **state)
+{
+    (void)state;
+    rig_init_co();
+    mc_co_step(&rig.co, rig.now);
+    hal_can_frame_t f;
+    (void)take(&f);
+    const uint8_t seg[8] = {(uint8_t)((5u << 1) | 1u), 0xF4, 0x01, 0, 0, 0, 0, 0};   /* 500 ms, last */
+    f = sdo(0x20, 0x1017, 0, 0);   /* size not indicated */
+    assert_int_equal(f.data[0], 0x60u);
+    put(0x605u, seg, 8u);
+    mc_co_step(&rig.co, rig.now);
+    assert_true(take(&f));
+    assert_int_equal(f.data[0], 0x20u);
+    f = sdo(0x40, 0x1017, 0, 0);
+    assert_int_equal(word(&f), 500u);
+    /* 4 bytes announced, 2 sent */
+    f = sdo(0x21, 0x1017, 0, 4);
+    assert_int_equal(f.data[0], 0x60u);
+    const uint8_t seg2[8] = {(uint8_t)((5u << 1) | 1u), 0x2C, 0x01, 0, 0, 0, 0, 0};
+    put(0x605u, seg2, 8u);
+    mc_co_step(&rig.co, rig.now);
+    assert_true(take(&f));
+    expect_abort(&f, MC_SDO_ABORT_LENGTH);
+    f = sdo(0x40, 0x1017, 0, 0);
+    assert_int_equal(word(&f), 500u);
+}
+
+/* The heartbeat's state byte after the next heartbeat period. */
+static uint8_t heartbeat_state(void)
+{
+    rig.now += 100;
+    mc_co_step(&rig.co, rig.now);
+    hal_can_frame_t f;
+    assert_true(take_id(0x705u, &f));
+    drain();
+    return f.data[0];
+}
+
+/* NMT "enter pre-operational" (0x80, §7.2.8.3.2.2), addressed to this node or broadcast, takes an
+ * operational node back to pre-operational (heartbeat 0x7F), where SDO still answers. */
+static void test_nmt_enter_pre_operational(void **state)
+{
+    (void)state;
+    rig_init_co();
+    mc_co_step(&rig.co, rig.now);
+    drain();
+    assert_int_equal(heartbeat_state(), 0x7Fu);
+    for (uint8_t node = 0u; node <= NODE; node = (uint8_t)(node + NODE)) {
+        nmt(0x01u);
+        assert_int_equal(heartbeat_state(), 0x05u);
+        const uint8_t pre[2] = {0x80u, node};
+        put(0x000u, pre, 2u);
+        assert_int_equal(heartbeat_state(), 0x7Fu);
+        const hal_can_frame_t f = sdo(0x40, 0x1017, 0, 0);
+        assert_int_equal(f.data[0], 0x4Bu);
+        assert_int_equal(word(&f), 100u);
+    }
+    /* an unknown command specifier changes nothing */
+    const uint8_t unknown[2] = {0x00u, NODE};
+    put(0x000u, unknown, 2u);
+    assert_int_equal(heartbeat_state(), 0x7Fu);
+    nmt(0x01u);
+    put(0x000u, unknown, 2u);
+    assert_int_equal(heartbeat_state(), 0x05u);
+}
+
 static void drive_run(int n, bool enable)
 {
     const mc_drive_cmd_t c = {.enable = enable, .mode = MC_MODE_CURRENT};
@@ -301,6 +371,8 @@ int main(void)
         cmocka_unit_test(test_sdo_aborts),
         cmocka_unit_test(test_segmented_download),
         cmocka_unit_test(test_emcy_on_fault),
+        cmocka_unit_test(test_segmented_download_size),
+        cmocka_unit_test(test_nmt_enter_pre_operational),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

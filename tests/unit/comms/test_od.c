@@ -308,6 +308,141 @@ static void test_boot_partial_reported(void **state)
     assert_int_equal(sdo_read(0x1003, 1, &a), MC_EMCY_PARAMS_LOST | ((uint32_t)k1 << 16));
 }
 
+/* The PDO communication parameters' numbers (transmission type, inhibit time, event timer, SYNC
+ * start value) are described as the device takes them: the declared maximum is accepted and the
+ * next value refused "value too high" (where the type holds it), with the PDO invalid (as the
+ * CiA 301 procedure asks); the times carry the units the EDS and the tools show (inhibit time in
+ * 100 us, event timer in ms, §7.5.2.35). */
+static void test_pdo_comm_ranges_and_units(void **state)
+{
+    (void)state;
+    rig_init();
+    static const uint16_t comm[] = {0x1400u, 0x1403u, 0x1800u, 0x1803u};
+    for (size_t k = 0; k < sizeof comm / sizeof comm[0]; ++k) {
+        const uint16_t idx = comm[k];
+        uint32_t a;
+        const uint32_t cob = sdo_read(idx, 1, &a);
+        assert_int_equal(a, 0u);
+        assert_int_equal(sdo_write(idx, 1, cob | 0x80000000u, 4), 0u);
+        static const uint8_t subs[] = {2u, 3u, 5u, 6u};
+        for (size_t j = 0; j < sizeof subs / sizeof subs[0]; ++j) {
+            mc_co_entry_t e;
+            bool miss = false;
+            if (!mc_co_od_lookup(idx, subs[j], &e, &miss)) {
+                assert_true(miss);
+                assert_true(idx < 0x1800u && subs[j] > 2u);   /* an RPDO has no timers here */
+                continue;
+            }
+            const uint32_t n = e.type == MC_CO_U8 ? 1u : 2u;
+            const int64_t type_max = n == 1u ? 255 : 65535;
+            assert_true(e.max > 0 && e.max <= type_max);
+            if (subs[j] == 2u) {
+                assert_int_equal(e.max, 255);   /* 254/255: event-driven, the CiA 301 top types */
+            }
+            assert_int_equal(sdo_write(idx, subs[j], (uint32_t)e.max, n), 0u);
+            if (e.max < type_max) {
+                assert_int_equal(sdo_write(idx, subs[j], (uint32_t)e.max + 1u, n), MC_SDO_ABORT_VALUE_HIGH);
+            }
+            if (subs[j] == 3u) {
+                assert_string_equal(e.unit, "100 us");
+            } else if (subs[j] == 5u) {
+                assert_string_equal(e.unit, "ms");
+            }
+        }
+    }
+}
+
+/* Power-on after the newest stored copy was damaged (a bit of its header flipped): the boot
+ * takes the copy stored before it, reports FELL_BACK, and the drive runs with that set, not the
+ * defaults (CiA 301 0x1010: the last good save survives). */
+static void test_boot_falls_back_to_older_copy(void **state)
+{
+    (void)state;
+    rig_init();
+    rig.co.ds_on = false;
+    const int bw = mc_param_find("control.current_bw_hz");
+    const uint16_t obj = (uint16_t)(0x2000 + bw);
+    assert_int_equal(sdo_write(obj, 0, mc_f32_bits(321.0f), 4), 0u);
+    mc_drive_isr(&rig.d);
+    assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), 0u);
+    static hal_nvm_t older;
+    older = rig.nvm;
+    assert_int_equal(sdo_write(obj, 0, mc_f32_bits(456.0f), 4), 0u);
+    mc_drive_isr(&rig.d);
+    assert_int_equal(sdo_write(0x1010, 1, MC_CO_SAVE_SIGNATURE, 4), 0u);
+    static hal_nvm_t nvm;
+    nvm = rig.nvm;
+    /* the newest copy: the first block the second save changed; its sequence (header byte 8) */
+    size_t first = 0u;
+    while (first < sizeof nvm.mem && nvm.mem[first] == older.mem[first]) {
+        ++first;
+    }
+    assert_true(first < sizeof nvm.mem);
+    mc_drive_cfg_t base;
+    mc_drive_cfg_default(&base);
+    static mc_flux_map_t map;
+    assert_int_equal(mc_co_boot_config(&nvm, &base, &rig.cfg, &map, NULL), MC_PSTORE_OK);
+    assert_true(rig.cfg.p.control_current_bw_hz == 456.0f);
+    nvm.mem[first / HAL_HOST_NVM_BLOCK_SIZE * HAL_HOST_NVM_BLOCK_SIZE + 8u] ^= 0x01u;
+    memset(&rig, 0, sizeof rig);
+    rig.nvm = nvm;
+    const mc_pstore_status_t st = mc_co_boot_config(&rig.nvm, &base, &rig.cfg, &map, NULL);
+    assert_int_equal(st, MC_PSTORE_FELL_BACK);
+    assert_true(rig.cfg.p.control_current_bw_hz == 321.0f);
+    rig_start(st);
+    uint32_t a;
+    assert_true(mc_bits_f32(sdo_read(obj, 0, &a)) == 321.0f);
+    assert_int_equal(sdo_read(0x2FF1, 0, &a), (uint32_t)MC_PSTORE_FELL_BACK);
+}
+
+/* The error history 0x1003 lists the newest entry first and keeps the older ones below it: a
+ * partial boot after a reset communication (the history survives it) pushes the previous boot's
+ * entry to sub-index 2. */
+static void test_boot_partial_history_order(void **state)
+{
+    (void)state;
+    rig_init();
+    const int k1 = mc_param_find("estimator.k1"), k2 = mc_param_find("control.current_bw_hz");
+    memset(&rig.co, 0, sizeof rig.co);
+    rig_start(MC_PSTORE_PARTIAL);
+    mc_store_report_t rep = {.kept = 90u, .dropped = 1u, .first = (int16_t)k1, .reason = MC_STORE_DROP_RANGE,
+                             .other_table = true};
+    mc_co_set_boot_report(&rig.co, &rep);
+    mc_co_step(&rig.co, rig.now);
+    rep.first = (int16_t)k2;
+    mc_co_set_boot_report(&rig.co, &rep);
+    nmt(0x82u);   /* reset communication: boot-up again, with the second report */
+    mc_co_step(&rig.co, rig.now);
+    drain();
+    uint32_t a;
+    assert_int_equal(sdo_read(0x1003, 0, &a), 2u);
+    assert_int_equal(sdo_read(0x1003, 1, &a), MC_EMCY_PARAMS_LOST | ((uint32_t)k2 << 16));
+    assert_int_equal(sdo_read(0x1003, 2, &a), MC_EMCY_PARAMS_LOST | ((uint32_t)k1 << 16));
+}
+
+/* A mapping object's number of entries (sub 0) is described from 0: 0 is the first step of the
+ * CiA 301 mapping procedure (§7.5.2.36), so the declared minimum must be what the device takes,
+ * for the RPDO and the TPDO mappings alike (the PDO made invalid first). */
+static void test_pdo_map_count_from_zero(void **state)
+{
+    (void)state;
+    rig_init();
+    static const uint16_t maps[] = {0x1600u, 0x1A00u};
+    for (size_t k = 0; k < 2; ++k) {
+        mc_co_entry_t e;
+        bool miss = false;
+        assert_true(mc_co_od_lookup(maps[k], 0u, &e, &miss));
+        const uint16_t comm = (uint16_t)(maps[k] - 0x200u);
+        uint32_t a;
+        const uint32_t cob = sdo_read(comm, 1, &a);
+        assert_int_equal(sdo_write(comm, 1, cob | 0x80000000u, 4), 0u);
+        assert_int_equal(sdo_write(maps[k], 0, 0u, 1), 0u);   /* the device takes 0 ... */
+        assert_int_equal(sdo_read(maps[k], 0, &a), 0u);
+        assert_true(e.min <= 0);                                /* ... and so does its description */
+        assert_true(e.max >= 1);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -318,6 +453,10 @@ int main(void)
         cmocka_unit_test(test_scope_upload),
         cmocka_unit_test(test_segmented_size_mismatch),
         cmocka_unit_test(test_reset_node_reloads),
+        cmocka_unit_test(test_pdo_comm_ranges_and_units),
+        cmocka_unit_test(test_boot_falls_back_to_older_copy),
+        cmocka_unit_test(test_boot_partial_history_order),
+        cmocka_unit_test(test_pdo_map_count_from_zero),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -196,6 +196,37 @@ static void test_pdo_index_ranges(void **state)
     }
 }
 
+/* A controlword that comes by RPDO counts as one (the image hands the drive to CANopen on the
+ * first) and takes its own 402 transition, also two in one batch (CiA 402 §6.3); an RPDO without
+ * the controlword (target velocity) is none. RPDO3 is mapped here to the controlword alone. */
+static void test_rpdo_controlword(void **state)
+{
+    (void)state;
+    rig_init();
+    assert_int_equal(sdo_write(0x1602, 0, 0, 1), 0u);
+    assert_int_equal(sdo_write(0x1602, 1, 0x60400010u, 4), 0u);
+    assert_int_equal(sdo_write(0x1602, 0, 1, 1), 0u);
+    assert_int_equal(sdo_write(0x1402, 1, 0x405u, 4), 0u);
+    nmt(0x01);
+    drain();
+    assert_int_equal(rig.co.ds.od.statusword & 0x6Fu, 0x40u);   /* switch on disabled */
+    const uint32_t cw0 = rig.co.cw_count;
+    const uint8_t v[6] = {0xDC, 0x05, 0x00, 0x00, 0x64, 0x00};   /* RPDO2: 1500 rpm, 100 per-mille */
+    put(0x305u, v, 6u);
+    mc_co_step(&rig.co, rig.now);
+    uint32_t a;
+    assert_int_equal(sdo_read(0x60FF, 0, &a), 1500u);
+    assert_int_equal(rig.co.cw_count, cw0);
+    /* shutdown then switch on, in one batch: both transitions taken */
+    const uint8_t shutdown[2] = {0x06, 0x00}, switch_on[2] = {0x07, 0x00};
+    put(0x405u, shutdown, 2u);
+    put(0x405u, switch_on, 2u);
+    mc_co_step(&rig.co, rig.now);
+    assert_int_equal(rig.co.cw_count, cw0 + 2u);
+    assert_int_equal(sdo_read(0x6040, 0, &a), 0x07u);
+    assert_int_equal(rig.co.ds.od.statusword & 0x6Fu, 0x23u);   /* switched on */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -204,6 +235,7 @@ int main(void)
         cmocka_unit_test(test_rpdo),
         cmocka_unit_test(test_tpdo_timing),
         cmocka_unit_test(test_pdo_index_ranges),
+        cmocka_unit_test(test_rpdo_controlword),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

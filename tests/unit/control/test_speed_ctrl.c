@@ -88,6 +88,13 @@ static void test_reset_bumpless(void **state)
     assert_near(mc_sc_step(&s, 100.0f, 100.0f), 12.5, 1e-6);   /* zero error: no bump */
     mc_sc_reset(&s, 99.0f);                                    /* clamped to the limit */
     assert_near(mc_sc_step(&s, 100.0f, 100.0f), 30.0, 1e-6);
+    /* braking: a preload below -limit is clamped too, and the integrator holds -limit, not the
+     * excess: a small positive error moves the torque off the limit at once */
+    mc_sc_reset(&s, -99.0f);
+    assert_near(s.torque_ref, -30.0, 1e-6);
+    assert_near(mc_sc_step(&s, 100.0f, 100.0f), -30.0, 1e-6);
+    mc_sc_reset(&s, -99.0f);
+    assert_near(mc_sc_step(&s, 102.0f, 100.0f), -30.0 + 0.5 * 2.0 + 20.0 * 1e-3 * 2.0, 1e-5);
 }
 
 static void test_antiwindup(void **state)

@@ -337,10 +337,81 @@ static void test_drive_side(void **st)
     assert_int_equal(mc_catch_entry_corner(&c, 0.0f, NAN, (float)VDC, u_land), -1);
 }
 
+/* (C.4) on a more salient machine (Lq/Ld = 1.4: the wrong sign misses by |2 - Lq/Ld| = 0.6 of
+ * the end rotation, less than the thesis motor's 0.77): above base speed pulse 1 alone still
+ * decides the sign, and angle and speed are right. */
+static void test_single_pulse_salient(void **st)
+{
+    (void)st;
+    const double lq = 12.9e-3, ld = lq / 1.4;
+    for (int sg = -1; sg <= 1; sg += 2) {
+        for (int a = 0; a < 4; ++a) {
+            const double w = sg * 1500.0 * 2.0 * PI_D / 60.0 * 5.0, th0 = -2.5 + 1.4 * a;
+            const outcome_t o = run_catch(ld, lq, w, th0);
+            assert_int_equal(o.st, MC_IP_DONE);
+            assert_true(o.c.moving);
+            if (!o.c.single || ang_err_deg(o.c.theta, o.th_true) > 2.0 || fabs(o.c.omega - w) > 0.05 * fabs(w)) {
+                fail_msg("%g rad/s, th0 %g: single %d, theta err %g deg, omega %g", w, th0, (int)o.c.single,
+                         ang_err_deg(o.c.theta, o.th_true), (double)o.c.omega);
+            }
+        }
+    }
+}
+
+/* The gap between the two pulses lasts until the current has decayed to i_rest (bounded by
+ * n_gap_max more periods): pulse 2 must start from rest. Generating (1200 rpm, Lq = 2 Ld: two
+ * pulses) the test plant keeps the current through the gap: the bound ends it; at 300 rpm the
+ * current is gone at once: the planned gap alone. */
+static void test_gap_waits_for_rest(void **st)
+{
+    (void)st;
+    const double speeds[] = {-1200.0, 300.0};
+    for (size_t k = 0; k < 2; ++k) {
+        const double w = speeds[k] * 2.0 * PI_D / 60.0 * 5.0;
+        plant_t p = {.ld = 6.45e-3, .lq = 12.9e-3, .w = w, .th = 0.5, .pa = PSI * cos(0.5), .pb = PSI * sin(0.5)};
+        const mc_catch_cfg_t cfg = cfg_for(p.ld, p.lq);
+        static mc_catch_t c;
+        assert_true(mc_catch_start(&c, &cfg));
+        int stage = 0;   /* 0 before pulse 1, 1 pulse 1, 2 the gap, 3 pulse 2 */
+        uint32_t gap = 0u;
+        double i_at_start = -1.0;
+        for (int n = 0; n < 5000 && stage < 3; ++n) {
+            double ia, ib;
+            plant_currents(&p, &ia, &ib);
+            mc_abc_t duty;
+            bool off;
+            const mc_ip_status_t r = mc_catch_step(&c, (mc_ab_t){(float)ia, (float)ib}, (float)VDC, &duty, &off);
+            assert_int_equal(r, MC_IP_RUNNING);
+            if (stage == 0 && !off) {
+                stage = 1;
+            } else if (stage == 1 && off) {
+                stage = 2;
+            } else if (stage == 2 && !off) {
+                stage = 3;
+                i_at_start = hypot(ia, ib);
+            }
+            gap += stage == 2;
+            p.on = !off;
+            plant_period(&p);
+        }
+        assert_int_equal(stage, 3);
+        assert_false(c.single);
+        if (k == 0) {
+            assert_true(i_at_start > cfg.i_rest);   /* the current kept flowing: the bound ended it */
+            assert_int_equal(gap, c.n_gap + cfg.n_gap_max);   /* the call ending pulse 1 counts too */
+        } else {
+            assert_true(i_at_start <= cfg.i_rest);
+            assert_int_equal(gap, c.n_gap);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_angle_and_speed_both_signs),
+        cmocka_unit_test(test_single_pulse_salient),
+        cmocka_unit_test(test_gap_waits_for_rest),
         cmocka_unit_test(test_standstill),
         cmocka_unit_test(test_single_pulse_falls_back),
         cmocka_unit_test(test_passive_sign_from_the_diodes),

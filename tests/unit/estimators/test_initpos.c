@@ -276,11 +276,49 @@ static void test_pulse_program_length(void **st)
     }
 }
 
+/* A gap in a pulse program lasts until the current has decayed to i_rest (at least two periods,
+ * at most gap_max, then flagged): the next pulse must start from rest, or its di mixes in the
+ * decay. The runner is fed a current that stays at 2 A until call `rest_at`. */
+static int first_call_of_pulse2(int rest_at, bool *timeout)
+{
+    mc_ip_run_t r;
+    mc_ip_run_init(&r, 0.0f, 0.5f, 0.0f, 12);
+    assert_true(mc_ip_run_direct(&r, 1u, 2, 0));   /* V(100), 2 periods */
+    assert_true(mc_ip_run_gap(&r, 1));
+    assert_true(mc_ip_run_direct(&r, 2u, 1, 1));   /* V(010) */
+    for (int n = 0; n < 40; ++n) {
+        const mc_ab_t i = {(n >= 2 && n < rest_at) ? 2.0f : 0.0f, 0.0f};
+        mc_abc_t d;
+        mc_ip_rec_t rec;
+        int tag;
+        (void)mc_ip_run_step(&r, i, 300.0f, &d, &rec, &tag);
+        if (d.b > 0.5f && d.a < 0.5f) {
+            *timeout = r.decay_timeout;
+            return n;
+        }
+    }
+    fail_msg("pulse 2 never issued");
+    return -1;
+}
+
+static void test_gap_waits_for_decay(void **st)
+{
+    (void)st;
+    bool timeout = true;
+    assert_int_equal(first_call_of_pulse2(8, &timeout), 8);   /* at the first sample at rest */
+    assert_false(timeout);
+    assert_int_equal(first_call_of_pulse2(3, &timeout), 4);   /* at rest at once: two periods */
+    assert_false(timeout);
+    assert_int_equal(first_call_of_pulse2(1000, &timeout), 2 + 12);   /* never: gap_max, flagged */
+    assert_true(timeout);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_vectors),
         cmocka_unit_test(test_timing_record),
+        cmocka_unit_test(test_gap_waits_for_decay),
         cmocka_unit_test(test_linear_sweep),
         cmocka_unit_test(test_saturating_table),
         cmocka_unit_test(test_noise_and_failures),

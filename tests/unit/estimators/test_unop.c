@@ -514,6 +514,70 @@ static void test_init_reset(void **st)
     assert_true(cfg.mid_sample && cfg.reg_predicted);
 }
 
+/* mc_unop_cost's grad and hess may each be asked for alone (the header: "may be NULL"): the
+ * gradient without the Hessian, or the Hessian without the gradient, is the same as with both,
+ * and the gradient agrees with a central difference of the cost in theta. */
+static void test_cost_derivatives_alone(void **st)
+{
+    (void)st;
+    const double om = RPM_TO_WE(400.0);
+    mc_unop_cfg_t cfg = sun_cfg(NULL, 1);
+    mc_unop_t s;
+    mc_unop_init(&s, &cfg);
+    dsample_t d;
+    double thk;
+    dgen_sample(&cfg, &TRAJ_RUN, 1.0, om, 1, &d, &thk);
+    const mc_angle_in_t in = to_in(&d);
+    const float th = (float)(thk + 20.0 * DEG), w = (float)(om + 30.0);
+    float g_both[2], h_both[4], g[2] = {0.0f, 0.0f}, h[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    /* another candidate first, with both: nothing of it may leak into the next calls */
+    (void)mc_unop_cost(&s, &in, th + 0.5f, w - 40.0f, th, w, 0.1f, 0.1f, g_both, h_both);
+    const float c_g = mc_unop_cost(&s, &in, th, w, th, w, 0.1f, 0.1f, g, NULL);
+    (void)mc_unop_cost(&s, &in, th + 0.5f, w - 40.0f, th, w, 0.1f, 0.1f, g_both, h_both);
+    const float c_h = mc_unop_cost(&s, &in, th, w, th, w, 0.1f, 0.1f, NULL, h);
+    const float c_both = mc_unop_cost(&s, &in, th, w, th, w, 0.1f, 0.1f, g_both, h_both);
+    assert_true(c_g == c_both && c_h == c_both);
+    assert_true(fabsf(g_both[0]) > 1e-3f);
+    for (int k = 0; k < 2; ++k) {
+        assert_true(g[k] == g_both[k]);
+    }
+    for (int k = 0; k < 4; ++k) {
+        assert_true(h[k] == h_both[k]);
+    }
+    const float e = 1e-3f;
+    const double fd = ((double)mc_unop_cost(&s, &in, th + e, w, th, w, 0.1f, 0.1f, NULL, NULL) -
+                       (double)mc_unop_cost(&s, &in, th - e, w, th, w, 0.1f, 0.1f, NULL, NULL)) / (2.0 * e);
+    assert_near(g[0], fd, 0.02 * fabs(fd) + 1e-4);
+}
+
+/* The cost the estimator reports (s.cost: the telemetry's est_cost) is the cost at the estimate it
+ * returns, also when the search stops right after a step (one iteration here), not the cost at
+ * the start of that step. No regularisation (k1 = k2 = 0), so mc_unop_cost re-evaluates it. */
+static void test_reported_cost_is_at_the_estimate(void **st)
+{
+    (void)st;
+    const double om = RPM_TO_WE(400.0);
+    mc_unop_cfg_t cfg = sun_cfg(NULL, 1);
+    cfg.iter_max = 1;
+    cfg.k1 = 0.0f;
+    cfg.k2 = 0.0f;
+    mc_unop_t s;
+    mc_unop_init(&s, &cfg);
+    dsample_t d;
+    double thk;
+    dgen_sample(&cfg, &TRAJ_RUN, 1.0, om, 1, &d, &thk);
+    const mc_angle_in_t in = to_in(&d);
+    const float th0 = (float)(thk + 25.0 * DEG), om0 = (float)(om + 40.0);
+    const float c0 = mc_unop_cost(&s, &in, th0, om0, 0, 0, 0, 0, NULL, NULL);
+    mc_unop_reset(&s, th0, om0);
+    mc_angle_out_t out;
+    mc_unop_step(&s, &in, &out);
+    assert_int_equal(s.iters, 1);
+    const float c1 = mc_unop_cost(&s, &in, s.theta, s.omega, 0, 0, 0, 0, NULL, NULL);
+    assert_true(c1 < 0.5f * c0);   /* the step moved: the two costs are far apart */
+    assert_near(s.cost, c1, 1e-3 * c1 + 1e-6);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -526,6 +590,8 @@ int main(void)
         cmocka_unit_test(test_mid_vs_thesis_on_continuous_data),
         cmocka_unit_test(test_regularisation_lag),
         cmocka_unit_test(test_modified_newton_descends),
+        cmocka_unit_test(test_cost_derivatives_alone),
+        cmocka_unit_test(test_reported_cost_is_at_the_estimate),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
