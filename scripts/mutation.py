@@ -239,6 +239,11 @@ class CRunner:
                             "-DCMAKE_BUILD_TYPE=Release", "-DMC_BUILD_IMAGES=OFF",
                             "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON"], check=True,
                            stdout=subprocess.DEVNULL)
+        # the copy is built (re-configured when a CMakeLists.txt changed) before the tests are
+        # listed: a test added since the last run would be missing from the list otherwise
+        rc, out, _ = run(["ninja", "-C", str(self.build), f"-j{jobs}"] + ([] if quick_files is None else ["build.ninja"]), None, None)
+        if rc != 0:
+            sys.exit("mutation: the unmutated copy does not build:\n" + out[-3000:])
         names = subprocess.run(["ctest", "--test-dir", str(self.build), "-N", "-LE", "pil"],
                                capture_output=True, text=True, check=True).stdout
         self.tests = re.findall(r"Test\s+#\d+:\s+(\S+)", names)
