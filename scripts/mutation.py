@@ -473,6 +473,10 @@ def main() -> int:
     for m in chosen:
         m["must_kill"] = any(m["file"] == f and m["mutated"].strip() == mu for (f, _, mu) in must)
     chosen.sort(key=lambda m: (m["file"], m["line"], m["mutated"]))
+    if not a.quick:
+        # tested in a seeded random order: a run stopped early (--summarize) is still a sample
+        # of every file, not of the first files in name order
+        random.Random(a.seed).shuffle(chosen)
     generated = sum(len(v) for v in all_mutants.values())
     print(f"mutation: {generated} mutants of {len(files)} files (universalmutator), testing {len(chosen)} (seed {a.seed}"
           f"{', shard ' + a.shard if a.shard else ''}, {a.workers} worker{'s' if a.workers > 1 else ''})", flush=True)
