@@ -16,6 +16,7 @@
 #include "hal_host/host.h"
 #include "mc/bits.h"
 #include "mc/param_store.h"
+#include "pstore_same.h"
 
 /* large objects (the NVM, 13.5 KB maps) static: test state, not firmware */
 static hal_nvm_t nvm, snap;
@@ -85,36 +86,9 @@ static const mc_drive_cfg_t *make_cfg(int k, int nd, int nq)
     return c;
 }
 
-static bool same_bits(float a, float b)
-{
-    return mc_f32_bits(a) == mc_f32_bits(b);
-}
-
-/* got (loaded, its map in got_map) is exactly want; dropped: want stored without its map */
 static bool same_cfg(const mc_drive_cfg_t *got, const mc_drive_cfg_t *want, bool dropped)
 {
-    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
-        if (mc_param_is_auto(&got->p, id) != mc_param_is_auto(&want->p, id) ||
-            !same_bits(mc_param_get(&got->p, id), mc_param_get(&want->p, id))) {
-            return false;
-        }
-    }
-    if (!same_bits(got->est.rs, want->est.rs) || !same_bits(got->est.ld, want->est.ld) ||
-        !same_bits(got->est.lq, want->est.lq) || !same_bits(got->est.psi_pm, want->est.psi_pm)) {
-        return false;
-    }
-    const mc_flux_map_t *w = dropped ? NULL : want->est.map;
-    if (w == NULL) {
-        return got->est.map == NULL;
-    }
-    const mc_flux_map_t *g = got->est.map;
-    if (g != &got_map || g->n_d != w->n_d || g->n_q != w->n_q || !same_bits(g->id0, w->id0) ||
-        !same_bits(g->did, w->did) || !same_bits(g->iq0, w->iq0) || !same_bits(g->diq, w->diq)) {
-        return false;
-    }
-    const size_t cells = (size_t)w->n_d * (size_t)w->n_q;
-    return memcmp(g->psi_d, w->psi_d, cells * sizeof(float)) == 0 &&
-           memcmp(g->psi_q, w->psi_q, cells * sizeof(float)) == 0;
+    return same_cfg_in(got, want, dropped, &got_map);
 }
 
 static mc_pstore_status_t load(mc_drive_cfg_t *got, mc_pstore_info_t *info)
