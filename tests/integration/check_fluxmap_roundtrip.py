@@ -81,6 +81,28 @@ def main():
         sys.exit("FAIL: the map preset's run differs from the analytic one:\n  " + "\n  ".join(bad))
     print("OK: sensorless_demo on the exported map agrees with the analytic preset")
 
+    # A map too small for the demo (+-4 A; the load needs i_q ~ 5.8 A): the run leaves the grid,
+    # extrapolates, warns once on stderr with the time and reports the time outside.
+    small = os.path.join(out, "sun2016-small.csv")
+    run([a.python, "-m", "mctools", "preset", "sun2016-ipm-5kw", "--export-map", small,
+         "--export-points", "9", "--export-span", "4"])
+    with open(toml) as f:
+        text = f.read().replace("sun2016-map.csv", "sun2016-small.csv")
+    toml_small = os.path.join(out, "sun2016-small.toml")
+    with open(toml_small, "w") as f:
+        f.write(text)
+    d = os.path.join(out, "small")
+    p = run([a.mcsim, "run", scn, "--set", f"machine.preset={toml_small}", "--set", "output.trace=false",
+             "--out", d, "--quiet"])
+    with open(os.path.join(d, "metrics.json")) as f:
+        ms = json.load(f)
+    warn = [ln for ln in p.stderr.splitlines() if "leaves the flux map's grid" in ln]
+    t0, outside = ms.get("fluxmap_first_outside_s"), ms.get("fluxmap_outside_s")
+    print(f"small map: first outside at {t0} s, {outside} s outside; stderr: {warn}")
+    if len(warn) != 1 or t0 is None or f"t = {t0:.6f} s" not in warn[0] or not outside > 0.5:
+        sys.exit("FAIL: leaving the map's grid was not warned once with its time, or not measured")
+    print("OK: leaving the grid is warned with its time and measured")
+
 
 if __name__ == "__main__":
     main()
