@@ -78,6 +78,21 @@ static void test_conversions_round_and_saturate(void **state)
     }
 }
 
+/* An indeterminate torque (currents at the end of the float range with a large flux linkage:
+ * psi_pm i_q -> +inf, (ld - lq) i_d i_q -> -inf in (2.9)) reads 0; the current saturates. */
+static void test_indeterminate_torque_reads_0(void **state)
+{
+    (void)state;
+    mc_402_cfg_t c = CFG;
+    c.psi_pm = 2.0f;
+    start_cfg(&c);
+    tm.i_dq.d = 3.0e38f;
+    tm.i_dq.q = 3.0e38f;
+    step_n(1);
+    assert_int_equal(s.od.torque_actual, 0);
+    assert_int_equal(s.od.current_actual, 32767);
+}
+
 /* 0x6077 and 0x6078 at 20 x rated (the scale exactly, to the rounding), and 0x6078's sign: that
  * of i_q, with i_q = 0 (pure field weakening current) positive. */
 static void test_actual_torque_and_current(void **state)
@@ -494,6 +509,7 @@ int main(void)
         cmocka_unit_test(test_rated_values_that_make_no_sense_read_as_1),
         cmocka_unit_test(test_conversions_round_and_saturate),
         cmocka_unit_test(test_actual_torque_and_current),
+        cmocka_unit_test(test_indeterminate_torque_reads_0),
         cmocka_unit_test(test_bumpless_into_torque_control),
         cmocka_unit_test(test_target_at_its_limit_is_not_limited),
         cmocka_unit_test(test_pv_ramp_through_zero),

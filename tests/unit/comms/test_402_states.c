@@ -3,6 +3,7 @@
  * stop option codes outside 1-8, faults while disabling, and the statusword bits 4, 10, 11, 12,
  * 15 and the command's mode and references in the states where they are easy to get wrong: a
  * ramp-down, the quick stop hold (options 5-8), a fault reaction, a fault. */
+#include <time.h>
 #include "h402.h"
 
 /* Fresh, then to `st` by the controlword: RTSO, SO, OE, or Quick stop active held after a quick
@@ -426,6 +427,48 @@ static void test_bit4_at_vdc_on(void **state)
     assert_false(sw_bit(4));
 }
 
+/* The quick stop hold's velocity target is 0: a rotor within 0x606D of 0 all through the hold
+ * (here at +-20 rpm, the window's edge) has been at that target for longer than 0x606E when
+ * operation is enabled again (16) in csv with the target 0: bit 10 at once. */
+static void test_hold_target_0_counts_for_the_window(void **state)
+{
+    (void)state;
+    for (int sgn = -1; sgn <= 1; sgn += 2) {
+        start();
+        s.od.mode = MC_402_MODE_CSV;
+        s.od.quick_stop_option = 6;
+        to_enabled();
+        set_rpm(20.0f * (float)sgn);
+        step_n(5);
+        cw(0x02);
+        step_n(1100);   /* not stopped (above 0x606F): ends after 20 / 1000 s + 1 s */
+        assert_false(s.stopping);
+        assert_int_equal(s.state, MC_402_QUICK_STOP_ACTIVE);
+        assert_int_equal(cw(0x0F), 0x0237);
+        assert_true(sw_bit(10));
+    }
+}
+
+/* A drive fault without a fault bit reads 0x1000 (generic), and finding the code is bounded
+ * work: entering Fault this way a few times costs no noticeable CPU time (the 402 block runs in
+ * the CANopen device's background loop). */
+static void test_fault_without_bits_is_generic_and_quick(void **state)
+{
+    (void)state;
+    const clock_t t0 = clock();
+    for (int k = 0; k < 3; ++k) {
+        start();
+        to_enabled();
+        step_n(5);
+        tm.state = MC_STATE_FAULT;
+        tm.faults = 0u;
+        step_n(1);
+        assert_int_equal(s.state, MC_402_FAULT);
+        assert_int_equal(s.od.error_code, 0x1000u);
+    }
+    assert_true((double)(clock() - t0) / CLOCKS_PER_SEC < 0.5);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -442,6 +485,8 @@ int main(void)
         cmocka_unit_test(test_command_kind_and_references),
         cmocka_unit_test(test_demands_torque_mode_and_fault_reaction),
         cmocka_unit_test(test_bit4_at_vdc_on),
+        cmocka_unit_test(test_hold_target_0_counts_for_the_window),
+        cmocka_unit_test(test_fault_without_bits_is_generic_and_quick),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
