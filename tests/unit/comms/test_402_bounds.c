@@ -503,6 +503,59 @@ static void test_only_the_four_modes(void **state)
     }
 }
 
+/* 0x6070 = 0 and 0x606E = 0: no time to wait, but still the condition itself. Speed = 0 (bit 12)
+ * only with |velocity actual| <= 0x606F, target reached (bit 10) only within 0x606D of the target;
+ * a ramp-down still ramps (it ends when the rotor is below 0x606F, not at once); and with the rotor
+ * just come inside, a controlword between two periods sees it at once. */
+static void test_zero_times_still_need_the_condition(void **state)
+{
+    (void)state;
+    start();
+    s.od.velocity_threshold_time = 0u;
+    s.od.velocity_window_time = 0u;
+    s.od.target_velocity = 600;
+    to_enabled();
+    step_n(700);
+    assert_int_equal(s.od.velocity_actual, 600);
+    assert_false(sw_bit(12));   /* turning at 600 rpm: not speed 0 */
+    assert_true(sw_bit(10));
+    set_rpm(700.0f);            /* outside 0x606D */
+    step_n(1);
+    assert_false(sw_bit(10));
+    drv.follow = true;
+    step_n(5);
+    cw(0x02);                   /* quick stop (option 2): a ramp on 0x6085, 1000 rpm/s */
+    step_n(300);
+    assert_int_equal(s.state, MC_402_QUICK_STOP_ACTIVE);
+    assert_true(s.stopping);
+    assert_true(fabsf(speed_rpm() - 300.0f) < 2.0f);
+    step_n(400);
+    assert_int_equal(s.state, MC_402_SWITCH_ON_DISABLED);
+
+    /* between two periods: the rotor has just come below 0x606F (csv: into the window) */
+    start();
+    s.od.velocity_threshold_time = 0u;
+    s.od.velocity_window_time = 0u;
+    s.od.quick_stop_option = 6;
+    s.od.mode = MC_402_MODE_CSV;
+    s.od.target_velocity = 300;
+    set_rpm(0.0f);
+    to_enabled();
+    step_n(1);
+    set_rpm(200.0f);
+    step_n(1);
+    assert_false(sw_bit(10));
+    set_rpm(290.0f);
+    mc_402_controlword(&s, &tm, &cmd);
+    assert_true(sw_bit(10));
+    set_rpm(0.0f);
+    s.od.controlword = 0x02;
+    mc_402_controlword(&s, &tm, &cmd);
+    assert_int_equal(s.state, MC_402_QUICK_STOP_ACTIVE);
+    assert_false(s.stopping);   /* stopped already: the ramp-down is over */
+    assert_true(sw_bit(10));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -523,6 +576,7 @@ int main(void)
         cmocka_unit_test(test_torque_demand_restarts_from_0),
         cmocka_unit_test(test_pv_halt_holds_exactly_0),
         cmocka_unit_test(test_only_the_four_modes),
+        cmocka_unit_test(test_zero_times_still_need_the_condition),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
