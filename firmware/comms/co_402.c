@@ -420,10 +420,10 @@ static void advance(mc_402_t *s, const mc_drive_telem_t *tm, float dt, mc_drive_
         s->t_ramp = t_target;
     }
 
-    /* standstill (0x606F / 0x6070) and the velocity window (0x606D / 0x606E) */
+    /* standstill (0x606F / 0x6070) and the velocity window (0x606D / 0x606E): a time of 0 still needs the condition */
     s->thr_time = fabsf(v_act) <= (float)o->velocity_threshold ? fminf(s->thr_time + dt, 1.0e6f) : 0.0f;
     s->win_time = fabsf(v_act - v_target) <= (float)o->velocity_window ? fminf(s->win_time + dt, 1.0e6f) : 0.0f;
-    const bool still = s->thr_time >= 1e-3f * (float)o->velocity_threshold_time;
+    const bool still = s->thr_time >= 1e-3f * (float)o->velocity_threshold_time && fabsf(v_act) <= (float)o->velocity_threshold;
     if (s->stopping) {
         s->stop_time += dt;
         if (still || s->stop_time >= s->stop_limit) {
@@ -468,7 +468,7 @@ static void advance(mc_402_t *s, const mc_drive_telem_t *tm, float dt, mc_drive_
             (halt && (s->active_mode == MC_402_MODE_PV || s->active_mode == MC_402_MODE_TQ))) {
             reached = s->speed_ctl ? still : s->t_ramp == 0.0f;   /* halted / stopped */
         } else if (s->speed_ctl) {
-            reached = s->win_time >= 1e-3f * (float)o->velocity_window_time &&
+            reached = s->win_time >= 1e-3f * (float)o->velocity_window_time && fabsf(v_act - v_target) <= (float)o->velocity_window &&
                       (s->active_mode != MC_402_MODE_PV || s->v_ramp == v_target);
         } else {
             reached = s->t_ramp == t_target;
