@@ -19,6 +19,7 @@
 #include "drive_target.hpp"
 #include "metrics.hpp"
 #include "mcsim/fluxmap.hpp"
+#include "mcsim/fluxmap_file.hpp"
 #include "mcsim/plant.hpp"
 #include "mcsim/sensors.hpp"
 
@@ -83,6 +84,8 @@ std::unique_ptr<FluxModel> make_plant_model(const Scenario& sc, const MachinePar
 {
     const std::string& kind = sc.s("machine.model");
     if (kind == "linear") return make_linear_model(mp.ld, mp.lq, mp.psi_pm);
+    // a measured map is the plant itself for "analytic" and "table" (there is no closed form)
+    if (mp.flux_map) return make_preset_model(mp);
     auto analytic = make_analytic_model(mp.sat);
     if (kind == "analytic") return analytic;
     const int n = static_cast<int>(sc.i("machine.table_points"));
@@ -148,18 +151,28 @@ std::unique_ptr<mc_flux_map_t> make_estimator_map(const FluxModel& m, int n, dou
                                                   double psi_scale, double cross_scale)
 {
     const GridAxis axis{-span, span, n};
-    const FluxMapTable t = tabulate_flux_map_cached(m, axis, axis);
+    // A measured map is resampled from the map itself (bilinear, with its edge extrapolation), not
+    // from the plant's inversion of it: the estimator's model is the map, as with the analytic model.
+    const auto* measured = dynamic_cast<const MeasuredMapModel*>(&m);
+    auto fwd = [&](const Vec2& i) { return measured ? measured->measured().table.eval(i) : m.flux(i); };
+    FluxMapTable t(TableKind::FluxOfCurrent, axis, axis);
+    if (measured) {
+        for (int a = 0; a < n; ++a)
+            for (int b = 0; b < n; ++b) t.set_node(a, b, fwd(Vec2(axis.at(a), axis.at(b))));
+    } else {
+        t = tabulate_flux_map_cached(m, axis, axis);
+    }
     auto map = std::make_unique<mc_flux_map_t>();
     map->n_d = n;
     map->n_q = n;
     map->id0 = map->iq0 = static_cast<float>(-span);
     map->did = map->diq = static_cast<float>(axis.step());
-    const Vec2 psi0 = m.flux(Vec2::Zero());
+    const Vec2 psi0 = fwd(Vec2::Zero());
     std::vector<Vec2> cut_d, cut_q;  // psi(i_d, 0), psi(0, i_q) at the grid's currents
     if (cross_scale != 1.0) {
         for (int k = 0; k < n; ++k) {
-            cut_d.push_back(m.flux(Vec2(axis.at(k), 0.0)));
-            cut_q.push_back(m.flux(Vec2(0.0, axis.at(k))));
+            cut_d.push_back(fwd(Vec2(axis.at(k), 0.0)));
+            cut_q.push_back(fwd(Vec2(0.0, axis.at(k))));
         }
     }
     for (int a = 0; a < n; ++a) {
@@ -475,6 +488,13 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
     const long overrun_every = sc.i("faults.isr_overrun_every");
     const long overrun_k0 = overrun_from >= 0.0 ? static_cast<long>(std::ceil(overrun_from / r.ts - 1e-9)) : -1;
 
+    // A measured map: its load warnings, and the time the current spends outside its grid (the
+    // plant extrapolates there, docs/machine-models.md "Measured flux maps"); warned at the first exit.
+    const FluxMapData* fmap = r.mp.flux_map.get();
+    if (fmap)
+        for (const std::string& w : fmap->warnings) std::fprintf(stderr, "mcsim: warning: %s\n", w.c_str());
+    double map_outside_s = 0, map_first_out_s = NAN;
+
     double isr_ns = 0, plant_ns = 0;
     mc_drive_telem_t last_tm{};
     long timed = 0;
@@ -517,6 +537,18 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         const auto iabc = plant.i_abc();
         const double ipk = std::max({std::fabs(iabc[0]), std::fabs(iabc[1]), std::fabs(iabc[2])});
         const Vec2 idq = plant.i_dq();
+        if (fmap && !fmap->in_grid(idq)) {
+            if (std::isnan(map_first_out_s)) {
+                map_first_out_s = t;
+                const FluxMapTable& g = fmap->table;
+                std::fprintf(stderr,
+                             "mcsim: warning: t = %.6f s: the current (i_d, i_q) = (%.3f, %.3f) A leaves the flux map's grid "
+                             "(i_d %g .. %g A, i_q %g .. %g A, %s); the plant extrapolates linearly from the edge "
+                             "(metric fluxmap_outside_s)\n",
+                             t, idq.x(), idq.y(), g.x.lo, g.x.hi, g.y.lo, g.y.hi, fmap->file.c_str());
+            }
+            map_outside_s += r.ts;
+        }
         double sref = NAN;
         if (is_dyno) sref = dyno.at(t);
         else if (!can_commands && commander.mode == MC_MODE_SPEED && !is_locked) sref = commander.speed_ref.at(t);
@@ -580,6 +612,10 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
                                      {"polarity_flips", std::to_string(tm.polarity_flips)},
                                      {"step2_confidence", json_number(tm.pol_z)},
                                      {"step2_verdict", json_string(step2_verdict_name(tm.pol_verdict))}};
+    if (fmap) {
+        extra.push_back({"fluxmap_outside_s", json_number(map_outside_s)});
+        extra.push_back({"fluxmap_first_outside_s", json_number(map_first_out_s)});
+    }
     for (auto& kv : drive->metrics()) extra.push_back(std::move(kv));
     out.metrics_json = metrics.json(fault_names(tm.faults), state_name(tm.state), extra);
     if (!opt.out_dir.empty()) {

@@ -1,5 +1,6 @@
 // Pieces shared by every FluxModel: the Newton inversion psi(i) and small-signal helpers.
 #include "mcsim/machine.hpp"
+#include "mcsim/fluxmap_file.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -90,6 +91,9 @@ double torque(const FluxModel& m, int pole_pairs, const Vec2& i) {
     return 1.5 * pole_pairs * (psi.x() * i.y() - psi.y() * i.x());
 }
 
-std::unique_ptr<FluxModel> make_preset_model(const MachineParams& mp) { return make_analytic_model(mp.sat); }
+std::unique_ptr<FluxModel> make_preset_model(const MachineParams& mp) {
+    if (mp.flux_map) return std::make_unique<MeasuredMapModel>(mp.flux_map);
+    return make_analytic_model(mp.sat);
+}
 
 }  // namespace mcsim

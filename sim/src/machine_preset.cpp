@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "mcsim/fluxmap_file.hpp"
 #include "mcsim/machine.hpp"
 #include "mcsim/text.hpp"
 
@@ -122,10 +123,10 @@ public:
         return int(i->get());
     }
 
-    std::string string(const toml::table& t, const std::string& key) const {
-        const toml::node& n = need(t, "", key);
+    std::string string(const toml::table& t, const std::string& key, const std::string& prefix = "") const {
+        const toml::node& n = need(t, prefix, key);
         auto s = n.as_string();
-        if (!s) fail(key, "value " + node_text(n) + " is a " + type_name(n) + ", expected a string");
+        if (!s) fail(prefix + key, "value " + node_text(n) + " is a " + type_name(n) + ", expected a string");
         return s->get();
     }
 
@@ -183,9 +184,14 @@ MachineParams load_machine_preset(const std::string& name_or_path) {
     m.pole_pairs = rd.integer(t, "pole_pairs", 1, 100);
     // Plausible ranges; the scenario keys these defaults feed have their own (docs/simulator.md).
     m.rs = rd.number(t, "", "rs_ohm", {0, false, 100, "ohm"});
-    m.psi_pm = rd.number(t, "", "psi_pm_wb", {0, false, 10, "Wb"});
-    m.ld = rd.number(t, "", "ld_h", {1e-7, false, 10, "H"});
-    m.lq = rd.number(t, "", "lq_h", {1e-7, false, 10, "H"});
+    // With a measured [flux_map], psi_pm_wb, ld_h, lq_h may be omitted: the map's values at i = 0.
+    const bool has_map = t.contains("flux_map"), has_sat = t.contains("saturation");
+    const Range r_psi{0, false, 10, "Wb"}, r_l{1e-7, false, 10, "H"};
+    const bool map_psi = has_map && !t.contains("psi_pm_wb"), map_ld = has_map && !t.contains("ld_h"),
+               map_lq = has_map && !t.contains("lq_h");
+    if (!map_psi) m.psi_pm = rd.number(t, "", "psi_pm_wb", r_psi);
+    if (!map_ld) m.ld = rd.number(t, "", "ld_h", r_l);
+    if (!map_lq) m.lq = rd.number(t, "", "lq_h", r_l);
     m.inertia = rd.number(t, "", "inertia_kgm2", {1e-6, false, 1e3, "kg m^2"});
     m.friction = rd.number(t, "", "friction_nms", {0, false, 1e2, "N m s"});
     m.i_rated_peak = rd.number(t, "", "i_rated_peak_a", {0.01, false, 5000, "A"});
@@ -193,6 +199,35 @@ MachineParams load_machine_preset(const std::string& name_or_path) {
     m.vdc_nominal = rd.number(t, "", "vdc_nominal_v", {1, false, 2000, "V"});
     m.f_sample = rd.number(t, "", "f_sample_hz", {100, false, 1e6, "Hz"});
 
+    // The magnetics: an analytic [saturation] model or a measured [flux_map], exactly one.
+    if (has_map && has_sat)
+        rd.fail("flux_map", "a preset gives either [saturation] or [flux_map], not both");
+    if (has_map) {
+        const toml::table& fm = rd.table("flux_map");
+        const std::string rel = rd.string(fm, "file", "flux_map.");
+        if (rel.empty()) rd.fail("flux_map.file", "empty file name");
+        namespace fs = std::filesystem;
+        const fs::path p(rel);
+        const std::string map_file = p.is_absolute() ? rel : (fs::path(file).parent_path() / p).string();
+        std::shared_ptr<FluxMapData> map;
+        try {
+            map = std::make_shared<FluxMapData>(read_flux_map_file(map_file));
+        } catch (const std::exception& e) {
+            rd.fail("flux_map.file", e.what());
+        }
+        // psi_pm_wb, ld_h, lq_h: the map's values at i = 0 unless given
+        if (map_psi) m.psi_pm = map->psi_pm;
+        if (map_ld) m.ld = map->ld;
+        if (map_lq) m.lq = map->lq;
+        auto in_range = [](double v, const Range& r) { return std::isfinite(v) && v > r.lo && v <= r.hi; };
+        if (!in_range(m.psi_pm, r_psi) || !in_range(m.ld, r_l) || !in_range(m.lq, r_l))
+            rd.fail("flux_map.file", "the map's psi_pm = " + num_text(m.psi_pm) + " Wb, Ld = " + num_text(m.ld) +
+                                         " H, Lq = " + num_text(m.lq) + " H at i = 0 are outside the preset ranges (" +
+                                         range_text(r_psi) + ", " + range_text(r_l) + ")");
+        m.flux_map = std::move(map);
+        return m;
+    }
+    if (!has_sat) rd.fail("saturation", "missing (give an analytic [saturation] table or a measured [flux_map])");
     const toml::table& s = rd.table("saturation");
     const std::string sp = "saturation.";
     const Range exponent{0, false, 8, ""};

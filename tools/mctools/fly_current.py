@@ -191,6 +191,9 @@ def _floats(text: str, key: str) -> list[float]:
 
 def _cmd(args) -> int:
     m = load_preset(args.preset, args.preset_dir)
+    if not hasattr(m.model, "current"):   # a measured map gives psi(i), this integrates i(psi)
+        raise FlyCurrentInputError(f"{args.preset}: a measured-map preset ([flux_map]) is not supported here: "
+                                   "fly-current needs the closed-form current map of a [saturation] preset")
     rpms = _floats(args.rpm, "--rpm")
     limits = [s.strip() for s in args.limit.split(",") if s.strip()]
     bad = [s for s in limits if s not in ("circle", "hexagon")]

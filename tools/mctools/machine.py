@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 
 import numpy as np
 
@@ -230,7 +231,9 @@ class Machine:
                          float(psi_d), float(psi_q))
 
     def small_signal(self):
-        """(psi_pm, Ld, Lq) of the model at i = 0."""
+        """(psi_pm, Ld, Lq) of the model at i = 0 (a measured map: its central differences)."""
+        if hasattr(self.model, "small_signal"):
+            return self.model.small_signal()
         l_dd, _, l_qq = self.model.inductances(0.0, 0.0)
         return self.model.psi_pm(), float(l_dd), float(l_qq)
 
@@ -275,26 +278,45 @@ class Machine:
 
 
 _REQUIRED = ("name", "pole_pairs", "rs_ohm", "psi_pm_wb", "ld_h", "lq_h")
+_FROM_MAP = ("psi_pm_wb", "ld_h", "lq_h")   # may be omitted with a [flux_map]
 _OPTIONAL = ("inertia_kgm2", "friction_nms", "i_rated_peak_a", "torque_rated_nm",
              "vdc_nominal_v", "f_sample_hz")
 
 
-def machine_from_dict(d: dict) -> Machine:
+def machine_from_dict(d: dict, base_dir=None) -> Machine:
     """Build a Machine from a parsed preset (TOML) mapping.
 
-    Without a [saturation] table the constant-parameter model (ld_h, lq_h, psi_pm_wb) is used.
+    Without a [saturation] table the constant-parameter model (ld_h, lq_h, psi_pm_wb) is used; with
+    a [flux_map] the measured map (mctools.fluxmap; its file relative to base_dir, the preset's
+    folder), and psi_pm_wb, ld_h, lq_h default to the map's values at i = 0.
     """
+    fmap = d.get("flux_map")
+    if fmap is not None:
+        from mctools.fluxmap import read_flux_map
+        if "saturation" in d:
+            raise ValueError("key 'flux_map': a preset gives either [saturation] or [flux_map], not both")
+        if not isinstance(fmap, dict) or not isinstance(fmap.get("file"), str) or not fmap["file"]:
+            raise ValueError("key 'flux_map.file': expected a non-empty string (the map's CSV file)")
+        f = Path(fmap["file"])
+        if not f.is_absolute():
+            f = Path(base_dir or ".") / f
+        model = read_flux_map(str(f))
+        d = dict(d)
+        for k, v in zip(_FROM_MAP, model.small_signal()):
+            d.setdefault(k, v)
     missing = [k for k in _REQUIRED if k not in d]
     if missing:
         raise ValueError(f"preset lacks required key(s): {', '.join(missing)}")
     sat = d.get("saturation")
-    if sat is None:
+    if fmap is not None:
+        pass
+    elif sat is None:
         model = SaturationModel.linear(float(d["ld_h"]), float(d["lq_h"]), float(d["psi_pm_wb"]))
     elif isinstance(sat, dict):
         model = SaturationModel.from_mapping(sat)
     else:
         raise ValueError("preset key 'saturation' must be a table")
-    known = set(_REQUIRED) | set(_OPTIONAL) | {"saturation"}
+    known = set(_REQUIRED) | set(_OPTIONAL) | {"saturation", "flux_map"}
     return Machine(
         name=str(d["name"]),
         pole_pairs=int(d["pole_pairs"]),

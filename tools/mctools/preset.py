@@ -6,6 +6,8 @@ import json
 import math
 import os
 import tomllib
+
+import numpy as np
 from pathlib import Path
 
 from mctools.errors import InputError
@@ -60,7 +62,7 @@ def load_preset(name_or_path: str, preset_dir=None) -> Machine:
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{path}: invalid TOML: {exc}") from None
     try:
-        return machine_from_dict(data)
+        return machine_from_dict(data, base_dir=path.parent)
     except (ValueError, TypeError) as exc:
         raise PresetError(f"{path}: {exc}") from None
 
@@ -78,6 +80,20 @@ def derived_figures(m: Machine) -> dict:
         "lq_model_h": lq,
         "lq_preset_h": m.lq_h,
     }
+    fm = getattr(m.model, "recip_rms", None)
+    if fm is not None:
+        mp = m.model
+        out.update({
+            "flux_map_file": mp.file,
+            "flux_map_grid": [mp.x.n, mp.y.n],
+            "flux_map_i_d_range_a": [mp.x.lo, mp.x.hi],
+            "flux_map_i_q_range_a": [mp.y.lo, mp.y.hi],
+            "flux_map_ldq_h": mp.ldq,
+            "flux_map_reciprocity_rms": mp.recip_rms,
+            "flux_map_reciprocity_max": mp.recip_max,
+            "flux_map_reciprocity_max_at_a": list(mp.recip_max_at),
+            "flux_map_warnings": list(mp.warnings),
+        })
     if math.isfinite(m.vdc_nominal_v):
         out["vdc_nominal_v"] = m.vdc_nominal_v
         out["u_max_v"] = m.u_max()
@@ -110,13 +126,27 @@ def format_report(f: dict, source: Path | None = None) -> str:
     def dev(model, preset):
         return f"({100.0 * (model / preset - 1.0):+.2f} % vs preset)" if preset else ""
 
+    kind = "saturation model"
+    if "flux_map_file" in f:
+        kind = "flux map, central differences"
     lines = [f"preset {f['name']}" + (f"  [{source}]" if source else ""),
-             f"  pole pairs                 {f['pole_pairs']}",
-             "  small-signal at i = 0 (saturation model):",
+             f"  pole pairs                 {f['pole_pairs']}"]
+    if "flux_map_file" in f:
+        (d_lo, d_hi), (q_lo, q_hi) = f["flux_map_i_d_range_a"], f["flux_map_i_q_range_a"]
+        lines += [f"  measured flux map          {f['flux_map_file']}",
+                  f"    grid                     {f['flux_map_grid'][0]} x {f['flux_map_grid'][1]}, "
+                  f"i_d {d_lo:g} .. {d_hi:g} A, i_q {q_lo:g} .. {q_hi:g} A",
+                  f"    reciprocity mismatch     rms {100 * f['flux_map_reciprocity_rms']:.2f} %, max "
+                  f"{100 * f['flux_map_reciprocity_max']:.2f} % at ({f['flux_map_reciprocity_max_at_a'][0]:g}, "
+                  f"{f['flux_map_reciprocity_max_at_a'][1]:g}) A  (|l_dq - l_qd| / sqrt(l_dd l_qq))"]
+        lines += [f"    warning: {w}" for w in f["flux_map_warnings"]]
+    lines += [f"  small-signal at i = 0 ({kind}):",
              f"    psi_pm                   {f['psi_pm_model_wb']:.5f} Wb "
              f"{dev(f['psi_pm_model_wb'], f['psi_pm_preset_wb'])}",
              f"    Ld                       {mh(f['ld_model_h'])} {dev(f['ld_model_h'], f['ld_preset_h'])}",
              f"    Lq                       {mh(f['lq_model_h'])} {dev(f['lq_model_h'], f['lq_preset_h'])}"]
+    if "flux_map_ldq_h" in f:
+        lines.append(f"    Ldq (d psi_d / d i_q)    {mh(f['flux_map_ldq_h'])}")
     if "u_max_v" in f:
         lines += [f"  at Vdc = {f['vdc_nominal_v']:g} V (u_max = Vdc/sqrt(3) = {f['u_max_v']:.1f} V):",
                   f"    no-load base speed       {f['base_speed_noload_rpm']:.0f} rpm"]
@@ -136,8 +166,26 @@ def format_report(f: dict, source: Path | None = None) -> str:
     return "\n".join(lines)
 
 
+def export_map(m: Machine, out, points: int, span_a: float | None) -> str:
+    """Tabulate the preset's model psi(i) on a points x points grid over +-span_a (default
+    1.5 x i_rated_peak_a) and write it as a measured-map CSV (`[flux_map] file = ...`)."""
+    from mctools.fluxmap import write_flux_map
+    if points < 3:
+        raise PresetError(f"--export-points {points}: a map needs at least 3 points per axis")
+    span = span_a if span_a is not None else 1.5 * m.i_rated_peak_a
+    if not (math.isfinite(span) and span > 0):
+        raise PresetError("--export-span: give a positive span (the preset has no i_rated_peak_a)")
+    axis = np.linspace(-span, span, points)
+    axis[points // 2] = 0.0 if points % 2 else axis[points // 2]   # exact i = 0 on odd grids
+    n = write_flux_map(out, axis, axis, m.model.flux)
+    return f"wrote {out}: {points} x {points} grid, i_d, i_q in +-{span:g} A ({n} rows)"
+
+
 def cmd_preset(args) -> int:
     path = find_preset(args.preset, args.preset_dir)
+    if args.export_map:
+        print(export_map(load_preset(str(path)), args.export_map, args.export_points, args.export_span))
+        return 0
     figs = derived_figures(load_preset(str(path)))
     if args.json:
         print(json.dumps(figs, indent=2))
@@ -152,4 +200,10 @@ def add_parser(sub) -> None:
     p.add_argument("--preset-dir", metavar="DIR",
                    help="directory to look up preset names in (also: env MC_PRESET_DIR)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--export-map", metavar="FILE",
+                   help="write the preset's flux map psi(i) as a CSV for a [flux_map] preset and exit")
+    p.add_argument("--export-points", metavar="N", type=int, default=41,
+                   help="grid points per axis of --export-map (default 41)")
+    p.add_argument("--export-span", metavar="A", type=float,
+                   help="--export-map grid half-width [A] (default 1.5 x i_rated_peak_a)")
     p.set_defaults(func=cmd_preset)

@@ -113,3 +113,10 @@ def test_cli_rejects_bad_options(argv, key, capsys):
     rc = cli.main(["fly-current", str(REPO_PRESETS / "sun2016-ipm-5kw.toml")] + argv)
     assert rc == 2
     assert key in capsys.readouterr().err
+
+
+def test_cli_refuses_a_measured_map_preset(capsys):
+    # fly-current integrates the closed-form i(psi); a [flux_map] preset has none: exit 2, said why
+    rc = cli.main(["fly-current", str(REPO_PRESETS / "baldor-5p6kw-pmsyrm.toml")])
+    assert rc == 2
+    assert "measured-map preset" in capsys.readouterr().err

@@ -10,6 +10,7 @@ namespace mcsim {
 namespace detail {
 struct AnalyticEval;
 }
+struct FluxMapData;  // a measured map (mcsim/fluxmap_file.hpp)
 
 using Vec2 = Eigen::Vector2d;
 using Mat2 = Eigen::Matrix2d;
@@ -36,7 +37,10 @@ struct MachineParams {
     double torque_rated = 0;  // [N m]
     double vdc_nominal = 0;   // [V]
     double f_sample = 0;      // [Hz] bench sampling = switching frequency
-    SaturationParams sat;
+    SaturationParams sat;     // [saturation]; unused when flux_map is set
+    // [flux_map] file = "...": the measured map, read and checked (null for an analytic preset).
+    // psi_pm, ld, lq are then the map's values at i = 0 unless the preset gives them.
+    std::shared_ptr<const FluxMapData> flux_map;
 };
 
 // Interface every magnetic model implements. current() and its Jacobian are what the plant
@@ -102,7 +106,8 @@ struct SmallSignal {
 SmallSignal small_signal(const FluxModel& m);
 // Electromagnetic torque T = 1.5 p (psi_d i_q - psi_q i_d) at current i [N m].
 double torque(const FluxModel& m, int pole_pairs, const Vec2& i);
-// The model a preset describes: the analytic model of its [saturation] table.
+// The model a preset describes: the analytic model of its [saturation] table, or the measured map
+// of its [flux_map] inverted to i(psi) (MeasuredMapModel).
 std::unique_ptr<FluxModel> make_preset_model(const MachineParams& mp);
 
 // Loads presets/<name>.toml (or a path); throws std::runtime_error naming file, key, value.
