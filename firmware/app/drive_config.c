@@ -124,6 +124,8 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     b->step2.n = (int)p->startup_step2_n;
     b->step2.i_trip = p->control_i_trip_a;
     b->step2.i_rest = p->startup_i_rest_a;
+    b->step2.z_min = p->startup_polarity_z_min;
+    b->step2.i_max = p->control_i_max_a;
     mc_dvi_cfg_default(&b->dvi);
     b->dvi.rs = m->rs;
     b->dvi.v = p->startup_v_pol_v;

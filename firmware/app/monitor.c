@@ -37,7 +37,7 @@ void mc_monitor_unpack_cmd(const uint32_t w[MC_MONITOR_CMD_WORDS], mc_drive_cmd_
     F(est_cost) F(est_cond) F(u_inj) F(theta1) F(theta2) F(c1) F(c2) B(pol_flip) F(duty[0])        \
     F(duty[1]) F(duty[2]) B(u_limited) B(fw_active) U(cmd_rejected) U(recoveries)                  \
     U(recovered_from) U(polarity_checks) U(polarity_flips) I(polarity_last)                        \
-    E(cmd_reject_last, mc_cmd_reject_t)
+    E(cmd_reject_last, mc_cmd_reject_t) F(pol_z) E(pol_verdict, uint8_t)
 
 void mc_monitor_pack_telem(const mc_drive_telem_t *t, uint32_t w[MC_MONITOR_TM_WORDS])
 {

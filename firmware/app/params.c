@@ -17,10 +17,16 @@
 MC_PARAMS(MC_X)
 #undef MC_X
 
+#ifdef MC_PARAM_NO_DOC
+#define MC_PARAM_DOC(s) ""
+#else
+#define MC_PARAM_DOC(s) s
+#endif
+
 /* clang-format off */
 const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
 #define MC_X(g, k, type_, unit_, lo, hi, def_, rule_, group_, access_, choices_, doc_) \
-    {.name = #g "." #k, .unit = unit_, .choices = MC_CHOICE_TEXT(choices_), .doc = doc_, \
+    {.name = #g "." #k, .unit = unit_, .choices = MC_CHOICE_TEXT(choices_), .doc = MC_PARAM_DOC(doc_), \
      .offset = (uint16_t)offsetof(mc_params_t, g##_##k), .type = (uint8_t)MC_PT_##type_, \
      .group = (uint8_t)MC_PG_##group_, .access = (uint8_t)MC_PA_##access_, \
      .rule = (uint8_t)MC_RULE_##rule_, .min = (float)(lo), .max = (float)(hi), .def = (float)(def_)},

@@ -57,8 +57,9 @@ void mc_drive_startup_reset(mc_drive_t *d)
     d->i_ab_prev = (mc_ab_t){0.0f, 0.0f};
     d->u_hist[0] = d->u_hist[1] = (mc_ab_t){0.0f, 0.0f};
     d->tm.theta1 = d->tm.theta2 = 0.0f;
-    d->tm.c1 = d->tm.c2 = 0.0f;
+    d->tm.c1 = d->tm.c2 = d->tm.pol_z = 0.0f;
     d->tm.pol_flip = false;
+    d->tm.pol_verdict = 0u;
 }
 
 /* Duties decided outside the control pipeline, with the voltage history kept true, so the
@@ -327,10 +328,15 @@ static void catch_step(mc_drive_t *d, mc_ab_t i_ab, float vdc)
 static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
 {
     const mc_ip_status_t st = phase_period(d, i_ab, vdc);
+    mc_phase_result_t res;
+    if (st == MC_IP_FAILED && d->seq.step == MC_INIT_STEP2) {
+        mc_phase_result(&d->phase, &res);   /* why it failed: an undecided polarity, a trip */
+        d->tm.pol_z = res.conf;
+        d->tm.pol_verdict = (uint8_t)res.verdict;
+    }
     if (st != MC_IP_DONE) {
         return st;
     }
-    mc_phase_result_t res;
     mc_phase_result(&d->phase, &res);
     if (d->seq.step == MC_INIT_STEP1) {
         d->tm.theta1 = res.theta;
@@ -344,6 +350,8 @@ static mc_ip_status_t pulse_steps(mc_drive_t *d, mc_ab_t i_ab, float vdc)
     d->tm.pol_flip = res.flip;
     d->tm.c1 = res.c1;
     d->tm.c2 = res.c2;
+    d->tm.pol_z = res.conf;
+    d->tm.pol_verdict = (uint8_t)res.verdict;
     mc_phase_stop(&d->phase);
     /* Step III continues from theta2 with the running-state estimator itself (no method switch
      * later): only its state is set here. */

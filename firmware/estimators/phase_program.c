@@ -22,6 +22,8 @@ static void clear_result(mc_phase_result_t *r)
     r->flip = false;
     r->c1 = 0.0f;
     r->c2 = 0.0f;
+    r->conf = 0.0f;
+    r->verdict = 0;
     r->omega = 0.0f;
     r->moving = false;
     r->i_peak = 0.0f;
@@ -123,7 +125,9 @@ static void pol_result(const mc_phase_ws_t *ws, mc_phase_result_t *r)
     r->flip = s->flip;
     r->c1 = s->c1;
     r->c2 = s->c2;
-    r->i_peak = s->prog.i_peak;
+    r->conf = s->z;
+    r->verdict = (int)s->verdict;
+    r->i_peak = s->i_peak;
     r->calls = s->calls;
 }
 

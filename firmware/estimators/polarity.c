@@ -42,6 +42,21 @@ void mc_polarity_cfg_default(mc_polarity_cfg_t *cfg)
     cfg->l_at_end = false;
     cfg->i_rest = 0.3f;
     cfg->i_trip = 0.0f;
+    cfg->z_min = 0.0f;
+    cfg->i_max = 0.0f;
+}
+
+/* (Re)program the runner with one train of half-pulse length n */
+static bool train(mc_polarity_t *s, int n)
+{
+    const mc_polarity_cfg_t *cfg = &s->cfg;
+    mc_ip_run_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, 1);
+    s->n_now = n;
+    s->tries++;
+    mc_ab_t up = vec(cfg->v_pol, s->dir), un = vec(-cfg->v_pol, s->dir);
+    /* Fig 5.7: +n, -2n, +n; zero net volt-seconds, so the current ends where it started */
+    return mc_ip_run_vector(&s->prog, up, n, 0) && mc_ip_run_vector(&s->prog, un, 2 * n, 1) &&
+           mc_ip_run_vector(&s->prog, up, n, 2);
 }
 
 bool mc_polarity_start(mc_polarity_t *s, const mc_polarity_cfg_t *cfg, float theta1)
@@ -50,7 +65,9 @@ bool mc_polarity_start(mc_polarity_t *s, const mc_polarity_cfg_t *cfg, float the
     s->state = ST_FAILED;
     s->theta1 = theta1;
     s->theta2 = mc_wrap_pi(theta1);
-    s->c1 = s->c2 = 0.0f;
+    s->c1 = s->c2 = s->asym = s->z = s->i_peak = 0.0f;
+    s->verdict = MC_POL_ABORTED;
+    s->tries = s->n_now = 0;
     s->flip = false;
     s->n_valid = 0;
     s->v_real = 0.0f;
@@ -58,16 +75,13 @@ bool mc_polarity_start(mc_polarity_t *s, const mc_polarity_cfg_t *cfg, float the
     s->dir = mc_sincos(theta1);
     mc_ip_run_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, 1);
     if (!(cfg->ts > 0.0f) || !(cfg->v_pol > 0.0f) || cfg->n < 1 || cfg->n > MC_POL_N_MAX ||
-        4 * cfg->n > MC_IP_REC_MAX) {
+        4 * cfg->n > MC_IP_REC_MAX || !(cfg->z_min <= 1e6f) || !(cfg->i_max <= 1e6f)) {
         return false;
     }
-    mc_ab_t up = vec(cfg->v_pol, s->dir), un = vec(-cfg->v_pol, s->dir);
-    /* Fig 5.7: +n, -2n, +n; zero net volt-seconds, so the current ends where it started */
-    bool ok = mc_ip_run_vector(&s->prog, up, cfg->n, 0) &&
-              mc_ip_run_vector(&s->prog, un, 2 * cfg->n, 1) &&
-              mc_ip_run_vector(&s->prog, up, cfg->n, 2);
+    bool ok = train(s, cfg->n);
     if (ok) {
         s->state = ST_RUN;
+        s->verdict = MC_POL_PENDING;
     }
     return ok;
 }
@@ -96,8 +110,65 @@ static void fold(mc_polarity_t *s, const mc_ip_rec_t *r)
     if (s->n_valid < MC_IP_REC_MAX) {
         s->i_delta[s->n_valid] = i1;
         s->l_diff[s->n_valid] = ldiff;
+        s->l_even[s->n_valid] = 0.5f * (lp[0] + ln[0]);
+        s->l_odd[s->n_valid] = 0.5f * (lp[0] - ln[0]);
     }
     s->n_valid++;
+}
+
+/* The fit of the header, L(j) = a E(j) + b O(j) by least squares over the stored intervals (two
+ * passes: the residual is summed, not taken as a difference of large sums); b and z = |b| / se(b).
+ * false when the odd profile is absent or collinear with the even one (nothing to decide on). */
+static bool fit_odd(mc_polarity_t *s)
+{
+    const int m = s->n_valid < MC_IP_REC_MAX ? s->n_valid : MC_IP_REC_MAX;
+    float see = 0.0f, soo = 0.0f, seo = 0.0f, sel = 0.0f, sol = 0.0f;
+    for (int j = 0; j < m; ++j) {
+        const float e = s->l_even[j], o = s->l_odd[j], l = s->l_diff[j];
+        see += e * e;
+        soo += o * o;
+        seo += e * o;
+        sel += e * l;
+        sol += o * l;
+    }
+    const float det = see * soo - seo * seo;
+    if (m < 3 || !(det > 1e-6f * see * soo)) {
+        return false;
+    }
+    const float a = (sel * soo - sol * seo) / det, b = (sol * see - sel * seo) / det;
+    float rss = 0.0f;
+    for (int j = 0; j < m; ++j) {
+        const float r = s->l_diff[j] - a * s->l_even[j] - b * s->l_odd[j];
+        rss += r * r;
+    }
+    const float var_b = rss / (float)(m - 2) * see / det;
+    s->asym = b;
+    const float z = var_b > 0.0f ? (b < 0.0f ? -b : b) / sqrtf(var_b) : 1e6f;   /* exact fit */
+    s->z = z < 1e6f ? z : 1e6f;
+    return s->z == s->z;
+}
+
+/* Half-pulse length of the next train: the longest whose flux swing +-v n Ts the model turns into
+ * at most 0.9 i_max either way (the current's rise is the model's saturation, not linear), at
+ * least the first train's; the intervals still free in the store bound it (the fit needs them
+ * all). 0: no further train (full, or no i_max: retries off). */
+static int retry_n(const mc_polarity_t *s)
+{
+    const float im = 0.9f * s->cfg.i_max;
+    if (!(im > 0.0f) || !(s->v_real > 0.0f)) {
+        return 0;
+    }
+    mc_dq_t psi0, psip, psin;
+    float l[4];
+    mc_flux_eval(&s->cfg.model, (mc_dq_t){0.0f, 0.0f}, &psi0, l, NULL);
+    mc_flux_eval(&s->cfg.model, (mc_dq_t){im, 0.0f}, &psip, l, NULL);
+    mc_flux_eval(&s->cfg.model, (mc_dq_t){-im, 0.0f}, &psin, l, NULL);
+    const float up = psip.d - psi0.d, dn = psi0.d - psin.d;
+    float n = floorf((up < dn ? up : dn) / (s->v_real * s->cfg.ts));
+    n = n > (float)s->cfg.n ? n : (float)s->cfg.n;   /* at least the first train's length */
+    int nmax = (MC_IP_REC_MAX - s->n_valid) / 4;
+    nmax = nmax < MC_POL_N_MAX ? nmax : MC_POL_N_MAX;
+    return !(n >= 1.0f) || nmax < 1 ? 0 : n >= (float)nmax ? nmax : (int)n;
 }
 
 mc_ip_status_t mc_polarity_step(mc_polarity_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty)
@@ -114,8 +185,10 @@ mc_ip_status_t mc_polarity_step(mc_polarity_t *s, mc_ab_t i_ab, float vdc, mc_ab
         mc_ab_t u = s->prog.u_line[1];
         s->v_real = sqrtf(u.alpha * u.alpha + u.beta * u.beta);
     }
+    s->i_peak = s->prog.i_peak > s->i_peak ? s->prog.i_peak : s->i_peak;   /* over all trains */
     if (st == MC_IP_FAILED) {
         s->state = ST_FAILED;
+        s->verdict = MC_POL_ABORTED;
         zero_duty(duty);
         return MC_IP_FAILED;
     }
@@ -128,12 +201,27 @@ mc_ip_status_t mc_polarity_step(mc_polarity_t *s, mc_ab_t i_ab, float vdc, mc_ab
     }
     if (s->n_valid < 2 || !(s->c1 >= 0.0f) || !(s->c2 >= 0.0f)) {
         s->state = ST_FAILED;
+        s->verdict = MC_POL_NO_DATA;
         return MC_IP_FAILED;
     }
-    s->flip = s->c1 > s->c2;
+    /* the thesis' (5.7) without the check; with it the sign of the fitted odd share */
+    const bool fitted = s->cfg.z_min > 0.0f && fit_odd(s);
+    s->flip = fitted ? s->asym < 0.0f : s->c1 > s->c2;
     s->theta2 = mc_wrap_pi(s->theta1 + (s->flip ? MC_PI : 0.0f));
-    s->state = ST_DONE;
-    return MC_IP_DONE;
+    if (s->cfg.z_min <= 0.0f || (fitted && s->z >= s->cfg.z_min)) {
+        s->verdict = MC_POL_DECIDED;
+        s->state = ST_DONE;
+        return MC_IP_DONE;
+    }
+    /* not sure: more trains, with longer pulses where the current limit leaves room (more
+     * current, more asymmetry), until the stored intervals are full; all of them in the fit */
+    const int n2 = retry_n(s);
+    if (n2 >= 1 && train(s, n2)) {
+        return MC_IP_RUNNING;
+    }
+    s->verdict = MC_POL_UNDECIDED;
+    s->state = ST_FAILED;
+    return MC_IP_FAILED;
 }
 
 /* ---------------- DVI ---------------- */

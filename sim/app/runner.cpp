@@ -55,6 +55,18 @@ const char* state_name(mc_state_t s)
     return "?";
 }
 
+// Step II's verdict (mc/polarity.h), "" when Step II did not run
+const char* step2_verdict_name(unsigned v)
+{
+    switch (v) {
+    case MC_POL_DECIDED: return "decided";
+    case MC_POL_UNDECIDED: return "undecided";
+    case MC_POL_NO_DATA: return "no_data";
+    case MC_POL_ABORTED: return "aborted";
+    default: return "";
+    }
+}
+
 std::vector<std::string> fault_names(uint32_t f);
 
 std::vector<std::string> fault_names(uint32_t f)
@@ -597,7 +609,9 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
                                      {"recoveries", std::to_string(tm.recoveries)},
                                      {"recovered_from", json_string_array(fault_names(tm.recovered_from))},
                                      {"polarity_checks", std::to_string(tm.polarity_checks)},
-                                     {"polarity_flips", std::to_string(tm.polarity_flips)}};
+                                     {"polarity_flips", std::to_string(tm.polarity_flips)},
+                                     {"step2_confidence", json_number(tm.pol_z)},
+                                     {"step2_verdict", json_string(step2_verdict_name(tm.pol_verdict))}};
     if (fmap) {
         extra.push_back({"fluxmap_outside_s", json_number(map_outside_s)});
         extra.push_back({"fluxmap_first_outside_s", json_number(map_first_out_s)});

@@ -35,6 +35,8 @@ if method == "generalized" and noise > 0.1 and seed % 10 == 0:
     pol = False
 if method == "dvi" and noise > 0.2 and seed % 4 == 0:
     pol = False
+if method == "generalized" and noise == 0.3 and seed % 5 == 0:
+    pol = None   # Step II undecided: a fault, no polarity handed on
 metrics = {
     "current_peak_a": 99.0, "current_limit_a": 20.0,
     "step12_time_s": 0.0106, "step1_err_deg": e1,
@@ -252,7 +254,7 @@ def test_noise_summary(setup):
     runs = [r for r in data["runs"] if r["method"] == "dvi" and r["noise_a"] == 0.25]
     assert [r["seed"] for r in runs] == list(range(1, 21))
     assert [r["theta0_deg"] for r in runs] == data["angles_deg"]
-    assert "| 0.15 A | 90.0 % (18/20) ✗ | 100.0 % (20/20) |" in md
+    assert "| 0.15 A | 90.0 % (18/20), 2 wrong ✗ | 100.0 % (20/20) |" in md
     assert "- generalized: ≥ 99 % correct up to 0.05 A; first below at 0.15 A." in md
     assert "dvi >= 99 % up to 0.15 A" in out
     argv = json.loads((setup[0] / "out_noise" / "dvi" / "noise_0.25" / "seed_00004"
@@ -269,6 +271,24 @@ def test_noise_min_pct_and_no_working_level(setup):
     assert g["limit_a"] is None and g["first_fail_a"] == 0.15
     assert "up to none of the levels" in md
     assert "dvi" not in data["summary"]
+
+
+def test_noise_refused_is_not_wrong(setup):
+    # at 0.3 A the fake refuses seeds 5 and 10 (null): counted apart, and not wrong
+    rc, out, err, data, md = sweep(setup, "noise", "good", "--levels", "0.3", "--trials", "10",
+                                   "--methods", "generalized", "--max-wrong", "0", tag="n3")
+    assert rc == 0, err
+    r = data["summary"]["generalized"]["levels"][0]
+    assert (r["correct"], r["undecided"], r["wrong"]) == (8, 2, 0)
+    assert "| 0.3 A | 80.0 % (8/10), 2 refused ✗ |" in md
+
+
+def test_noise_max_wrong_fails(setup):
+    # at 0.15 A the fake hands on a wrong polarity at seed 10
+    rc, out, err, data, md = sweep(setup, "noise", "good", "--levels", "0.15", "--trials", "10",
+                                   "--methods", "generalized", "--max-wrong", "0", tag="n4")
+    assert rc == 1
+    assert "1 wrong polarities handed on (generalized at 0.15 A), more than --max-wrong 0" in err
 
 
 # ---------------------------------------------------------------------------------------------
@@ -288,6 +308,7 @@ def test_noise_min_pct_and_no_working_level(setup):
     ("table7_1", ["--set", "startup.step1_cost=linear"], "sets it itself"),
     ("noise", ["--methods", "generalized,foo"], "--methods"),
     ("noise", ["--levels", "-0.1"], "--levels"),
+    ("noise", ["--max-wrong", "-1"], "--max-wrong must be 0 or more"),
     ("noise", ["--trials", "0"], "--trials"),
     ("noise", ["--set", "scenario.seed=3"], "sets it itself"),
 ])

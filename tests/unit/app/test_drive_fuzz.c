@@ -120,6 +120,9 @@ static void cfg_sensorless(mc_drive_cfg_t *c)
     assert_true(mc_param_set_choice(p, MC_PARAM_estimator_model, "fluxmap", NULL));
     assert_true(mc_param_set_choice(p, MC_PARAM_startup_init_pos, "three_step", NULL));
     assert_true(mc_param_set(p, MC_PARAM_startup_step3_speed_tol_rpm, 5.73f, NULL));
+    /* the linear map gives Step II nothing to decide on (an init_pos fault with the check):
+     * the thesis' comparison, so that the commands reach RUN */
+    assert_true(mc_param_set(p, MC_PARAM_startup_polarity_z_min, 0.0f, NULL));
     c->est = (mc_est_model_t){.rs = NAN, .ld = (float)LD, .lq = (float)LQ, .psi_pm = (float)PSI, .map = &map_ok};
 }
 

@@ -232,6 +232,10 @@ static void rig_init(rig_t *r, double theta_r)
     p->estimator_model = 0;                 /* constant parameters: the plant is linear */
     p->startup_init_pos = 1;
     p->startup_catch = 0;                  /* the thesis' path; test_catch_first adds the catch */
+    /* the linear map has no l_dd asymmetry: Step II cannot know the polarity, and with its
+     * check (the default) says so (test_step2_undecided); the sequencing tests take the
+     * thesis' (5.7) comparison, a guess here, and hold the angle modulo pi */
+    assert_true(mc_param_set(p, MC_PARAM_startup_polarity_z_min, 0.0f, NULL));
     assert_true(mc_param_set(p, MC_PARAM_startup_step3_speed_tol_rpm, 5.73f, NULL));   /* 3 rad/s electrical */
     r->cfg.est = (mc_est_model_t){.rs = NAN, .ld = (float)LD, .lq = (float)LQ, .psi_pm = 0.34305f, .map = &r->map};
     assert_true(mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep));
@@ -385,12 +389,62 @@ static void test_fault_in_every_step(void **st)
         assert_float_equal(r.d.tm.c1, 0.0f, 0.0f);
         assert_float_equal(r.d.tm.c2, 0.0f, 0.0f);
         assert_false(r.d.tm.pol_flip);
+        assert_float_equal(r.d.tm.pol_z, 0.0f, 0.0f);
+        assert_int_equal(r.d.tm.pol_verdict, 0);
         run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
         run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
         run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
         run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP3, 5000);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
     }
+}
+
+/* The linear map has no l_dd asymmetry: with the check on (the default startup.polarity_z_min)
+ * Step II cannot decide. More trains follow (until the stored intervals are full, the peak kept
+ * within the current limit), then an init_pos fault with the verdict "undecided" and the outputs
+ * off, instead of handing a guess to Step III. The same rig with the check off decides (a guess)
+ * and reaches Step III: the fault is the check's. */
+static void test_step2_undecided(void **st)
+{
+    (void)st;
+    static rig_t r;
+    mc_drive_cfg_t def;
+    mc_drive_cfg_default(&def);
+    assert_true(def.p.startup_polarity_z_min > 0.0f);
+    rig_init(&r, 0.7);
+    r.cfg.p.startup_polarity_z_min = def.p.startup_polarity_z_min;
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    command(&r, true);
+    step(&r, 1);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP2);
+    double peak = 0.0;
+    int n = 0;
+    while (mc_drive_state(&r.d) == MC_STATE_INIT_POS && r.d.seq.step == MC_INIT_STEP2 && n < 1000) {
+        step(&r, 1);
+        peak = fmax(peak, hypot(r.id, r.iq));
+        ++n;
+    }
+    print_message("Step II on a symmetric profile: fault after %d periods, peak %.1f A, z %.2f\n", n,
+                  peak, (double)r.d.tm.pol_z);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_INIT_POS);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    assert_int_equal(r.d.tm.pol_verdict, MC_POL_UNDECIDED);
+    assert_true(r.d.tm.pol_z < def.p.startup_polarity_z_min);
+    /* more than one train (16 periods), all of the store's 64 intervals at most (+ delays) */
+    assert_true(n > 20 && n <= MC_IP_REC_MAX + 8);
+    assert_true(peak <= 1.1 * (double)r.cfg.p.control_i_max_a);
+    /* the control: the same start without the check goes on to Step III */
+    rig_init(&r, 0.7);
+    command(&r, true);
+    step(&r, 1);
+    run_until_leaves(&r, MC_STATE_OFFSET_CAL, MC_INIT_NONE, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP1, 100);
+    run_until_leaves(&r, MC_STATE_INIT_POS, MC_INIT_STEP2, 100);
+    assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+    assert_int_equal(mc_drive_faults(&r.d), 0u);
 }
 
 /* Disable/enable at many points of the sequence: never outputs on outside INIT_POS/RUN, and every
@@ -711,6 +765,7 @@ int main(void)
         cmocka_unit_test(test_catch_first),
         cmocka_unit_test(test_drive_full_path),
         cmocka_unit_test(test_fault_in_every_step),
+        cmocka_unit_test(test_step2_undecided),
         cmocka_unit_test(test_repeated_enable_disable),
         cmocka_unit_test(test_step3_timeout),
         cmocka_unit_test(test_step1_current_limit),

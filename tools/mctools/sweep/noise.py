@@ -4,6 +4,7 @@ many seeded trials with random initial angles, per current-noise level."""
 from __future__ import annotations
 
 import random
+import sys
 from pathlib import Path
 
 from mctools.sweep.common import (
@@ -54,15 +55,18 @@ def noise_markdown(summary: dict, args, scenario, methods, levels) -> str:
     lines = ["### Step II polarity decision vs current noise (Fig. 7.4)", "",
              f"`{cmd}`: per method and level {args.trials} trials, scenario.seed = 1..{args.trials}, "
              f"initial angles uniform in [0, 360)° from seed {args.angle_seed} (the same angles for "
-             f"every level and method). Percentage of runs with `polarity_correct` true (a null "
-             f"or failed run counts as wrong).", "",
+             f"every level and method). Percentage of runs with `polarity_correct` true; "
+             f"\"refused\": no polarity handed on (Step II undecided, a fault with the reason, "
+             f"or a failed run), \"wrong\": a wrong polarity handed on.", "",
              "| noise rms | " + " | ".join(methods) + " |", "|---|" + "---|" * len(methods)]
     for i, lv in enumerate(levels):
         cells = []
         for method in methods:
             r = summary[method]["levels"][i]
             mark = "" if r["pct"] is not None and r["pct"] >= args.min_pct else " ✗"
-            cells.append(f"{r['pct']:.1f} % ({r['correct']}/{r['trials']}){mark}"
+            extra = (f", {r['undecided']} refused" if r["undecided"] else "") + \
+                (f", {r['wrong']} wrong" if r["wrong"] else "")
+            cells.append(f"{r['pct']:.1f} % ({r['correct']}/{r['trials']}){extra}{mark}"
                          if r["pct"] is not None else DASH)
         lines.append(f"| {lv:g} A | " + " | ".join(cells) + " |")
     lines.append("")
@@ -89,6 +93,8 @@ def cmd_noise(args) -> int:
         raise SweepInputError("--trials must be in 1..100000")
     if not 0.0 < args.min_pct <= 100.0:
         raise SweepInputError("--min-pct must be in (0, 100]")
+    if args.max_wrong is not None and args.max_wrong < 0:
+        raise SweepInputError("--max-wrong must be 0 or more")
     args.sets_ = parse_sets(args.set, ("mechanics.theta0_deg", "scenario.seed",
                                        "sensors.i_noise_rms_a", "startup.polarity"))
     out = Path(args.out or "out/sweep/noise")
@@ -119,7 +125,15 @@ def cmd_noise(args) -> int:
           + "; ".join(f"{m} >= {args.min_pct:g} % up to "
                       + (f"{summary[m]['limit_a']:g} A" if summary[m]["limit_a"] is not None
                          else "(none)") for m in methods))
-    return 1 if failed else 0
+    if failed:
+        return 1
+    if args.max_wrong is not None:
+        worst = max((r["wrong"], m, r["noise_a"]) for m in methods for r in summary[m]["levels"])
+        if worst[0] > args.max_wrong:
+            print(f"sweep noise: {worst[0]} wrong polarities handed on ({worst[1]} at "
+                  f"{worst[2]:g} A), more than --max-wrong {args.max_wrong}", file=sys.stderr)
+            return 1
+    return 0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -137,6 +151,9 @@ def add_parser(ssub) -> None:
                    help="Step II methods (default generalized,dvi)")
     n.add_argument("--angle-seed", type=int, default=1, metavar="S",
                    help="seed of the random initial angles (default 1)")
+    n.add_argument("--max-wrong", type=int, default=None, metavar="N",
+                   help="exit 1 if a method hands on more than N wrong polarities at a level "
+                        "(a refusal is not wrong)")
     n.add_argument("--min-pct", type=float, default=99.0, metavar="P",
                    help="a level works when at least P %% of the trials are right (default 99)")
     n.set_defaults(func=cmd_noise)

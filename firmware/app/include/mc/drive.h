@@ -85,6 +85,8 @@ typedef struct {
     float    theta1, theta2;     /* Step I (mod pi) and Step II results [rad] */
     float    c1, c2;             /* (5.7) costs, or DVI peak currents        */
     bool     pol_flip;           /* Step II added pi                         */
+    uint8_t  pol_verdict;        /* Step II: mc_pol_verdict_t (mc/polarity.h) */
+    float    pol_z;              /* Step II confidence |b| / se(b)           */
     float    duty[3];
     bool     u_limited, fw_active;
     uint32_t cmd_rejected;       /* commands refused at the hand-over        */

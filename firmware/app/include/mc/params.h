@@ -64,7 +64,7 @@ typedef struct {
     const char *name;        /* "group.key", stable: scenario key, tuning name, docs        */
     const char *unit;
     const char *choices;     /* ENUM: "a|b|c", the stored value is the position; else ""    */
-    const char *doc;
+    const char *doc;         /* one line for the docs and tools ("" in a target image)      */
     uint16_t offset;         /* of the member in mc_params_t                                */
     uint8_t type;            /* mc_param_type_t   */
     uint8_t group;           /* mc_param_group_t  */

@@ -70,6 +70,8 @@ typedef struct {
     float theta_aux;  /* secondary angle [rad] (table above) */
     bool flip;        /* Step II: pi was added to theta_in */
     float c1, c2;     /* decision quantities (table above) */
+    float conf;       /* Step II generalized: confidence z (mc/polarity.h); others 0 */
+    int verdict;      /* Step II generalized: mc_pol_verdict_t; others 0 */
     float omega;      /* catch: the speed [rad/s el] (others: 0) */
     bool moving;      /* catch: the rotor turns (false: standing, go on with the standstill start) */
     float i_peak;     /* largest |i_ab| sampled during the program [A] */

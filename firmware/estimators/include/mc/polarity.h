@@ -7,12 +7,32 @@
  *    n periods (reset by +V n); the pulse with the larger peak |i_delta| points north.
  * The pulse vector is V in the delta direction, limited by the hexagon (mc_svpwm scales it onto
  * the boundary: the largest magnitude <= V available in that direction, e.g. 176.8 V at 41.5 deg
- * for 300 V); the realised vector is what enters ubar. Calling convention: mc/initpos.h. */
+ * for 300 V); the realised vector is what enters ubar. Calling convention: mc/initpos.h.
+ *
+ * Confidence (an addition to (5.7), with z_min > 0): the measured L(j) is fitted by least
+ * squares as a E(j) + b O(j), E and O the even and odd parts of the model's profile,
+ * (l_dd(+i) +- l_dd(-i)) / 2. b = +1 is the profile as assumed (delta points north), b = -1 the
+ * mirrored one (flip). The even part absorbs what both hypotheses share: a scale error of the
+ * model's inductance, the larger inductance seen off the d axis when Step I is a few degrees
+ * off. The decision is the sign of b, its confidence z = |b| / se(b) (a t statistic). A
+ * symmetric profile (O = 0), a noisy measurement or a profile the machine does not show give a
+ * small z. Below z_min further trains follow, with longer pulses where the limit allows (more
+ * current, where the saturation asymmetry is larger; the model's flux keeps the peak below
+ * 0.9 i_max), until the MC_IP_REC_MAX stored intervals are used; still below: FAILED with
+ * verdict UNDECIDED, never a guess. */
 #ifndef MC_POLARITY_H
 #define MC_POLARITY_H
 #include "mc/initpos.h"
 
 #define MC_POL_N_MAX 16   /* upper bound of the pulse length n [periods]; 4n <= MC_IP_REC_MAX */
+
+typedef enum {
+    MC_POL_PENDING = 0,  /* running */
+    MC_POL_DECIDED,      /* theta2 valid, z >= z_min */
+    MC_POL_UNDECIDED,    /* z < z_min after the strongest train the current limit allows */
+    MC_POL_NO_DATA,      /* fewer than 2 usable intervals (no current change) */
+    MC_POL_ABORTED       /* the pulse program failed: |i| > i_trip, vdc <= 0, non-finite current */
+} mc_pol_verdict_t;
 
 typedef struct {
     float ts, rs;            /* [s], [ohm] */
@@ -23,6 +43,8 @@ typedef struct {
                                 the interval's mean current, where the chord slope (5.6) of a
                                 smooth psi(i) is closest to the derivative */
     float i_rest, i_trip;    /* [A], see mc_ip_prog_t (no gap in this program: i_rest unused) */
+    float z_min;             /* confidence a decision needs (<= 0: c1 vs c2 alone, the thesis) */
+    float i_max;             /* [A] a retry's longer pulses aim at 0.9 x this peak (<= 0: no retry) */
 } mc_polarity_cfg_t;
 
 typedef struct {
@@ -34,14 +56,21 @@ typedef struct {
     float theta1;            /* input [rad] */
     float theta2;            /* [-pi, pi) */
     float c1, c2;            /* (5.7) [H^2] */
+    float asym;              /* fitted share b of the model's odd profile (above; z_min > 0) */
+    float z;                 /* confidence |b| / se(b) (above), >= 0 */
+    mc_pol_verdict_t verdict;
+    int tries, n_now;        /* trains run (1, more after retries); half-pulse length of the last */
     bool flip;               /* c1 > c2: pi added */
     int n_valid;             /* intervals used in (5.7) */
     float v_real;            /* realised |V| of the first pulse [V] */
+    float i_peak;            /* largest |i_ab| sampled over all trains [A] */
     float i_delta[MC_IP_REC_MAX], l_diff[MC_IP_REC_MAX];  /* (i_delta(j), L_delta^diff(j)) */
+    float l_even[MC_IP_REC_MAX], l_odd[MC_IP_REC_MAX];    /* the model's E(j), O(j) [H] */
     int calls;
 } mc_polarity_t;
 
-/* thesis defaults: v_pol 200 V, n 4, l at the mean current, i_rest 0.3 A; ts, rs, model unset */
+/* thesis defaults: v_pol 200 V, n 4, l at the mean current, i_rest 0.3 A, no confidence check
+ * (z_min 0, no retry); ts, rs, model unset */
 void mc_polarity_cfg_default(mc_polarity_cfg_t *cfg);
 bool mc_polarity_start(mc_polarity_t *s, const mc_polarity_cfg_t *cfg, float theta1);
 mc_ip_status_t mc_polarity_step(mc_polarity_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty);
