@@ -194,6 +194,9 @@ def test_zoo_command(fake, tmp_path):
     b = cells[("brodatzki-35kw", "demo")]
     assert not b["passed"] and b["text"] == "**FAIL** loss_of_lock at 1.23 s; peak 14.5 A = 1.45 × limit"
     assert cells[("brodatzki-35kw", "demo_low_fs")]["passed"]
+    run0 = cells[("brodatzki-35kw", "demo_low_fs")]["runs"][0]   # enough to run it again
+    assert run0["sets"][0] == 'machine.preset="brodatzki-35kw"' and "control.ts_s=0.0005" in run0["sets"]
+    assert run0["scenario"].endswith("brodatzki-35kw/demo.toml")
     assert cells[("brodatzki-35kw", "start")]["text"].startswith("**7/8**; polarity wrong at 90°")
     table = md.read_text()
     rows = [ln for ln in table.splitlines() if ln.startswith("| sun2016") or ln.startswith("| brodatzki")]

@@ -283,6 +283,11 @@ def judge_run(r: Run, need_windows: bool) -> tuple[bool, list[str], dict]:
     return not reasons, reasons, nums
 
 
+def _where(r: Run) -> dict:
+    """How to run it again: the scenario, the --set keys and the run folder."""
+    return {"scenario": str(r.scenario), "sets": list(r.sets), "dir": str(r.dir)}
+
+
 def judge_start(runs: list[Run]) -> Cell:
     """8 of 8: polarity right, no fault, in RUN, |init error (mean over 20 ms)| <= 3 deg, current."""
     wrong, bad_err, faults, failed, not_run, over = [], [], {}, [], [], []
@@ -315,7 +320,7 @@ def judge_start(runs: list[Run]) -> Cell:
                 if pk > PEAK_FACTOR * lim:
                     over.append(a)
         per.append({"angle": a, "passed": ok, "polarity_correct": pol, "init_pos_err_mean_deg": err,
-                    **nums})
+                    **nums, **_where(r)})
     n_ok = sum(1 for p in per if p["passed"])
     if n_ok == len(runs):
         text = f"pass {n_ok}/{len(runs)}, init ≤ {worst_err:.1f}°, peak {worst_pk:.2f}×"
@@ -345,7 +350,7 @@ def judge_cell(test: str, runs: list[Run]) -> Cell:
     for r in runs:
         ok, reasons, nums = judge_run(r, need_windows=True)
         all_ok &= ok
-        per.append({"label": r.label, "passed": ok, "reasons": reasons, **nums})
+        per.append({"label": r.label, "passed": ok, "reasons": reasons, **nums, **_where(r)})
         pre = f"{r.label}: " if len(runs) > 1 else ""
         if ok:
             pk, lim = nums["current_peak_a"], nums["current_limit_a"]
