@@ -19,7 +19,7 @@ from mctools.errors import EXIT_BAD_INPUT, InputError
 
 REPO = Path(__file__).resolve().parents[2]
 SUBCOMMANDS = ["plot", "preset", "report", "fit-adq", "sweep", "fly-current"]
-SWEEPS = ["angles", "table7_1", "noise", "seeds", "envelope"]
+SWEEPS = ["angles", "table7_1", "noise", "seeds", "envelope", "zoo"]
 
 
 def subparsers(parser: argparse.ArgumentParser) -> argparse._SubParsersAction:

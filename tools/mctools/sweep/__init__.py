@@ -22,9 +22,9 @@ what they share (argument checks, the mcsim runs, the numbers, the outputs).
 
 from __future__ import annotations
 
-from mctools.sweep import angles, envelope, noise, seeds, table7_1
+from mctools.sweep import angles, envelope, noise, seeds, table7_1, zoo
 
-SWEEPS = (angles, table7_1, noise, seeds, envelope)  # in the order `mctools sweep --help` lists them
+SWEEPS = (angles, table7_1, noise, seeds, envelope, zoo)  # in the order `mctools sweep --help` lists them
 
 
 def add_parser(sub) -> None:

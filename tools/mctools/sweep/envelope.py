@@ -210,19 +210,20 @@ def envelope_markdown(rows: list[EnvelopeError], scen_names: list[str], cells: d
     return "\n".join(lines)
 
 
-def replace_doc_section(doc: Path, section: str) -> None:
-    """Puts `section` between the envelope markers of `doc`, replacing what is there, or
-    appends the markers and the section (a new file holds only them)."""
-    block = f"{DOC_BEGIN}\n{section.strip()}\n{DOC_END}"
+def replace_doc_section(doc: Path, section: str, markers: tuple[str, str] = (DOC_BEGIN, DOC_END)) -> None:
+    """Puts `section` between the markers (default: the envelope's) of `doc`, replacing what is
+    there, or appends the markers and the section (a new file holds only them)."""
+    begin, end = markers
+    block = f"{begin}\n{section.strip()}\n{end}"
     text = doc.read_text(encoding="utf-8") if doc.is_file() else ""
-    if DOC_BEGIN in text:
-        a = text.index(DOC_BEGIN)
-        b = text.find(DOC_END, a)
+    if begin in text:
+        a = text.index(begin)
+        b = text.find(end, a)
         if b < 0:
-            raise SweepInputError(f"{doc}: {DOC_BEGIN} without {DOC_END}")
-        text = text[:a] + block + text[b + len(DOC_END):]
-    elif DOC_END in text:
-        raise SweepInputError(f"{doc}: {DOC_END} without {DOC_BEGIN}")
+            raise SweepInputError(f"{doc}: {begin} without {end}")
+        text = text[:a] + block + text[b + len(end):]
+    elif end in text:
+        raise SweepInputError(f"{doc}: {end} without {begin}")
     else:
         text = (text.rstrip("\n") + "\n\n" if text.strip() else "") + block + "\n"
     doc.parent.mkdir(parents=True, exist_ok=True)

@@ -1,0 +1,225 @@
+"""`mctools sweep zoo`: the scaled scenarios, the pass / fail rules of a cell, and the command
+against a fake mcsim (no simulator runs here)."""
+
+import contextlib
+import io
+import json
+import tomllib
+
+import pytest
+
+from fakes import write_fake_mcsim
+from mctools import cli
+from mctools.sweep.zoo import (TESTS, Motor, Run, build_runs, demo_toml, judge_cell, judge_start,
+                               motor_info, torque_toml)
+
+# Stands in for mcsim: brodatzki trips loss_of_lock in the demo and gets the polarity wrong at
+# 90 deg; the fly runs at negative speed exceed the current limit; a dyno speed of exactly 0 is
+# refused like a bad key (exit 2); everything else passes.
+FAKE_BODY = r'''
+sets = {k: tomllib.loads("x = " + v)["x"] for k, v in sets.items()}
+out.mkdir(parents=True, exist_ok=True)
+(out / "argv.json").write_text(json.dumps(a))
+motor = sets.get("machine.preset", "")
+if scenario == "demo" or scenario == "torque_steps":
+    motor = tomllib.loads((pathlib.Path(a[1])).read_text())["machine"]["preset"]
+if sets.get("mechanics.dyno_speed_rpm") == 0.0:
+    print("mcsim: error: key 'mechanics.dyno_speed_rpm' = 0: out of range", file=sys.stderr)
+    sys.exit(2)
+m = {"faults": [], "fault_time_s": None, "current_peak_a": 9.0, "current_limit_a": 10.0,
+     "angle_err_steady_max_deg": -1.2, "angle_err_max_deg": 4.0, "final_state": "RUN"}
+if scenario == "initpos_sweep":
+    th = sets["mechanics.theta0_deg"]
+    pol = not (motor == "brodatzki-35kw" and th == 90.0)
+    m.update(polarity_correct=pol, init_pos_err_mean_deg=0.7 if pol else 179.0,
+             angle_err_steady_max_deg=None)
+if scenario == "demo" and motor == "brodatzki-35kw" and "control.ts_s" not in sets:
+    m.update(faults=["loss_of_lock"], fault_time_s=1.23, angle_err_steady_max_deg=None,
+             current_peak_a=14.5, final_state="FAULT")
+if scenario == "catch_dyno" and sets["mechanics.dyno_speed_rpm"] < 0:
+    m.update(current_peak_a=12.0)
+(out / "metrics.json").write_text(json.dumps(m))
+'''
+
+
+def run_cli(*argv):
+    o, e = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
+        rc = cli.main(["sweep", "zoo", *argv])
+    return rc, o.getvalue(), e.getvalue()
+
+
+@pytest.fixture(scope="module")
+def fake(tmp_path_factory):
+    root = tmp_path_factory.mktemp("zoo")
+    return write_fake_mcsim(root / "fake_mcsim.py", FAKE_BODY), root
+
+
+THESIS = Motor("sun2016-ipm-5kw", 890.0, 29.7, 13.29, 10000.0, 1.23)
+
+
+# ---------------------------------------------------------------------------------------------
+# scaling
+
+def test_base_speed_from_the_preset():
+    m = motor_info("sun2016-ipm-5kw")
+    assert m.base_rpm == pytest.approx(890.0, abs=1.0)   # `mctools preset`: MTPA rated, incl. Rs
+    assert m.torque_nm == 29.7 and m.f_sample_hz == 10000.0
+    assert m.lq_over_ld == pytest.approx(12.9 / 10.5, rel=0.02)
+
+
+def test_demo_scaled_to_the_motor():
+    d = tomllib.loads(demo_toml(THESIS, short=False))
+    assert d["machine"]["preset"] == "sun2016-ipm-5kw"
+    # the thesis motor gets the shipped demo's speeds and load back
+    assert [v for _, v in d["control"]["speed_ref_rpm"]] == [0.0, 0.0, 100.0, 100.0, 600.0, 600.0,
+                                                            -200.0]
+    assert d["mechanics"]["load_torque_nm"][-1] == [0.3, 14.85]
+    assert [w["name"] for w in d["metrics"]["window"]] == ["standstill_loaded", "plus_lo", "plus_hi",
+                                                          "minus"]
+    big = Motor("x", 3000.0, 80.0, 160.0, 8000.0, 4.0)
+    d = tomllib.loads(demo_toml(big, short=False))
+    assert [v for _, v in d["control"]["speed_ref_rpm"]][-3:] == [pytest.approx(2022.5, abs=0.1),
+                                                                 pytest.approx(2022.5, abs=0.1),
+                                                                 pytest.approx(-674.2, abs=0.1)]
+    assert d["mechanics"]["load_torque_nm"][-1][1] == 40.0
+    short = tomllib.loads(demo_toml(big, short=True))
+    assert short["scenario"]["duration_s"] == 0.5
+    assert [w["name"] for w in short["metrics"]["window"]] == ["standstill_loaded"]
+
+
+def test_torque_steps_scaled():
+    d = tomllib.loads(torque_toml(THESIS, short=False))
+    assert d["control"]["mode"] == "torque" and d["startup"]["init_pos"] == "three_step"
+    assert d["mechanics"]["dyno_speed_rpm"][-1] == [0.4, 89.0]
+    t = [v for _, v in d["control"]["torque_ref_nm"]]
+    assert max(t) == pytest.approx(0.76 * 29.7) and min(t) == pytest.approx(-0.76 * 29.7)
+
+
+def test_runs_per_motor(tmp_path):
+    runs = build_runs([THESIS], tmp_path, (0.0, 45.0), short=False)
+    by = {}
+    for r in runs:
+        by.setdefault(r.test, []).append(r)
+    assert sorted(by) == sorted(k for k, _ in TESTS)
+    assert len(by["start"]) == 2 and all(len(by[f"fly{s}"]) == 2 for s in (5, 50, 100))
+    fly = sorted(dict(s.split("=", 1) for s in r.sets)["mechanics.dyno_speed_rpm"]
+                 for r in by["fly100"])
+    assert fly == ["-890.0", "890.0"]
+    low = dict(s.split("=", 1) for s in by["demo_low_fs"][0].sets)
+    assert low["control.ts_s"] == "0.0005" and by["demo_low_fs"][0].scenario == by["demo"][0].scenario
+    for r in runs:   # default drive keys: only the preset and scenario-level keys
+        keys = {s.split("=", 1)[0] for s in r.sets}
+        assert keys <= {"machine.preset", "output.trace", "mechanics.theta0_deg",
+                        "mechanics.dyno_speed_rpm", "control.torque_ref_nm", "control.ts_s"}
+
+
+# ---------------------------------------------------------------------------------------------
+# cells
+
+def mk(test, metrics, label="x", error=None):
+    return Run("m", test, label, None, (), None, metrics=metrics, error=error)
+
+
+def ok_metrics(**kw):
+    m = {"faults": [], "fault_time_s": None, "current_peak_a": 9.0, "current_limit_a": 10.0,
+         "angle_err_steady_max_deg": 1.0, "final_state": "RUN"}
+    m.update(kw)
+    return m
+
+
+def test_cell_rules():
+    c = judge_cell("demo", [mk("demo", ok_metrics())])
+    assert c.passed and c.text == "pass 1.0°, peak 0.90×"
+    # the 3 deg and 1.1 x limit boundaries
+    assert judge_cell("demo", [mk("demo", ok_metrics(angle_err_steady_max_deg=-3.0,
+                                                     current_peak_a=11.0))]).passed
+    c = judge_cell("demo", [mk("demo", ok_metrics(angle_err_steady_max_deg=-3.05))])
+    assert not c.passed and c.text == "**FAIL** steady 3.0°"
+    c = judge_cell("demo", [mk("demo", ok_metrics(current_peak_a=11.2))])
+    assert not c.passed and "peak 11.2 A = 1.12 × limit" in c.text
+    c = judge_cell("demo", [mk("demo", ok_metrics(faults=["loss_of_lock", "overcurrent"],
+                                                  fault_time_s=0.5,
+                                                  angle_err_steady_max_deg=None))])
+    assert c.text == "**FAIL** loss_of_lock, overcurrent at 0.50 s"
+    # no fault, but the windows never ran
+    c = judge_cell("demo", [mk("demo", ok_metrics(angle_err_steady_max_deg=None))])
+    assert not c.passed and "no steady window ran" in c.text
+    # a refused run is a failing cell with mcsim's reason
+    r = mk("demo", None, error="run failed (exit 2)")
+    r.log_tail = "mcsim: error: key 'startup.v_pol_v' = 0.12: out of range"
+    c = judge_cell("demo", [r])
+    assert not c.passed and "exit 2" in c.text and "v_pol_v" in c.text
+    # two runs in one cell: each labelled, one failing fails the cell
+    c = judge_cell("fly5", [mk("fly5", ok_metrics(), "+10 rpm"),
+                            mk("fly5", ok_metrics(faults=["tracking"], fault_time_s=0.1),
+                               "-10 rpm")])
+    assert not c.passed and c.text.startswith("**FAIL** +10 rpm: 1.0°") and "-10 rpm: tracking" in c.text
+
+
+def test_start_cell():
+    def st(a, pol=True, err=0.5, **kw):
+        return mk("start", ok_metrics(polarity_correct=pol, init_pos_err_mean_deg=err,
+                                      angle_err_steady_max_deg=None, **kw), f"theta0={a}")
+    c = judge_start([st(a) for a in (0, 45, 90)])
+    assert c.passed and c.text == "pass 3/3, init ≤ 0.5°, peak 0.90×"
+    c = judge_start([st(0), st(45, pol=False, err=178.0), st(90, err=4.0),
+                     st(135, faults=["overcurrent"], final_state="FAULT", current_peak_a=20.0)])
+    assert not c.passed
+    assert c.text == ("**1/4**; polarity wrong at 45°; init error > 3° at 90°; overcurrent at 135°; "
+                      "peak up to 2.00 × limit (135°)")
+    c = judge_start([st(0, final_state="INIT_POS"), st(45, pol=None, err=None)])
+    assert "polarity wrong at 45°" in c.text and "ended in 0: INIT_POS" in c.text
+
+
+# ---------------------------------------------------------------------------------------------
+# the command
+
+def test_zoo_command(fake, tmp_path):
+    mcsim, _ = fake
+    md, js, doc = tmp_path / "z.md", tmp_path / "z.json", tmp_path / "zoo.md"
+    doc.write_text("# Zoo\n\nintro\n")
+    rc, o, e = run_cli("--motors", "sun2016-ipm-5kw,brodatzki-35kw", "--mcsim", str(mcsim),
+                       "--out", str(tmp_path / "out"), "--md", str(md), "--json", str(js),
+                       "--doc", str(doc), "--jobs", "2")
+    assert rc == 0, e   # failing cells are findings, not a tool error
+    assert "[34/34]" in e   # progress: 17 runs per motor
+    data = json.loads(js.read_text())
+    cells = {(c["motor"], c["test"]): c for c in data["cells"]}
+    assert len(cells) == 14
+    assert all(cells[("sun2016-ipm-5kw", k)]["passed"] for k, _ in TESTS
+               if k not in ("fly5", "fly50", "fly100"))
+    assert not cells[("sun2016-ipm-5kw", "fly5")]["passed"]   # the negative speed's current
+    assert "peak 12 A = 1.20 × limit" in cells[("sun2016-ipm-5kw", "fly5")]["text"]
+    b = cells[("brodatzki-35kw", "demo")]
+    assert not b["passed"] and b["text"] == "**FAIL** loss_of_lock at 1.23 s; peak 14.5 A = 1.45 × limit"
+    assert cells[("brodatzki-35kw", "demo_low_fs")]["passed"]
+    run0 = cells[("brodatzki-35kw", "demo_low_fs")]["runs"][0]   # enough to run it again
+    assert run0["sets"][0] == 'machine.preset="brodatzki-35kw"' and "control.ts_s=0.0005" in run0["sets"]
+    assert run0["scenario"].endswith("brodatzki-35kw/demo.toml")
+    assert cells[("brodatzki-35kw", "start")]["text"].startswith("**7/8**; polarity wrong at 90°")
+    table = md.read_text()
+    rows = [ln for ln in table.splitlines() if ln.startswith("| sun2016") or ln.startswith("| brodatzki")]
+    assert len(rows) == 4 and all(r.count(" | ") == len(TESTS) for r in rows if "**" in r or "pass" in r)
+    assert "Cells: 6 of 14 pass." in table
+    assert "sweep zoo: 2 motors x 7 tests, 6 pass, 8 fail" in o
+    text = doc.read_text()
+    assert text.startswith("# Zoo\n\nintro\n\n<!-- zoo:begin -->\n") and text.endswith("<!-- zoo:end -->\n")
+    # the generated demo carries the motor and its scaled speeds
+    demo = tomllib.loads((tmp_path / "out" / "brodatzki-35kw" / "demo.toml").read_text())
+    assert demo["machine"]["preset"] == "brodatzki-35kw"
+    # --strict: the failing cells make it exit 1
+    rc, o, e = run_cli("--motors", "brodatzki-35kw", "--angles", "0", "--mcsim", str(mcsim),
+                       "--out", str(tmp_path / "out2"), "--strict")
+    assert rc == 1
+
+
+def test_zoo_bad_input(fake, tmp_path):
+    mcsim, _ = fake
+    rc, o, e = run_cli("--motors", "no-such-motor-xyz", "--mcsim", str(mcsim), "--out", str(tmp_path))
+    assert rc == 2 and "no-such-motor-xyz" in e
+    rc, o, e = run_cli("--motors", "sun2016-ipm-5kw", "--angles", "0,x", "--mcsim", str(mcsim),
+                       "--out", str(tmp_path))
+    assert rc == 2 and "--angles" in e
+    rc, o, e = run_cli("--motors", "sun2016-ipm-5kw", "--jobs", "0", "--mcsim", str(mcsim))
+    assert rc == 2
