@@ -130,14 +130,14 @@ static void test_geometry(void **state)
         assert_false(hal_host_nvm_init_geom(&bad, m, 0x7E0000u, 3u));   /* above the model's capacity */
         return;
     }
-    /* 2 blocks a slot: 8192 - 40 bytes of records; 780 of parameters, 56 + 8 per map point */
+    /* 2 blocks a slot: 8192 - 40 bytes of records; 788 of parameters, 56 + 8 per map point */
     assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);
     assert_int_equal(g.slot_first[0], 0u);
     assert_int_equal(g.slot_first[1], 2u);
     assert_int_equal(g.slot_blocks, 2u);
     assert_int_equal(g.payload_max, 8152u);
     assert_int_equal(g.map_cells_max, (8152u - MC_STORE_PARAMS_MAX - 56u) / 8u);
-    assert_int_equal(g.map_cells_max, 914u);
+    assert_int_equal(g.map_cells_max, 913u);
     assert_int_equal(mc_pstore_geometry(NULL, &g), MC_PSTORE_BAD_ARGS);
     assert_string_equal(mc_pstore_status_name(MC_PSTORE_FELL_BACK), "fell_back");
     assert_string_equal(mc_pstore_status_name(MC_PSTORE_MAP_DROPPED), "map_dropped");
@@ -510,14 +510,14 @@ static void test_defaults_head_with_records_refused(void **state)
 }
 
 /* The smallest slot the store takes holds the parameter record and the model without a map
- * (780 + 32 bytes after the 40-byte header and marker): a device of two 832-byte sectors
- * (792 bytes of payload a slot) is refused before anything is written; one of two 856-byte
- * sectors (816) takes a set, without its map, and loads it back. */
+ * (788 + 32 bytes after the 40-byte header and marker): a device of two 832-byte sectors
+ * (792 bytes of payload a slot) is refused before anything is written; one of two 864-byte
+ * sectors (824) takes a set, without its map, and loads it back. */
 static void test_slot_too_small_refused(void **state)
 {
     (void)state;
-    static const hal_nvm_region_t small_r[1] = {{0u, 832u, 2u, 0u}}, fits_r[1] = {{0u, 856u, 2u, 0u}};
-    static const hal_nvm_geometry_t small = {2u * 832u, 8u, 1u, small_r}, fits = {2u * 856u, 8u, 1u, fits_r};
+    static const hal_nvm_region_t small_r[1] = {{0u, 832u, 2u, 0u}}, fits_r[1] = {{0u, 864u, 2u, 0u}};
+    static const hal_nvm_geometry_t small = {2u * 832u, 8u, 1u, small_r}, fits = {2u * 864u, 8u, 1u, fits_r};
     mc_pstore_geom_t g;
     mc_pstore_info_t info;
     mc_drive_cfg_t got;
