@@ -155,7 +155,7 @@ X(protection, lock_jump_deg,          F32, "deg",  1,     180,    30,       NONE
 X(protection, lock_jump_time_s,       F32, "s", 0,     1,      0.002f,   NONE,    PROTECTION, STANDSTILL, MC_NO_CHOICES, "... for this long: loss-of-lock fault (sensorless only; an estimate that runs away within milliseconds, faster than the averaged checks). 0: off.") \
 X(protection, accel_time_s,           F32, "s",     0,     1,      0.03f,    NONE,    PROTECTION, STANDSTILL, MC_NO_CHOICES, "Torque plausibility (speed mode): the speed loop asks for at least half its torque limit and the speed estimate (its derivative low-passed at 20 Hz) accelerates the other way at more than half of what that torque would give on motor.inertia_kgm2, for this long: fault torque_plausibility (a wrong angle; also an overload far beyond the limit). 0: off.") \
 X(control, u_loop,                    F32, "1",       1,     1.1547f, 1.1547f, NONE,    CONTROL, RUNTIME, MC_NO_CHOICES, "Radius of the voltage circle the current loop may ask of the modulator, share of Vdc/sqrt(3): 1 = linear SVPWM only; above 1 the request may reach the hexagon's corners (2/sqrt(3) = 1.1547) and mc_svpwm scales it into the hexagon keeping its direction (overmodulation, mc/svpwm.h (2.14a)).") \
-X(estimator, l_adapt_s,               F32, "s",       0,     10,     0.004f,   L_ADAPT, ESTIMATOR, STANDSTILL, MC_NO_CHOICES, "Time constant of UNOP's inductance-scale adaptation while injecting; 0: off (default: 2 injection periods).")
+X(estimator, l_adapt_s,               F32, "s",       0,     10,     0.01f,    L_ADAPT, ESTIMATOR, STANDSTILL, MC_NO_CHOICES, "Time constant of UNOP's inductance-scale adaptation while injecting; 0: off (default: 5 injection periods).")
 /* clang-format on */
 
 #endif
