@@ -406,6 +406,11 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         /* 2 Hz electrical: slower rotors move less than 25 deg during the standstill start's
          * ~30 ms, which Step III and the estimator absorb; the probe to see it lasts ~2.5 ms */
         return 120.0f / (float)p->motor_pole_pairs;
+    case MC_RULE_L_ADAPT:
+        /* five injection periods: settled well before the speed loop meets the wrong model (L
+         * x1.2 lost lock 18 ms after the enable), and calm enough that Step III's convergence
+         * test is not delayed (2 periods: 50.4 ms instead of 36.7 at one angle of 12) */
+        return 5.0f / p->injection_f_hz;
     case MC_RULE_NONE:
     case MC_RULE_COUNT:
     default:

@@ -43,6 +43,13 @@ static bool unop_build(const mc_params_t *p, float rs, const mc_flux_model_t *mo
     c->unop.omega_base = p->estimator_speed_scale_rpm * RPM_TO_RAD_S * pp;
     c->unop.mid_sample = p->estimator_mid_sample != 0;
     c->unop.reg_predicted = p->estimator_reg_predicted != 0;
+    /* the inductance scale adapts while the injection excites it: one rate per period from the
+     * time constant; the regressor power is floored at the injection's half magnitude squared,
+     * so a weak excitation moves it slowly */
+    const bool adapt = p->injection_kind != MC_CHOICE_injection_kind_off && p->estimator_l_adapt_s > 0.0f;
+    c->unop.l_adapt = adapt ? p->control_ts_s / (p->estimator_l_adapt_s + p->control_ts_s) : 0.0f;
+    c->unop.l_adapt_p = 0.25f * p->injection_v1_v * p->injection_v1_v;
+    mc_unop_cfg_band(&c->unop, p->injection_f_hz);
     /* critically damped PLL (3.9) */
     const float w = MC_2PI * p->estimator_pll_bw_hz;
     c->pll = (mc_pll_cfg_t){.kp = 2.0f * w, .ki = w * w, .ts = p->control_ts_s, .speed_fc_hz = p->estimator_pll_speed_fc_hz};
@@ -80,6 +87,8 @@ static void unop_reset(mc_angle_src_state_t *st, float theta, float omega)
 static void unop_step(mc_angle_src_state_t *st, const mc_angle_in_t *in, mc_angle_out_t *out)
 {
     src_unop_t *s = (src_unop_t *)(void *)st;
+    /* the PLL's angle of sample k-1 and its speed: the smooth estimate the adaptation needs */
+    mc_unop_adapt(&s->unop, in, s->pll.theta, s->pll.omega_filt);
     mc_unop_step(&s->unop, in, &s->raw);
     mc_pll_step(&s->pll, s->raw.theta, s->raw.omega);
     out->theta = s->pll.theta;
@@ -111,7 +120,8 @@ static bool unop_cfg_equal(const mc_angle_src_cfg_t *cfg_a, const mc_angle_src_c
            a->iter_max == b->iter_max && a->step_tol == b->step_tol && a->k1 == b->k1 && a->k2 == b->k2 &&
            a->omega_n1 == b->omega_n1 && a->omega_base == b->omega_base && a->mid_sample == b->mid_sample &&
            a->reg_predicted == b->reg_predicted && a->u_norm == b->u_norm && a->step_max == b->step_max &&
-           a->zoh_gain == b->zoh_gain && ca->pll.kp == cb->pll.kp && ca->pll.ki == cb->pll.ki &&
+           a->zoh_gain == b->zoh_gain && a->l_adapt == b->l_adapt && a->l_adapt_p == b->l_adapt_p &&
+           a->bp_a1 == b->bp_a1 && a->bp_a2 == b->bp_a2 && ca->pll.kp == cb->pll.kp && ca->pll.ki == cb->pll.ki &&
            ca->pll.ts == cb->pll.ts && ca->pll.speed_fc_hz == cb->pll.speed_fc_hz;
 }
 
@@ -121,3 +131,4 @@ const mc_angle_src_desc_t mc_angle_src_unop = {
     .build = unop_build, .init = unop_init, .retune = unop_retune, .reset = unop_reset, .step = unop_step,
     .diag = unop_diag, .cfg_of = unop_cfg_of, .cfg_equal = unop_cfg_equal,
 };
+

@@ -45,7 +45,7 @@ typedef struct {
 /* A source's own configuration, built in the background from the parameters (its descriptor's
  * build) and held by the drive in one union sized by MC_ANGLE_SRC_CFG_MAX; the source's file
  * defines the type inside it (check with MC_ANGLE_SRC_CFG_FITS). */
-#define MC_ANGLE_SRC_CFG_MAX 96    /* bytes: the largest source configuration (UNOP + PLL: 88) */
+#define MC_ANGLE_SRC_CFG_MAX 104   /* bytes: the largest source configuration (UNOP + PLL: 104) */
 
 typedef union {
     unsigned char bytes[MC_ANGLE_SRC_CFG_MAX];
@@ -56,7 +56,7 @@ typedef union {
 
 #define MC_ANGLE_SRC_CFG_FITS(type) _Static_assert(sizeof(type) <= MC_ANGLE_SRC_CFG_MAX, #type " too large")
 
-#define MC_ANGLE_SRC_STATE_MAX 200   /* bytes: the largest source state (UNOP + PLL: ~150) */
+#define MC_ANGLE_SRC_STATE_MAX 200   /* bytes: the largest source state (UNOP + PLL: 196 on a 64-bit host) */
 
 typedef union {
     unsigned char bytes[MC_ANGLE_SRC_STATE_MAX];

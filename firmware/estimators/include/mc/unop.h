@@ -12,6 +12,8 @@
 
 #define MC_UNOP_ITER_MAX 18   /* upper bound of cfg.iter_max (bounded loop) */
 #define MC_UNOP_LS_MAX   6    /* line-search halvings: xi = 1, 1/2, ..., 1/64 (6.7) */
+#define MC_UNOP_LS_LO    0.5f /* bounds of the adapted inductance scale */
+#define MC_UNOP_LS_HI    2.0f
 
 typedef struct {
     float ts;            /* sample time [s] */
@@ -36,6 +38,11 @@ typedef struct {
                             second-order correction for a voltage held in alpha-beta (held-voltage
                             mean and trapezoid flux together, steady state; default true); removes
                             a -(omega Ts)^2/24 relative speed bias */
+    float l_adapt;       /* inductance-scale adaptation: normalised-LMS gain per period (see
+                            mc_unop_adapt); 0: off, the model as given */
+    float l_adapt_p;     /* [V^2] floor of the regressor power in that normalisation */
+    float bp_a1, bp_a2;  /* denominator of the band-pass at the injection frequency the residual
+                            and the regressor go through (mc_unop_cfg_band) */
 } mc_unop_cfg_t;
 
 typedef struct {
@@ -48,6 +55,10 @@ typedef struct {
                             (after modification) */
     bool  modified;      /* some iteration had to modify the Hessian (not positive definite) */
     bool  ls_failed;     /* a line search found no Armijo decrease (the iteration stopped there) */
+    /* the model's inductive part as used: psi = psi0 + l_scale (psi_model(i) - psi0) */
+    float l_scale;       /* adapted by mc_unop_adapt in [MC_UNOP_LS_LO, MC_UNOP_LS_HI]; 1 at init */
+    mc_dq_t psi0;        /* psi_model(0): the magnet part, kept as given */
+    float bp_z[2][2];    /* band-pass states (transposed direct form II) of r_d and phi_d */
 } mc_unop_t;
 
 /* Algorithmic defaults (mid_sample, reg_predicted, iteration limits, scalings); leaves ts, rs,
@@ -62,6 +73,14 @@ void mc_unop_reset(mc_unop_t *s, float theta, float omega);
  * applied during [k-1, k] = in->u_ab_applied. The decision variables are theta(k-1), omega;
  * out->theta = wrap(theta(k-1) + omega Ts) is the angle at sample k, out->omega the speed. */
 void mc_unop_step(mc_unop_t *s, const mc_angle_in_t *in, mc_angle_out_t *out);
+/* Inductance-scale adaptation (an extension of (6.4)): at a smooth estimate of the same interval
+ * (theta = theta(k-1), omega; the PLL's, not the per-period solution, which absorbs the error),
+ * the residual of a model whose inductive part is off by a factor holds (s_true - l_scale) times
+ * dpsi/Ts of the model; one normalised-LMS step moves l_scale toward s_true. Only while
+ * |omega| <= omega_n1, where the HF injection excites dpsi/Ts along the estimated d axis. */
+void mc_unop_adapt(mc_unop_t *s, const mc_angle_in_t *in, float theta, float omega);
+/* The adaptation's band-pass (Q = 2, unity gain at f_hz) into cfg->bp_a1, bp_a2; needs cfg->ts. */
+void mc_unop_cfg_band(mc_unop_cfg_t *cfg, float f_hz);
 
 /* Gl (normalised) of candidate (theta, omega) = theta(k-1), omega on the interval of `in`, with
  * regularisation targets theta_ref, omega_ref and weights w1, w2 (6.5). grad, hess (may be NULL):
