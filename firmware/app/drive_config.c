@@ -98,6 +98,39 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
         (float)(2u * b->flying.n_pulse_max + 2u * b->flying.n_gap_max + 10u) * p->control_ts_s;
 }
 
+/* The flux swing [Wb] the model allows from i = 0 before |i| reaches i_lim, the smallest over the
+ * +d, -d and +q directions: along +d the magnet-aided saturation lowers l_dd, so a pulse sized
+ * by Ld at i = 0 overshoots there (brodatzki-35kw: 213 A for a 160 A limit). */
+static float flux_room(const mc_est_model_t *m, float i_lim)
+{
+    const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+    mc_dq_t p0, pd, nd, pq;
+    float l[4];
+    mc_flux_eval(&fm, (mc_dq_t){0.0f, 0.0f}, &p0, l, NULL);
+    mc_flux_eval(&fm, (mc_dq_t){i_lim, 0.0f}, &pd, l, NULL);
+    mc_flux_eval(&fm, (mc_dq_t){-i_lim, 0.0f}, &nd, l, NULL);
+    mc_flux_eval(&fm, (mc_dq_t){0.0f, i_lim}, &pq, l, NULL);
+    const float a = pd.d - p0.d, b = p0.d - nd.d, c = pq.q - p0.q;
+    const float r = a < b ? a : b;
+    return r < c ? r : c;
+}
+
+/* Standstill saliency the injection methods read (Steps I-II, Step III's HF injection): the HF
+ * current's difference between the axes, i_hf |1 - l_dd / l_qq| at i = 0, against the ADC
+ * quantum q. An angle is read from the q-axis HF current, about that difference per radian:
+ * at least 4 quanta keep one quantum within 1/8 rad (7 deg) of angle. */
+static bool saliency_usable(const mc_params_t *p, const mc_est_model_t *m)
+{
+    const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+    mc_dq_t psi;
+    float l[4];
+    mc_flux_eval(&fm, (mc_dq_t){0.0f, 0.0f}, &psi, l, NULL);
+    const float ldd = l[0], lqq = l[3];
+    const float q = 2.0f * p->hw_i_span_a / (float)(1L << p->hw_adc_bits);
+    const float di = p->injection_i_hf_a * fabsf(1.0f - ldd / lqq);
+    return ldd > 0.0f && lqq > 0.0f && di >= 4.0f * q;
+}
+
 static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_drive_blk_t *b)
 {
     mc_initpos_cfg_default(&b->step1);
@@ -108,6 +141,16 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     b->step1.cost = (mc_ip_cost_t)p->startup_step1_cost;
     b->step1.model = (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
     b->step1.m = (int)p->startup_step1_m;
+    /* the pulse's current by the model, not Ld at i = 0: at most 0.9 i_max (the 2/3 Vdc of a
+     * direct vector for m periods) */
+    const float room = flux_room(m, 0.9f * p->control_i_max_a);
+    const float m_max = floorf(room / (2.0f / 3.0f * p->hw_vdc_nominal_v * p->control_ts_s));
+    if (m_max < (float)b->step1.m) {
+        b->step1.m = m_max < 1.0f ? 1 : (int)m_max;
+    }
+    if (m_max < 1.0f) {   /* even one period too much: a shorter vector for one period */
+        b->step1.v_pulse = room / p->control_ts_s;
+    }
     b->step1.n_dir = (int)p->startup_step1_dirs;
     b->step1.i_trip = p->control_i_trip_a;
     b->step1.i_rest = p->startup_i_rest_a;
@@ -122,14 +165,18 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     b->step2.model = b->step1.model;
     b->step2.v_pol = p->startup_v_pol_v;
     b->step2.n = (int)p->startup_step2_n;
+    /* +-v n Ts along d: by the model at most 0.9 i_max either way */
+    const float v_max = room / ((float)b->step2.n * p->control_ts_s);
+    b->step2.v_pol = b->step2.v_pol < v_max ? b->step2.v_pol : v_max;
     b->step2.i_trip = p->control_i_trip_a;
     b->step2.i_rest = p->startup_i_rest_a;
     b->step2.z_min = p->startup_polarity_z_min;
     b->step2.i_max = p->control_i_max_a;
     mc_dvi_cfg_default(&b->dvi);
     b->dvi.rs = m->rs;
-    b->dvi.v = p->startup_v_pol_v;
     b->dvi.n = (int)p->startup_dvi_n;
+    const float v_dvi = room / ((float)b->dvi.n * p->control_ts_s);
+    b->dvi.v = p->startup_v_pol_v < v_dvi ? p->startup_v_pol_v : v_dvi;
     b->dvi.i_trip = p->control_i_trip_a;
     b->dvi.i_rest = p->startup_i_rest_a;
     b->three_step = p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step;
@@ -267,6 +314,12 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     mc_est_model_t m;
     if (!check_model(p, &cfg->est, &m, need_map, err)) {
         return false;
+    }
+    if (p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step && !saliency_usable(p, &m)) {
+        return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_startup_init_pos, (float)p->startup_init_pos,
+                             "needs saliency, and the motor model has none to read (l_qq = l_dd at i = 0, or their "
+                             "injection currents differ by less than 4 ADC counts): start with a known angle "
+                             "(startup.init_pos = given) or an encoder");
     }
     mc_drive_blk_t *b = &out->blk;
     *b = (mc_drive_blk_t){0};

@@ -247,6 +247,7 @@ void mc_initpos_cfg_default(mc_initpos_cfg_t *cfg)
     cfg->model = (mc_flux_model_t){.kind = MC_FLUX_CONST, .map = NULL};  /* to be filled in */
     cfg->cost = MC_IP_COST_LINEAR;
     cfg->m = 5;
+    cfg->v_pulse = 0.0f;
     cfg->n_dir = 1;
     cfg->all_pulses = false;
     cfg->grid = 36;
@@ -280,10 +281,26 @@ bool mc_initpos_start(mc_initpos_t *s, const mc_initpos_cfg_t *cfg)
         (cfg->cost == MC_IP_COST_LINEAR && !(cfg->ld > 0.0f && cfg->lq > 0.0f))) {
         return false;
     }
+    if (!(cfg->v_pulse >= 0.0f) || cfg->v_pulse > 1e5f) {
+        return false;
+    }
     bool ok = true;
     for (int d = 0; d < cfg->n_dir; ++d) {
         unsigned v = dir_vec[d], vc = 7u & ~v;
         int t = 4 * d;
+        if (cfg->v_pulse > 0.0f) {
+            /* phase a, b, c axes at 0, 120, 240 deg: the same directions as V(100), V(010), V(001) */
+            static const mc_ab_t axis[3] = {{1.0f, 0.0f}, {-0.5f, 0.8660254f}, {-0.5f, -0.8660254f}};
+            const mc_ab_t up = {cfg->v_pulse * axis[d].alpha, cfg->v_pulse * axis[d].beta};
+            const mc_ab_t un = {-up.alpha, -up.beta};
+            ok = ok && mc_ip_run_vector(&s->prog.run, up, cfg->m, t);
+            ok = ok && mc_ip_run_vector(&s->prog.run, un, 2 * cfg->m, cfg->all_pulses ? t + 1 : -1);
+            ok = ok && mc_ip_run_vector(&s->prog.run, up, cfg->m, cfg->all_pulses ? t + 2 : -1);
+            if (d + 1 < cfg->n_dir) {
+                ok = ok && mc_ip_prog_gap(&s->prog, cfg->gap_min);
+            }
+            continue;
+        }
         ok = ok && mc_ip_prog_direct(&s->prog, v, cfg->m, t);
         ok = ok && mc_ip_prog_direct(&s->prog, vc, 2 * cfg->m, cfg->all_pulses ? t + 1 : -1);
         ok = ok && mc_ip_prog_direct(&s->prog, v, cfg->m, cfg->all_pulses ? t + 2 : -1);

@@ -198,7 +198,7 @@ std::string explain_config_error(const Scenario& sc, const mc_param_err_t& e)
     if (e.kind == MC_PERR_CROSS && e.param2 >= 0) {
         os << "; key '" << scenario_key_of(e.param2) << "' = " << shown(e.param2, e.value2);
         if (!is_enum) os << "; allowed range [" << number(e.min) << ", " << number(e.max) << "]";
-    } else if (e.kind == MC_PERR_RANGE || e.kind == MC_PERR_NOT_FINITE || e.kind == MC_PERR_MODEL) {
+    } else if (e.kind == MC_PERR_RANGE || e.kind == MC_PERR_NOT_FINITE || (e.kind == MC_PERR_MODEL && !is_enum)) {
         os << "; allowed range [" << number(e.min) << ", " << number(e.max) << "]";
     }
     return os.str();

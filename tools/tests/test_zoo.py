@@ -150,6 +150,15 @@ def test_cell_rules():
     r.log_tail = "mcsim: error: key 'startup.v_pol_v' = 0.12: out of range"
     c = judge_cell("demo", [r])
     assert not c.passed and "exit 2" in c.text and "v_pol_v" in c.text
+    # a configuration the drive refuses in every run: a refused cell with the drive's reason
+    r1, r2 = mk("fly5", None, "+10 rpm"), mk("fly5", None, "-10 rpm")
+    for r in (r1, r2):
+        r.error, r.refused = "run failed (exit 2)", "key 'startup.init_pos' = \"three_step\": needs saliency"
+    c = judge_cell("fly5", [r1, r2])
+    assert c.refused and not c.passed and c.text == "refused: key 'startup.init_pos' = \"three_step\": needs saliency"
+    # ... but one refused run beside one that ran is a failure
+    c = judge_cell("fly5", [r1, mk("fly5", ok_metrics(), "-10 rpm")])
+    assert not c.refused and not c.passed
     # two runs in one cell: each labelled, one failing fails the cell
     c = judge_cell("fly5", [mk("fly5", ok_metrics(), "+10 rpm"),
                             mk("fly5", ok_metrics(faults=["tracking"], fault_time_s=0.1),
@@ -201,8 +210,8 @@ def test_zoo_command(fake, tmp_path):
     table = md.read_text()
     rows = [ln for ln in table.splitlines() if ln.startswith("| sun2016") or ln.startswith("| brodatzki")]
     assert len(rows) == 4 and all(r.count(" | ") == len(TESTS) for r in rows if "**" in r or "pass" in r)
-    assert "Cells: 6 of 14 pass." in table
-    assert "sweep zoo: 2 motors x 7 tests, 6 pass, 8 fail" in o
+    assert "Cells: 6 of 14 pass, 0 refused with a reason, 8 fail." in table
+    assert "sweep zoo: 2 motors x 7 tests, 6 pass, 0 refused, 8 fail" in o
     text = doc.read_text()
     assert text.startswith("# Zoo\n\nintro\n\n<!-- zoo:begin -->\n") and text.endswith("<!-- zoo:end -->\n")
     # the generated demo carries the motor and its scaled speeds

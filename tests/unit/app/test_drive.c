@@ -1102,6 +1102,75 @@ static void test_slew_d_axis(void **st)
 
 /* A configuration the drive takes leaves no error behind: kind NONE, and no parameter named
  * (ids -1, "none", as mc_param_err_t documents; the image and the simulator print them). */
+/* The three-step start reads the rotor through its saliency: configured on a model without it
+ * (the HF injection currents of the two axes differ by less than 4 ADC counts, l_qq = l_dd in
+ * the limit) the drive refuses it at configuration, naming startup.init_pos, instead of
+ * starting blind; just above the level it is taken, and a start from a given angle is always. */
+static void test_three_step_needs_saliency(void **st)
+{
+    (void)st;
+    static mc_drive_built_t b;
+    mc_drive_cfg_t cfg;
+    mc_param_err_t err;
+    mc_drive_cfg_default(&cfg);
+    assert_true(mc_drive_build(&cfg, &b, &err));
+    const double q = 2.0 * (double)b.p.hw_i_span_a / (double)(1L << b.p.hw_adc_bits);
+    const double i_hf = (double)b.p.injection_i_hf_a, ld = 10.5e-3;
+    /* l_qq giving an HF current difference of k ADC counts */
+    const double k[3] = {0.0, 3.9, 4.1};
+    const bool taken[3] = {false, false, true};
+    for (int c = 0; c < 3; ++c) {
+        mc_drive_cfg_default(&cfg);
+        /* sensorless, and no flux map needed: constant parameters, linear Step I cost, DVI */
+        assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_control_angle_source, "unop", NULL));
+        assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_estimator_model, "const", NULL));
+        assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_startup_init_pos, "three_step", NULL));
+        assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_startup_step1_cost, "linear", NULL));
+        assert_true(mc_param_set_choice(&cfg.p, MC_PARAM_startup_polarity, "dvi", NULL));
+        cfg.est.ld = (float)ld;
+        cfg.est.lq = (float)(ld / (1.0 - k[c] * q / i_hf));
+        memset(&err, 0, sizeof err);
+        const bool got = mc_drive_build(&cfg, &b, &err);
+        assert_int_equal(got, taken[c]);
+        if (!taken[c]) {
+            assert_int_equal(err.kind, MC_PERR_MODEL);
+            assert_int_equal(err.param, MC_PARAM_startup_init_pos);
+            assert_non_null(strstr(err.text, "saliency"));
+        }
+    }
+    /* the same model without saliency, started from a given angle */
+    mc_drive_cfg_default(&cfg);
+    cfg.est.ld = cfg.est.lq = (float)ld;
+    assert_true(mc_drive_build(&cfg, &b, &err));
+}
+
+/* Steps I and II size their pulses by the model: the flux a pulse moves may take the current
+ * to at most 0.9 control.i_max_a. On the thesis motor the rules' pulses stay (m = 5 periods of
+ * 2/3 Vdc, 200 V for Step II); with a 2 A limit even one period of 2/3 Vdc would pass it, so
+ * Step I's pulse is one period of a shorter vector and Step II's voltage is cut to match. */
+static void test_pulses_sized_by_model(void **st)
+{
+    (void)st;
+    static mc_drive_built_t b;
+    mc_drive_cfg_t cfg;
+    mc_param_err_t err;
+    mc_drive_cfg_default(&cfg);
+    assert_true(mc_drive_build(&cfg, &b, &err));
+    assert_int_equal(b.blk.step1.m, 5);
+    assert_float_equal(b.blk.step1.v_pulse, 0.0f, 0.0f);
+    assert_float_equal(b.blk.step2.v_pol, 200.0f, 0.0f);
+    mc_drive_cfg_default(&cfg);
+    assert_true(mc_param_set(&cfg.p, MC_PARAM_control_i_max_a, 2.0f, NULL));
+    assert_true(mc_drive_build(&cfg, &b, &err));
+    const double ts = (double)b.p.control_ts_s, ld = (double)b.p.motor_ld_h, lq = (double)b.p.motor_lq_h;
+    const double room = 0.9 * 2.0 * fmin(ld, lq);   /* the constant model: L i */
+    assert_true(2.0 / 3.0 * (double)b.p.hw_vdc_nominal_v * ts > room);
+    assert_int_equal(b.blk.step1.m, 1);
+    assert_float_equal(b.blk.step1.v_pulse, room / ts, 1e-3 * room / ts);
+    assert_float_equal(b.blk.step2.v_pol, room / (b.blk.step2.n * ts), 1e-3 * room / ts);
+    assert_float_equal(b.blk.dvi.v, room / (b.blk.dvi.n * ts), 1e-3 * room / ts);
+}
+
 static void test_config_error_none_after_good_init(void **st)
 {
     (void)st;
@@ -1150,6 +1219,8 @@ int main(void)
         cmocka_unit_test(test_telemetry_duties_are_the_pwm_duties),
         cmocka_unit_test(test_slew_d_axis),
         cmocka_unit_test(test_config_error_none_after_good_init),
+        cmocka_unit_test(test_three_step_needs_saliency),
+        cmocka_unit_test(test_pulses_sized_by_model),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -47,6 +47,42 @@ static double run_step1(const mc_initpos_cfg_t *c, int sat, double th_deg, doubl
     return err_mod_pi_deg(s->theta1, th_deg * DEG);
 }
 
+/* Shorter pulse vectors (v_pulse, for a motor whose current one period of 2/3 Vdc would take
+ * past its limit): the same directions at the given magnitude. On the linear machine the peak
+ * scales with the voltage (100 V against the 200 V of V(100) at 300 V: half), every angle is
+ * still found, and the three directions (6 vectors) fit the runner's vector table. */
+static void test_short_pulse_vectors(void **st)
+{
+    (void)st;
+    for (int nd = 1; nd <= 3; nd += 2) {
+        double peak[2] = {0.0, 0.0}, worst = 0.0;
+        for (int k = 0; k < 2; ++k) {
+            mc_initpos_cfg_t c = ip_cfg(MC_IP_COST_LINEAR, 5);
+            c.n_dir = nd;
+            c.v_pulse = k ? 100.0f : 0.0f;
+            for (int a = 0; a < 360; a += 15) {
+                mc_initpos_t s;
+                plant_t p;
+                double e = run_step1(&c, 0, a, 0.0, &s, &p);
+                peak[k] = fmax(peak[k], (double)s.prog.run.i_peak);
+                if (k) {
+                    worst = fmax(worst, e);
+                }
+            }
+        }
+        print_message("n_dir %d: peak %.2f A at V(100), %.2f A at 100 V; worst error %.3f deg\n", nd,
+                      peak[0], peak[1], worst);
+        assert_float_equal(peak[1] / peak[0], 0.5, 0.02);
+        assert_true(worst < 1.0);
+    }
+    mc_initpos_cfg_t c = ip_cfg(MC_IP_COST_LINEAR, 5);
+    mc_initpos_t s;
+    c.v_pulse = -1.0f;
+    assert_false(mc_initpos_start(&s, &c));
+    c.v_pulse = NAN;
+    assert_false(mc_initpos_start(&s, &c));
+}
+
 static void test_vectors(void **st)
 {
     (void)st;
@@ -317,6 +353,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_vectors),
+        cmocka_unit_test(test_short_pulse_vectors),
         cmocka_unit_test(test_timing_record),
         cmocka_unit_test(test_gap_waits_for_decay),
         cmocka_unit_test(test_linear_sweep),

@@ -77,6 +77,7 @@ class Run:
     exit_code: int | None = None
     seconds: float = 0.0
     log_tail: str = ""
+    refused: str = ""     # the drive refused the configuration (mcsim exit 2): its reason
 
 
 @dataclass
@@ -86,6 +87,7 @@ class Cell:
     passed: bool
     text: str
     numbers: dict = field(default_factory=dict)
+    refused: bool = False   # every run refused with a reason (not a pass, not a silent failure)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -244,6 +246,11 @@ def execute(r: Run, mcsim: str) -> Run:
         lines = [ln.strip() for ln in log.splitlines() if ln.strip()]
         r.log_tail = lines[-1][:160] if lines else ""
         r.error = f"run failed (exit {r.exit_code})"
+        # a configuration the drive refuses names the key and the reason after the file's name
+        why = next((ln[ln.index("key '"):] for ln in lines
+                    if ln.startswith("mcsim: error:") and "key '" in ln), "")
+        if r.exit_code == 2 and why:
+            r.refused = why
         return r
     r.metrics, r.error = read_metrics(r.dir)
     return r
@@ -286,6 +293,14 @@ def judge_run(r: Run, need_windows: bool) -> tuple[bool, list[str], dict]:
 def _where(r: Run) -> dict:
     """How to run it again: the scenario, the --set keys and the run folder."""
     return {"scenario": str(r.scenario), "sets": list(r.sets), "dir": str(r.dir)}
+
+
+def refused_cell(test: str, runs: list[Run]) -> Cell | None:
+    """The cell of a test whose every run the drive refused (the same reason): None otherwise."""
+    if not runs or not all(r.refused for r in runs):
+        return None
+    return Cell(runs[0].motor, test, False, f"refused: {runs[0].refused}",
+                {"refused": runs[0].refused, "runs": [_where(r) for r in runs]}, refused=True)
 
 
 def judge_start(runs: list[Run]) -> Cell:
@@ -344,6 +359,9 @@ def judge_start(runs: list[Run]) -> Cell:
 
 
 def judge_cell(test: str, runs: list[Run]) -> Cell:
+    refused = refused_cell(test, runs)
+    if refused is not None:
+        return refused
     if test == "start":
         return judge_start(runs)
     parts, all_ok, per = [], True, []
@@ -376,11 +394,13 @@ def git_commit() -> str:
 def zoo_markdown(motors: list[Motor], cells: dict, command: str, stamp: str, n_runs: int,
                  wall: float) -> str:
     n_pass = sum(1 for c in cells.values() if c.passed)
+    n_ref = sum(1 for c in cells.values() if c.refused)
     lines = [f"`{command}` ({stamp}; {n_runs} runs in {wall:.0f} s). Default drive keys; a cell "
              f"passes with no fault, steady angle error ≤ {STEADY_MAX_DEG:g}° in the steady windows "
              f"(the start: polarity right, the init error's 20 ms mean ≤ {STEADY_MAX_DEG:g}° and RUN "
              f"at every angle), peak phase current ≤ {PEAK_FACTOR:g} × the configured limit "
-             f"(`current_limit_a`); else the reasons (fault at its time, the worst number).", "",
+             f"(`current_limit_a`); else the reasons (fault at its time, the worst number). *refused*: the "
+             f"drive refused the configuration with the reason shown (mcsim exit 2).", "",
              "| motor | N_b [rpm] | rated [N m] | f_s [kHz] | Lq/Ld |", "|---|---|---|---|---|"]
     for m in motors:
         lines.append(f"| {m.name} | {m.base_rpm:.0f} | {m.torque_nm:g} | {m.f_sample_hz / 1e3:g} | "
@@ -390,7 +410,8 @@ def zoo_markdown(motors: list[Motor], cells: dict, command: str, stamp: str, n_r
     for m in motors:
         lines.append(f"| {m.name} | " + " | ".join(cells[(m.name, k)].text if (m.name, k) in cells
                                                   else "—" for k, _ in TESTS) + " |")
-    lines += ["", f"Cells: {n_pass} of {len(cells)} pass."]
+    lines += ["", f"Cells: {n_pass} of {len(cells)} pass, {n_ref} refused with a reason, "
+                  f"{len(cells) - n_pass - n_ref} fail."]
     return "\n".join(lines)
 
 
@@ -436,15 +457,16 @@ def cmd_zoo(args) -> int:
             "criteria": {"steady_max_deg": STEADY_MAX_DEG, "peak_factor": PEAK_FACTOR,
                          "low_ts_s": LOW_TS_S},
             "motors": [vars(m) for m in motors],
-            "cells": [{"motor": c.motor, "test": c.test, "passed": c.passed, "text": c.text,
-                       **c.numbers} for c in cells.values()]}
+            "cells": [{"motor": c.motor, "test": c.test, "passed": c.passed, "refused": c.refused,
+                       "text": c.text, **c.numbers} for c in cells.values()]}
     write_outputs(args, md, data)
     if args.doc:
         replace_doc_section(Path(args.doc), md, DOC_MARKERS)
         print(f"wrote the zoo table of {args.doc}")
-    n_fail = sum(1 for c in cells.values() if not c.passed)
-    print(f"sweep zoo: {len(motors)} motors x {len(TESTS)} tests, {len(cells) - n_fail} pass, "
-          f"{n_fail} fail; {len(runs)} runs in {wall:.1f} s ({args.jobs} at a time)")
+    n_ref = sum(1 for c in cells.values() if c.refused)
+    n_fail = sum(1 for c in cells.values() if not c.passed and not c.refused)
+    print(f"sweep zoo: {len(motors)} motors x {len(TESTS)} tests, {len(cells) - n_fail - n_ref} pass, "
+          f"{n_ref} refused, {n_fail} fail; {len(runs)} runs in {wall:.1f} s ({args.jobs} at a time)")
     return 1 if args.strict and n_fail else 0
 
 

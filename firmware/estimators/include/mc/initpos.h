@@ -130,6 +130,9 @@ typedef struct {
     mc_flux_model_t model;   /* for the nonlinear costs */
     mc_ip_cost_t cost;
     int m;                   /* periods per pulse, 1..MC_IP_M_MAX (thesis 5) */
+    float v_pulse;           /* [V] 0: the direct vectors V(100), V(011) ... (2/3 Vdc, thesis);
+                                > 0: vectors of this magnitude in the same directions (a motor
+                                whose current one period of 2/3 Vdc would take past its limit) */
     int n_dir;               /* 1..3 pulse directions: phase A (V(100)/V(011)), then B, C */
     bool all_pulses;         /* false (thesis Fig 5.4 red dots): the first m intervals of each
                                 direction; true: all 4m (needs n_dir * 4m <= MC_IP_REC_MAX) */
