@@ -179,6 +179,8 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     b->dvi.v = p->startup_v_pol_v < v_dvi ? p->startup_v_pol_v : v_dvi;
     b->dvi.i_trip = p->control_i_trip_a;
     b->dvi.i_rest = p->startup_i_rest_a;
+    b->dvi.z_min = p->startup_polarity_z_min;
+    b->dvi.reps_max = 3;   /* 3 programs of about 4 ms: Step I + II stay within the 20 ms time-out */
     b->three_step = p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step;
     b->ip1_pulse3 = p->startup_step1_method == MC_CHOICE_startup_step1_method_three_phase;
     b->ip2_dvi = p->startup_polarity == MC_CHOICE_startup_polarity_dvi;

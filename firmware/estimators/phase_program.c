@@ -162,6 +162,8 @@ static void dvi_result(const mc_phase_ws_t *ws, mc_phase_result_t *r)
     r->flip = s->flip;
     r->c1 = s->peak_pos;
     r->c2 = s->peak_neg;
+    r->conf = s->z;
+    r->verdict = (int)s->verdict;
     r->i_peak = s->prog.i_peak;
     r->calls = s->calls;
 }

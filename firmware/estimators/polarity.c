@@ -235,6 +235,23 @@ void mc_dvi_cfg_default(mc_dvi_cfg_t *cfg)
     cfg->gap_max = 50;
     cfg->i_rest = 0.3f;
     cfg->i_trip = 0.0f;
+    cfg->z_min = 0.0f;
+    cfg->reps_max = 1;
+}
+
+/* (Re)program the runner with one DVI program */
+static bool dvi_program(mc_dvi_t *s)
+{
+    const mc_dvi_cfg_t *cfg = &s->cfg;
+    mc_ip_run_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, cfg->gap_max);
+    s->peak_pos = s->peak_neg = s->chg_pos = s->chg_neg = s->i_start = 0.0f;
+    s->tag_prev = -1;
+    mc_ab_t up = vec(cfg->v, s->dir), un = vec(-cfg->v, s->dir);
+    /* the opposite pulse of equal volt-seconds brings the current back to (nearly) zero far
+     * faster than the zero vector (tau = L / Rs, tens of ms); the gap waits for the rest */
+    return mc_ip_run_vector(&s->prog, up, cfg->n, 0) && mc_ip_run_vector(&s->prog, un, cfg->n, -1) &&
+           mc_ip_run_gap(&s->prog, cfg->gap_min) && mc_ip_run_vector(&s->prog, un, cfg->n, 1) &&
+           mc_ip_run_vector(&s->prog, up, cfg->n, -1);
 }
 
 bool mc_dvi_start(mc_dvi_t *s, const mc_dvi_cfg_t *cfg, float theta1)
@@ -246,23 +263,39 @@ bool mc_dvi_start(mc_dvi_t *s, const mc_dvi_cfg_t *cfg, float theta1)
     s->peak_pos = s->peak_neg = 0.0f;
     s->flip = false;
     s->calls = 0;
+    s->sum_pos = s->sum_neg = s->s_d2 = s->di_prev = s->z = s->chg_pos = s->chg_neg = s->i_start = 0.0f;
+    s->n_d2 = s->reps = 0;
+    s->tag_prev = -1;
+    s->verdict = MC_POL_ABORTED;
     s->dir = mc_sincos(theta1);
     mc_ip_run_init(&s->prog, cfg->rs, cfg->i_rest, cfg->i_trip, cfg->gap_max);
-    if (!(cfg->v > 0.0f) || cfg->n < 1 || cfg->n > MC_POL_N_MAX) {
+    if (!(cfg->v > 0.0f) || cfg->n < 1 || cfg->n > MC_POL_N_MAX || !(cfg->z_min <= 1e6f) ||
+        cfg->reps_max < 1 || cfg->reps_max > MC_DVI_REPS_MAX) {
         return false;
     }
-    mc_ab_t up = vec(cfg->v, s->dir), un = vec(-cfg->v, s->dir);
-    /* the opposite pulse of equal volt-seconds brings the current back to (nearly) zero far
-     * faster than the zero vector (tau = L / Rs, tens of ms); the gap waits for the rest */
-    bool ok = mc_ip_run_vector(&s->prog, up, cfg->n, 0) &&
-              mc_ip_run_vector(&s->prog, un, cfg->n, -1) &&
-              mc_ip_run_gap(&s->prog, cfg->gap_min) &&
-              mc_ip_run_vector(&s->prog, un, cfg->n, 1) &&
-              mc_ip_run_vector(&s->prog, up, cfg->n, -1);
+    bool ok = dvi_program(s);
     if (ok) {
         s->state = ST_RUN;
+        s->verdict = MC_POL_PENDING;
     }
     return ok;
+}
+
+/* z of the DVI check: the mean change difference over its standard error, sqrt(2 sigma^2 / reps)
+ * for the noise and, in quadrature, 1 % of the mean change for what the sequence itself makes
+ * differ (0.5 % on a machine without saturation, where the two pulses should be equal) */
+static float dvi_confidence(const mc_dvi_t *s)
+{
+    const float d = (s->sum_neg - s->sum_pos) / (float)s->reps;
+    const float var = s->n_d2 > 0 ? s->s_d2 / (6.0f * (float)s->n_d2) : 0.0f;
+    const float sys = 0.01f * 0.5f * (s->sum_neg + s->sum_pos) / (float)s->reps;
+    const float se = sqrtf(2.0f * var / (float)s->reps + sys * sys);
+    const float ad = d < 0.0f ? -d : d;
+    if (!(ad > 0.0f)) {
+        return 0.0f;
+    }
+    const float z = se > 0.0f ? ad / se : 1e6f;
+    return z < 1e6f ? z : 1e6f;
 }
 
 mc_ip_status_t mc_dvi_step(mc_dvi_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty)
@@ -277,6 +310,7 @@ mc_ip_status_t mc_dvi_step(mc_dvi_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty)
     mc_ip_status_t st = mc_ip_run_step(&s->prog, i_ab, vdc, duty, &r, &tag);
     if (st == MC_IP_FAILED) {
         s->state = ST_FAILED;
+        s->verdict = MC_POL_ABORTED;
         zero_duty(duty);
         return MC_IP_FAILED;
     }
@@ -288,11 +322,44 @@ mc_ip_status_t mc_dvi_step(mc_dvi_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty)
         } else if (tag == 1 && a > s->peak_neg) {
             s->peak_neg = a;
         }
+        const float di = proj(r.i1, s->dir) - proj(r.i0, s->dir);
+        if (tag == s->tag_prev) {
+            const float d2 = di - s->di_prev;
+            s->s_d2 += d2 * d2;
+            s->n_d2++;
+        } else {
+            s->i_start = proj(r.i0, s->dir);   /* the pulse's first interval */
+        }
+        const float c = absf(proj(r.i1, s->dir) - s->i_start);
+        if (tag == 0 && c > s->chg_pos) {
+            s->chg_pos = c;
+        } else if (tag == 1 && c > s->chg_neg) {
+            s->chg_neg = c;
+        }
+        s->di_prev = di;
+        s->tag_prev = tag;
     }
     if (st != MC_IP_DONE) {
         return MC_IP_RUNNING;
     }
-    s->flip = s->peak_neg > s->peak_pos;
+    s->reps++;
+    s->sum_pos += s->chg_pos;
+    s->sum_neg += s->chg_neg;
+    if (s->cfg.z_min <= 0.0f) {
+        s->flip = s->peak_neg > s->peak_pos;   /* 3.5.2: the larger peak points north */
+    } else {
+        s->z = dvi_confidence(s);
+        s->flip = s->sum_neg > s->sum_pos;
+        if (s->z < s->cfg.z_min) {
+            if (s->reps < s->cfg.reps_max && dvi_program(s)) {
+                return MC_IP_RUNNING;
+            }
+            s->verdict = MC_POL_UNDECIDED;
+            s->state = ST_FAILED;
+            return MC_IP_FAILED;
+        }
+    }
+    s->verdict = MC_POL_DECIDED;
     s->theta2 = mc_wrap_pi(s->theta1 + (s->flip ? MC_PI : 0.0f));
     s->state = ST_DONE;
     return MC_IP_DONE;

@@ -308,6 +308,64 @@ static void test_dvi(void **st)
     }
 }
 
+/* DVI with the confidence check: on a machine without saturation asymmetry (the linear plant)
+ * the two pulses differ only by noise and the sequence's own 0.5 %: every start ends UNDECIDED
+ * after reps_max programs, where the thesis' rule (the larger peak) guesses (wrong at a quarter
+ * of the angles or more); with 0.2 A noise on the saturating plant most decide, all right. */
+static void test_dvi_confidence(void **st)
+{
+    (void)st;
+    mc_dvi_cfg_t c;
+    mc_dvi_cfg_default(&c);
+    c.rs = (float)SUN_RS;
+    int decided[2] = {0, 0}, wrong[2] = {0, 0}, undecided[2] = {0, 0}, wrong_blind = 0, n = 0;
+    for (int sat = 0; sat < 2; ++sat) {
+        for (uint64_t seed = 1; seed <= (sat ? 4u : 1u); ++seed) {
+            for (int a = 0; a < 360; a += 15) {
+                for (int chk = 0; chk < 2; ++chk) {
+                    plant_t p;
+                    plant_init(&p, sat, a);
+                    p.noise = sat ? 0.2 : 0.02;
+                    p.rng = 31u * seed + (uint64_t)a;
+                    int calls = 0;
+                    float th1 = step1(&p, &calls);
+                    c.z_min = chk ? 3.0f : 0.0f;
+                    c.reps_max = chk ? 3 : 1;
+                    mc_dvi_t s;
+                    assert_true(mc_dvi_start(&s, &c, th1));
+                    mc_ip_status_t stt;
+                    plant_run(&p, step_dvi, &s, 1000, &stt);
+                    const int ok = err_mod_2pi_deg(s.theta2, a * DEG) < 90.0;
+                    if (!chk) {
+                        assert_int_equal(stt, MC_IP_DONE);
+                        wrong_blind += !sat && !ok;
+                        continue;
+                    }
+                    n += sat;
+                    if (stt == MC_IP_DONE) {
+                        assert_int_equal(s.verdict, MC_POL_DECIDED);
+                        assert_true(s.z >= 3.0f);
+                        decided[sat]++;
+                        wrong[sat] += !ok;
+                    } else {
+                        assert_int_equal(stt, MC_IP_FAILED);
+                        assert_int_equal(s.verdict, MC_POL_UNDECIDED);
+                        assert_int_equal(s.reps, 3);
+                        undecided[sat]++;
+                    }
+                }
+            }
+        }
+    }
+    print_message("DVI z_min 3: linear plant %d decided / %d undecided; saturating, 0.2 A: %d decided, "
+                  "%d undecided, %d wrong of %d (the larger peak alone, linear plant: %d wrong)\n", decided[0],
+                  undecided[0], decided[1], undecided[1], wrong[1], n, wrong_blind);
+    assert_int_equal(decided[0], 0);
+    assert_int_equal(wrong[1], 0);
+    assert_true(decided[1] > undecided[1]);
+    assert_true(wrong_blind >= 6);   /* the larger peak alone guesses on the linear plant */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -318,6 +376,7 @@ int main(void)
         cmocka_unit_test(test_polarity_confident),
         cmocka_unit_test(test_polarity_symmetric_undecided),
         cmocka_unit_test(test_polarity_noise_never_wrong),
+        cmocka_unit_test(test_dvi_confidence),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }

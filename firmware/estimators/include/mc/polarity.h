@@ -75,14 +75,23 @@ void mc_polarity_cfg_default(mc_polarity_cfg_t *cfg);
 bool mc_polarity_start(mc_polarity_t *s, const mc_polarity_cfg_t *cfg, float theta1);
 mc_ip_status_t mc_polarity_step(mc_polarity_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *duty);
 
-/* ---- DVI reference ---- */
+/* ---- DVI reference ----
+ * With z_min > 0 (an addition): each pulse's current change from its start is compared (the
+ * gap leaves up to i_rest, which would bias the peaks themselves), and the program is repeated
+ * (at most reps_max times) until the mean difference is z_min standard errors away from zero (the
+ * noise's, and 1 % of the change for the sequence's own asymmetry);
+ * still not: FAILED, verdict UNDECIDED. */
 typedef struct {
     float rs;
     float v;                 /* [V] requested pulse magnitude (200) */
     int n;                   /* periods per pulse (thesis 7.2.2: 6) */
     int gap_min, gap_max;
     float i_rest, i_trip;
+    float z_min;             /* confidence a decision needs (<= 0: the larger peak alone, 3.5.2) */
+    int reps_max;            /* programs run at most while not confident (1..MC_DVI_REPS_MAX) */
 } mc_dvi_cfg_t;
+
+#define MC_DVI_REPS_MAX 8
 
 typedef struct {
     mc_dvi_cfg_t cfg;
@@ -90,9 +99,23 @@ typedef struct {
     mc_sincos_t dir;
     int state;
     float theta1, theta2;    /* theta2 in [-pi, pi) */
-    float peak_pos, peak_neg;/* peak |i_delta| of the +V and -V pulses [A] */
-    bool flip;               /* peak_neg > peak_pos */
+    float peak_pos, peak_neg;/* peak |i_delta| of the +V and -V pulses [A] (the last program) */
+    bool flip;               /* peak_neg > peak_pos (with the check: in the mean over programs) */
     int calls;
+    /* confidence (z_min > 0): the peaks' mean difference over the programs run against the
+     * current noise, estimated from the second differences of the current within each pulse
+     * (var = 6 sigma^2 for white noise; a saturation's curvature only adds to it) */
+    float chg_pos, chg_neg;  /* largest |i_delta - i_delta at the pulse's start| of each pulse
+                                (the gap ends at |i| <= i_rest, not at 0: the residual would
+                                bias the peaks themselves) [A] */
+    float i_start;           /* i_delta at the start of the pulse being measured [A] */
+    float sum_pos, sum_neg;  /* sums of chg_pos, chg_neg over the programs [A] */
+    float s_d2;              /* sum of squared second differences [A^2] */
+    int n_d2, reps;
+    float di_prev;           /* last interval's current change in the pulse being measured */
+    int tag_prev;            /* its tag (-1: none yet in this program) */
+    float z;                 /* |mean difference| / its standard error */
+    mc_pol_verdict_t verdict;
 } mc_dvi_t;
 
 void mc_dvi_cfg_default(mc_dvi_cfg_t *cfg);
