@@ -1,0 +1,428 @@
+/* The configuration store (mc/param_store.h) against copies a faulty or foreign writer could have
+ * left, every CRC of them valid (issue 30: the survivors of the mutation run in param_store.c
+ * that test_param_store.c and test_param_store_edges.c cannot see):
+ *   - a parameter record of another version (or version 1 of another table), a header with a
+ *     flag this firmware does not know, a record whose own CRC word is wrong (the payload CRC
+ *     does not cover it, format 2): refused, the older copy loads;
+ *   - headers whose lengths cannot be this device's: they do not count for the next sequence
+ *     number (their number is unknown), while a header that checks does, marked or not;
+ *   - sequence numbers across 2^31 and 2^32: every save is the newest copy a load returns;
+ *   - a device of two blocks, each exactly the largest copy: a save erases its own slot only;
+ *   - the info a call returns says only what happened, and NULL arguments are refused. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <string.h>
+#include "hal_host/host.h"
+#include "mc/bits.h"
+#include "mc/param_store.h"
+#include "pstore_same.h"
+
+static hal_nvm_t nvm, snap;
+static uint8_t work[MC_PSTORE_WORK_MIN];
+static mc_flux_map_t maps[4];
+static mc_drive_cfg_t sets[4];
+static mc_flux_map_t got_map;
+
+/* The copy's layout on the host model (write unit 8): header 32 bytes, marker 8, then the
+ * records padded to 8. */
+#define PAYLOAD_AT 40u
+
+/* set k: a few parameters moved, the model's scalars, an nd x nq map (0: none) */
+static const mc_drive_cfg_t *make_cfg(int k, int nd, int nq)
+{
+    mc_drive_cfg_t *c = &sets[k];
+    mc_params_default(&c->p);
+    assert_true(mc_param_set(&c->p, mc_param_find("control.ts_s"), 1e-4f - 1e-6f * (float)k, NULL));
+    assert_true(mc_param_set(&c->p, mc_param_find("hw.encoder_lines"), (float)(1000 + k), NULL));
+    c->est.rs = 0.1f + 0.01f * (float)k;
+    c->est.ld = 1e-3f * (float)(k + 1);
+    c->est.lq = 2e-3f * (float)(k + 1);
+    c->est.psi_pm = 0.05f + 0.001f * (float)k;
+    c->est.map = NULL;
+    if (nd > 0) {
+        mc_flux_map_t *m = &maps[k];
+        memset(m, 0, sizeof *m);
+        m->n_d = nd;
+        m->n_q = nq;
+        m->id0 = -10.0f - (float)k;
+        m->did = 0.5f;
+        m->iq0 = -20.0f;
+        m->diq = 0.25f;
+        for (int i = 0; i < nd * nq; ++i) {
+            m->psi_d[i] = 0.001f * (float)i + (float)k;
+            m->psi_q[i] = -0.002f * (float)i - (float)k;
+        }
+        c->est.map = m;
+    }
+    return c;
+}
+
+static mc_pstore_status_t load(mc_drive_cfg_t *got, mc_pstore_info_t *info)
+{
+    memset(got, 0, sizeof *got);
+    mc_params_default(&got->p);
+    return mc_pstore_load(&nvm, got, &got_map, work, sizeof work, info);
+}
+
+static uint32_t get32(const uint8_t *b)
+{
+    return (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
+}
+
+static void put32(uint8_t *b, uint32_t w)
+{
+    for (int k = 0; k < 4; ++k) {
+        b[k] = (uint8_t)(w >> (8 * k));
+    }
+}
+
+static uint32_t round8(uint32_t x)
+{
+    return (x + 7u) / 8u * 8u;
+}
+
+/* ---- a (slot 0, seq 1) and b (slot 1, seq 2) committed ------------------------------------ */
+
+static const mc_drive_cfg_t *ca, *cb;
+static uint8_t *slot0, *slot1;
+static uint32_t cap;   /* the record bytes a slot holds */
+
+static void two_copies(void)
+{
+    hal_host_nvm_init(&nvm);
+    ca = make_cfg(0, 4, 5);
+    cb = make_cfg(1, 6, 3);
+    assert_int_equal(mc_pstore_save(&nvm, ca, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 0 */
+    assert_int_equal(mc_pstore_save(&nvm, cb, work, sizeof work, NULL), MC_PSTORE_OK);   /* slot 1 */
+    mc_pstore_geom_t g;
+    (void)mc_pstore_geometry(&nvm, &g);
+    slot0 = nvm.mem + g.slot_first[0] * nvm.block_size;
+    slot1 = nvm.mem + g.slot_first[1] * nvm.block_size;
+    cap = g.payload_max;
+    snap = nvm;
+}
+
+/* load gives a (the newest copy refused) or b (taken) */
+static void loads(const mc_drive_cfg_t *want)
+{
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    assert_int_equal(load(&got, &info), want == ca ? MC_PSTORE_FELL_BACK : MC_PSTORE_OK);
+    assert_int_equal(info.slot, want == ca ? 0 : 1);
+    assert_int_equal(info.fell_back, want == ca);
+    assert_true(same_cfg_in(&got, want, false, &got_map));
+}
+
+/* the header CRC over the header's first 28 bytes, as a writer computes it */
+static void head_crc(uint8_t *slot)
+{
+    put32(slot + 28, mc_crc32(slot, 28u));
+}
+
+/* b's copy rewritten with these records under a format-2 header, every CRC valid */
+static void forge_b(const uint8_t *pr, uint32_t pl, const uint8_t *mr, uint32_t ml)
+{
+    static uint8_t crc_in[MC_STORE_PARAMS_MAX + MC_STORE_MODEL_MAX];
+    memset(slot1 + PAYLOAD_AT, 0xFF, round8(pl + ml));
+    memcpy(slot1 + PAYLOAD_AT, pr, pl);
+    memcpy(slot1 + PAYLOAD_AT + pl, mr, ml);
+    /* format 2: the payload CRC leaves out each record's CRC word */
+    memcpy(crc_in, pr, pl - 4u);
+    memcpy(crc_in + pl - 4u, mr, ml - 4u);
+    put32(slot1 + 16, pl);
+    put32(slot1 + 20, ml);
+    put32(slot1 + 24, mc_crc32(crc_in, pl + ml - 8u));
+    head_crc(slot1);
+}
+
+static void close_record(uint8_t *r, uint32_t len)
+{
+    put32(r + len - 4u, mc_crc32(r, len - 4u));
+}
+
+/* A parameter record of a version this firmware does not read (0, 3, the next one), or a
+ * version 1 record (positions in the frozen table of main at 5265cfe) whose table word is not
+ * that table's, each with every CRC of the copy valid: the record's numbering is unknown, the
+ * copy is refused and the older one loads, as mc_store_params_decode refuses such a record
+ * (BAD_VERSION). The same forging with this version loads. (param_store.c:401.) */
+static void test_params_record_of_another_version(void **state)
+{
+    (void)state;
+    two_copies();
+    static uint8_t pr[MC_STORE_PARAMS_MAX], mr[MC_STORE_MODEL_MAX];
+    const uint32_t pl = (uint32_t)mc_store_params_encode(&cb->p, pr, sizeof pr);
+    const uint32_t ml = (uint32_t)mc_store_model_encode(&cb->est, mr, sizeof mr);
+    forge_b(pr, pl, mr, ml);
+    loads(cb);
+    const uint32_t versions[] = {0u, 3u, MC_STORE_PARAMS_VERSION + 1u, 0xFFFFFFFFu};
+    for (size_t i = 0; i < sizeof versions / sizeof versions[0]; ++i) {
+        assert_int_not_equal(versions[i], MC_STORE_PARAMS_VERSION);
+        put32(pr + 4, versions[i]);
+        close_record(pr, pl);
+        mc_params_t p;
+        assert_int_equal(mc_store_params_decode(pr, pl, &p, NULL), MC_STORE_BAD_VERSION);
+        nvm = snap;
+        forge_b(pr, pl, mr, ml);
+        loads(ca);
+    }
+    /* version 1 of another table: its positions name other parameters */
+    const uint32_t w[] = {MC_STORE_MAGIC_PARAMS, 1u, MC_STORE_V1_TABLE ^ 1u, 2u, 0u, mc_f32_bits(1.0f), 1u, 0u};
+    uint8_t v1[4u * 9u];
+    for (int k = 0; k < 8; ++k) {
+        put32(v1 + 4 * k, w[k]);
+    }
+    close_record(v1, sizeof v1);
+    nvm = snap;
+    forge_b(v1, sizeof v1, mr, ml);
+    loads(ca);
+}
+
+/* Each record ends with its own CRC word, which format 2's payload CRC leaves out: a bit of the
+ * parameter record's or the model record's CRC word flipped (the header and the payload CRC
+ * still valid) is caught by that record's check alone; the copy is refused, the older loads.
+ * (param_store.c:493: the model record is read only after the parameter record checked.) */
+static void test_record_crc_word_flipped(void **state)
+{
+    (void)state;
+    two_copies();
+    const uint32_t pl = get32(slot1 + 16), ml = get32(slot1 + 20);
+    const uint32_t at[] = {PAYLOAD_AT + pl - 4u, PAYLOAD_AT + pl + ml - 4u};
+    for (size_t r = 0; r < 2u; ++r) {
+        for (uint32_t bit = 0u; bit < 32u; bit += 7u) {
+            nvm = snap;
+            slot1[at[r] + bit / 8u] ^= (uint8_t)(1u << (bit % 8u));
+            loads(ca);
+        }
+    }
+}
+
+/* A header with a flag bit this firmware does not know (a newer writer's), its CRC valid and
+ * the records intact: what the flag means is unknown, so the copy is not taken; the older one
+ * loads. (param_store.c:536.) */
+static void test_unknown_header_flag_refused(void **state)
+{
+    (void)state;
+    two_copies();
+    for (uint32_t bit = 2u; bit < 32u; ++bit) {
+        nvm = snap;
+        put32(slot1 + 12, get32(slot1 + 12) | (1u << bit));
+        head_crc(slot1);
+        loads(ca);
+    }
+    /* the known one with its meaning (no map) on a copy that has one: still a valid header */
+    nvm = snap;
+    put32(slot1 + 12, MC_PSTORE_FLAG_NO_MAP);
+    head_crc(slot1);
+    loads(cb);
+}
+
+/* The next save's sequence number is one above every header that checks, marked or not; a
+ * header whose lengths cannot be a copy on this device (a record longer than the slot, lengths
+ * whose sum is, lengths not whole words) does not check, its number is unknown and does not
+ * count, whatever it says. b's header, CRC valid, claims sequence 100: with valid lengths (the
+ * marker erased, not committed) the next save is 101; with each of those lengths it is 2 (a's 1
+ * + 1). (param_store.c:538.) */
+static void test_insane_lengths_do_not_count(void **state)
+{
+    (void)state;
+    two_copies();
+    const uint32_t pl = get32(slot1 + 16), ml = get32(slot1 + 20);
+    const struct {
+        uint32_t pl, ml, next;
+    } cases[] = {
+        {pl, ml, 101u},                     /* sane, unmarked: counts            */
+        {cap + 4u, ml, 2u},                 /* a parameter record past the slot  */
+        {cap + 4u, 0u, 2u},
+        {0xFFFFFFFCu, 32u, 2u},
+        {pl, cap - pl + 4u, 2u},            /* both together past the slot       */
+        {pl + 2u, ml, 2u},                  /* not whole words                   */
+        {pl, ml + 2u, 2u},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        nvm = snap;
+        put32(slot1 + 8, 100u);
+        put32(slot1 + 16, cases[i].pl);
+        put32(slot1 + 20, cases[i].ml);
+        head_crc(slot1);
+        memset(slot1 + 32, 0xFF, 8u);   /* the marker erased: a copy cut before its commit */
+        mc_drive_cfg_t got;
+        mc_pstore_info_t info;
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_int_equal(info.slot, 0);
+        assert_true(same_cfg_in(&got, ca, false, &got_map));
+        const mc_drive_cfg_t *c = make_cfg(2, 5, 5);
+        assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, &info), MC_PSTORE_OK);
+        assert_int_equal(info.slot, 1);
+        assert_int_equal(info.seq, cases[i].next);
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_int_equal(info.seq, cases[i].next);
+        assert_true(same_cfg_in(&got, c, false, &got_map));
+    }
+}
+
+/* Sequence numbers run on modulo 2^32 (mc/param_store.h: a newer than b when a - b is in
+ * [1, 2^31)): from a committed copy numbered s, each of three saves is numbered one more and is
+ * the copy a load returns, across 2^31 and across 2^32, and an erase after them too.
+ * (param_store.c:568: the first header that checks sets the number, whatever it is.) */
+static void test_sequence_wraps(void **state)
+{
+    (void)state;
+    const uint32_t starts[] = {0x7FFFFFFEu, 0x80000000u, 0xBFFFFFFFu, 0xFFFFFFFEu, 0xFFFFFFFFu, 0u};
+    for (size_t i = 0; i < sizeof starts / sizeof starts[0]; ++i) {
+        hal_host_nvm_init(&nvm);
+        const mc_drive_cfg_t *a = make_cfg(0, 3, 3);
+        assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
+        put32(nvm.mem + 8, starts[i]);   /* slot 0's copy, as if that many saves came before */
+        head_crc(nvm.mem);
+        mc_drive_cfg_t got;
+        mc_pstore_info_t info;
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_int_equal(info.seq, starts[i]);
+        for (uint32_t k = 1u; k <= 3u; ++k) {
+            const mc_drive_cfg_t *c = make_cfg((int)k, 2 + (int)k, 4);
+            assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, &info), MC_PSTORE_OK);
+            assert_int_equal(info.seq, starts[i] + k);
+            assert_int_equal(info.slot, (int)(k % 2u));
+            assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+            assert_int_equal(info.seq, starts[i] + k);
+            assert_int_equal(info.slot, (int)(k % 2u));
+            assert_true(same_cfg_in(&got, c, false, &got_map));
+        }
+        assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_OK);
+        assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
+        assert_true(info.defaults);
+        assert_int_equal(info.seq, starts[i] + 4u);
+    }
+}
+
+/* ---- a device of two blocks, each exactly the largest copy -------------------------------- */
+
+static hal_nvm_region_t region[1];
+static const hal_nvm_geometry_t device = {0u, 256u, 1u, region};
+
+/* A slot is one block, slot 1 the device's last block: a save of the largest set (its copy
+ * fills the block to the last byte) erases and writes its own block only, never the other
+ * slot's (the copy a load returns) nor past the device's end, into either slot, and both sets
+ * come back. (param_store.c:614, the blocks a commit erases.) */
+static void test_largest_copies_touch_their_own_block(void **state)
+{
+    (void)state;
+    const uint32_t largest = PAYLOAD_AT + round8(MC_STORE_PARAMS_MAX + MC_STORE_MODEL_MAX);
+    region[0] = (hal_nvm_region_t){0u, largest, 2u, 0u};
+    assert_true(hal_host_nvm_init_geom(&nvm, &device, 0u, 2u));
+    mc_pstore_geom_t g;
+    assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_OK);
+    assert_int_equal(g.slot_first[1], 1u);
+    assert_int_equal(g.slot_blocks, 1u);
+    const int n = MC_FLUX_MAP_MAX;
+    for (int k = 0; k < 4; ++k) {
+        const mc_drive_cfg_t *c = make_cfg(k, n, n);
+        const int slot = k % 2, other = 1 - slot;
+        snap = nvm;
+        mc_pstore_info_t info;
+        assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, &info), MC_PSTORE_OK);
+        assert_int_equal(info.slot, slot);
+        assert_memory_equal(nvm.mem + (uint32_t)other * largest, snap.mem + (uint32_t)other * largest, largest);
+        mc_drive_cfg_t got;
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_int_equal(info.slot, slot);
+        assert_true(same_cfg_in(&got, c, false, &got_map));
+    }
+}
+
+/* ---- what a call reports ------------------------------------------------------------------ */
+
+static void info_is_none(const mc_pstore_info_t *info)
+{
+    assert_int_equal(info->slot, -1);
+    assert_int_equal(info->seq, 0u);
+    assert_false(info->defaults);
+    assert_false(info->map_dropped);
+    assert_false(info->fell_back);
+    assert_int_equal(info->params.kept, 0u);
+    assert_int_equal(info->params.dropped, 0u);
+    assert_int_equal(info->params.unknown, 0u);
+    assert_false(info->params.other_table);
+    assert_int_equal(info->params.first, -1);
+}
+
+/* The info a save or a load fills says what happened and nothing else, whatever it held before:
+ * a refused call reports no copy (slot -1, number 0, no flag), a save the slot and number it
+ * wrote and no other flag, a load of the newest copy no fallback and no defaults.
+ * (param_store.c:689, the info's clearing.) */
+static void test_info_says_only_what_happened(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&nvm);
+    mc_pstore_info_t info;
+    mc_drive_cfg_t got;
+    const mc_drive_cfg_t *a = make_cfg(0, 4, 4);
+    memset(&info, 0xA5, sizeof info);
+    assert_int_equal(mc_pstore_save(&nvm, NULL, work, sizeof work, &info), MC_PSTORE_BAD_ARGS);
+    info_is_none(&info);
+    memset(&info, 0xA5, sizeof info);
+    assert_int_equal(mc_pstore_load(&nvm, &got, &got_map, work, 8u, &info), MC_PSTORE_BAD_ARGS);
+    info_is_none(&info);
+    memset(&info, 0xA5, sizeof info);
+    assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
+    info_is_none(&info);
+
+    memset(&info, 0xA5, sizeof info);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, &info), MC_PSTORE_OK);
+    assert_int_equal(info.slot, 0);
+    assert_int_equal(info.seq, 1u);
+    assert_false(info.defaults);
+    assert_false(info.map_dropped);
+    assert_false(info.fell_back);
+    memset(&info, 0xA5, sizeof info);
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_int_equal(info.slot, 0);
+    assert_int_equal(info.seq, 1u);
+    assert_false(info.defaults);
+    assert_false(info.map_dropped);
+    assert_false(info.fell_back);
+    assert_int_equal(info.params.kept, MC_PARAM_COUNT);
+    assert_int_equal(info.params.dropped, 0u);
+}
+
+/* NULL for the device or the work buffer: refused (BAD_ARGS) by load and erase before any NVM
+ * step, cfg untouched, as by save. (param_store.c:742, :775.) */
+static void test_null_arguments(void **state)
+{
+    (void)state;
+    hal_host_nvm_init(&nvm);
+    const mc_drive_cfg_t *a = make_cfg(0, 4, 4);
+    assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_OK);
+    snap = nvm;
+    mc_drive_cfg_t got = *make_cfg(1, 0, 0);
+    const mc_drive_cfg_t before = got;
+    mc_pstore_info_t info;
+    assert_int_equal(mc_pstore_load(&nvm, &got, &got_map, NULL, sizeof work, &info), MC_PSTORE_BAD_ARGS);
+    info_is_none(&info);
+    assert_int_equal(mc_pstore_load(&nvm, NULL, &got_map, work, sizeof work, &info), MC_PSTORE_BAD_ARGS);
+    assert_memory_equal(&got, &before, sizeof got);
+    assert_int_equal(mc_pstore_erase(NULL, work, sizeof work), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(mc_pstore_erase(&nvm, NULL, sizeof work), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(nvm.steps, snap.steps);
+    assert_memory_equal(nvm.mem, snap.mem, sizeof nvm.mem);
+    assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+    assert_true(same_cfg_in(&got, a, false, &got_map));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_params_record_of_another_version),
+        cmocka_unit_test(test_record_crc_word_flipped),
+        cmocka_unit_test(test_unknown_header_flag_refused),
+        cmocka_unit_test(test_insane_lengths_do_not_count),
+        cmocka_unit_test(test_sequence_wraps),
+        cmocka_unit_test(test_largest_copies_touch_their_own_block),
+        cmocka_unit_test(test_info_says_only_what_happened),
+        cmocka_unit_test(test_null_arguments),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
