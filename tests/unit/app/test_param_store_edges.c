@@ -16,7 +16,8 @@
  *     CRC word: the save (or load) is an NVM error, nothing is marked or overwritten;
  *   - a newest copy whose records contradict its header is refused from its first words, before
  *     an unreadable rest: the older copy loads;
- *   - write units below 8 (the layout of 8), a write unit or block size of 0 (refused).
+ *   - write units below 8 (the layout of 8), blocks of any size (odd too) with byte writes, a
+ *     write unit or block size of 0 (refused).
  * The host NVM model (hal_host) is the device; the faults are put in between the store and it by
  * the linker (--wrap of hal_nvm_read / write / erase / write_unit / block_size, CMakeLists.txt):
  * the firmware calls the wrappers below, which count the calls and inject the faults, then call
@@ -63,7 +64,8 @@ typedef struct {
 } fault_t;
 static fault_t fault = {.stuck_at = UINT32_MAX};   /* no fault */
 /* The write unit the device reports, 0: the host model's (8). A larger one (a multiple of 8) is
- * enforced here as a device with that unit would: a write at another offset or length fails. */
+ * enforced here as a device with that unit would: a write at another offset or length fails; a
+ * smaller one (1, 2, 4) is programmed by small_unit_write(). */
 static uint32_t unit;
 /* The block size the device reports: the host model's unless block_zero (a device description
  * that lost its erase size). */
@@ -117,6 +119,20 @@ bool __wrap_hal_nvm_read(const hal_nvm_t *nvm, uint32_t block, uint32_t offset, 
     return ok;
 }
 
+/* A device whose unit is 1, 2 or 4 bytes, programmed here as it would be (the host model takes
+ * whole 8-byte units only): a write only clears bits, within the block. */
+static bool small_unit_write(hal_nvm_t *nvm, uint32_t block, uint32_t offset, const void *data, uint32_t len)
+{
+    const uint32_t bs = nvm->block_size;
+    if (nvm->dead || block >= nvm->blocks || offset > bs || len > bs - offset) {
+        return false;
+    }
+    for (uint32_t k = 0u; k < len; ++k) {
+        nvm->mem[block * bs + offset + k] &= ((const uint8_t *)data)[k];
+    }
+    return true;
+}
+
 bool __wrap_hal_nvm_write(hal_nvm_t *nvm, uint32_t block, uint32_t offset, const void *data, uint32_t len)
 {
     count_call();
@@ -127,7 +143,8 @@ bool __wrap_hal_nvm_write(hal_nvm_t *nvm, uint32_t block, uint32_t offset, const
     const bool fail = fault.writes == fault.fail_write;
     bool ok = false;
     if (!fail || fault.carried_out) {
-        ok = __real_hal_nvm_write(nvm, block, offset, data, len);
+        ok = unit != 0u && unit < 8u ? small_unit_write(nvm, block, offset, data, len)
+                                     : __real_hal_nvm_write(nvm, block, offset, data, len);
         const uint32_t at = block * nvm->block_size + offset;
         if (ok && fault.stuck_at != UINT32_MAX && fault.stuck_at >= at && fault.stuck_at - at < len) {
             nvm->mem[fault.stuck_at] = 0xFFu;
@@ -903,6 +920,32 @@ static void test_write_units_below_8(void **state)
     }
 }
 
+/* A write unit of 1 (an EEPROM, a NOR flash written by bytes) allows a block of any size, odd
+ * too: a write that crosses a block's end is split there, and each part written whole, down to a
+ * last part of a single byte. Block sizes 3937 to 3951 bytes with the smallest work buffer: one
+ * of the payload's 64-byte writes crosses each of them with 1 to 15 bytes left (3943: 1 byte);
+ * both slots' sets come back bit-exact. (param_store.c:177, slot_write's loop to the last byte.) */
+static void test_any_block_size_with_byte_writes(void **state)
+{
+    (void)state;
+    for (uint32_t bs = 3937u; bs <= 3951u; ++bs) {
+        nvm_blocks(bs, 4u);
+        unit = 1u;
+        const mc_drive_cfg_t *a = make_cfg(0, 20, 20), *b = make_cfg(1, 21, 19);
+        assert_true(MC_STORE_PARAMS_MAX + 4u * (14u + 2u * 400u) > 3944u - PAYLOAD_AT);   /* it crosses */
+        mc_pstore_info_t info;
+        mc_drive_cfg_t got;
+        assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, &info), MC_PSTORE_OK);
+        assert_int_equal(info.slot, 0);
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_true(same_cfg(&got, a, false));
+        assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, &info), MC_PSTORE_OK);
+        assert_int_equal(info.slot, 1);
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_true(same_cfg(&got, b, false));
+    }
+}
+
 /* A device that reports a write unit of 0 or a block size of 0 (a description that lost them) is
  * refused (BAD_ARGS) by geometry, save, load and erase before any NVM step, with no layout.
  * (param_store.c:90.) */
@@ -960,6 +1003,7 @@ int main(void)
         cmocka_unit_test_setup(test_unreadable_record_crc, no_fault),
         cmocka_unit_test_setup(test_mismatch_refused_before_an_unreadable_rest, no_fault),
         cmocka_unit_test_setup(test_write_units_below_8, no_fault),
+        cmocka_unit_test_setup(test_any_block_size_with_byte_writes, no_fault),
         cmocka_unit_test_setup(test_zero_sizes_refused, no_fault),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

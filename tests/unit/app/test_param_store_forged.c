@@ -168,16 +168,30 @@ static void test_params_record_of_another_version(void **state)
         forge_b(pr, pl, mr, ml);
         loads(ca);
     }
-    /* version 1 of another table: its positions name other parameters */
-    const uint32_t w[] = {MC_STORE_MAGIC_PARAMS, 1u, MC_STORE_V1_TABLE ^ 1u, 2u, 0u, mc_f32_bits(1.0f), 1u, 0u};
-    uint8_t v1[4u * 9u];
-    for (int k = 0; k < 8; ++k) {
-        put32(v1 + 4 * k, w[k]);
+    /* version 1 of another table: its positions name other parameters; of the frozen table:
+     * read (the control) */
+    const uint32_t tables[] = {MC_STORE_V1_TABLE - 1u, MC_STORE_V1_TABLE + 1u, 0u, MC_STORE_V1_TABLE};
+    for (size_t i = 0; i < sizeof tables / sizeof tables[0]; ++i) {
+        const uint32_t w[] = {MC_STORE_MAGIC_PARAMS, 1u, tables[i], 2u, 0u | MC_STORE_V1_AUTO, 0u, 1u | MC_STORE_V1_AUTO, 0u};
+        uint8_t v1[4u * 9u];
+        for (int k = 0; k < 8; ++k) {
+            put32(v1 + 4 * k, w[k]);
+        }
+        close_record(v1, sizeof v1);
+        nvm = snap;
+        forge_b(v1, sizeof v1, mr, ml);
+        mc_drive_cfg_t got;
+        mc_pstore_info_t info;
+        const bool frozen = tables[i] == MC_STORE_V1_TABLE;
+        assert_int_equal(load(&got, &info), frozen ? MC_PSTORE_OK : MC_PSTORE_FELL_BACK);
+        assert_int_equal(info.slot, frozen ? 1 : 0);
+        if (frozen) {
+            assert_true(info.params.other_table);
+            assert_int_equal(info.params.kept + info.params.unknown, 2u);
+        } else {
+            assert_true(same_cfg_in(&got, ca, false, &got_map));
+        }
     }
-    close_record(v1, sizeof v1);
-    nvm = snap;
-    forge_b(v1, sizeof v1, mr, ml);
-    loads(ca);
 }
 
 /* Each record ends with its own CRC word, which format 2's payload CRC leaves out: a bit of the
@@ -295,6 +309,41 @@ static void test_sequence_wraps(void **state)
         assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
         assert_true(info.defaults);
         assert_int_equal(info.seq, starts[i] + 4u);
+    }
+}
+
+/* Which of two committed copies is the newer: b's number minus a's, modulo 2^32, in [1, 2^31)
+ * (serial number arithmetic, mc/param_store.h): b at a + 1, + 2^28, + 2^30, + 2^31 - 1 is the
+ * newer; at a + 2^31 + 1 or a - 1 (a newer by the same rule) a is. Each pair from a few
+ * starting numbers; the next save is one above the newer. (param_store.c:546.) */
+static void test_newer_by_serial_arithmetic(void **state)
+{
+    (void)state;
+    const uint32_t starts[] = {1u, 0x40000000u, 0xF0000000u};
+    const struct {
+        uint32_t db;
+        bool b_newer;
+    } cases[] = {{1u, true},           {0x10000000u, true},  {0x40000000u, true}, {0x7FFFFFFFu, true},
+                 {0x80000001u, false}, {0xFFFFFFFFu, false}, {0xC0000000u, false}};
+    for (size_t i = 0; i < sizeof starts / sizeof starts[0]; ++i) {
+        for (size_t j = 0; j < sizeof cases / sizeof cases[0]; ++j) {
+            two_copies();
+            const uint32_t sa = starts[i], sb = starts[i] + cases[j].db;
+            put32(slot0 + 8, sa);
+            head_crc(slot0);
+            put32(slot1 + 8, sb);
+            head_crc(slot1);
+            mc_drive_cfg_t got;
+            mc_pstore_info_t info;
+            assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+            assert_int_equal(info.slot, cases[j].b_newer ? 1 : 0);
+            assert_int_equal(info.seq, cases[j].b_newer ? sb : sa);
+            assert_true(same_cfg_in(&got, cases[j].b_newer ? cb : ca, false, &got_map));
+            const mc_drive_cfg_t *c = make_cfg(2, 3, 4);
+            assert_int_equal(mc_pstore_save(&nvm, c, work, sizeof work, &info), MC_PSTORE_OK);
+            assert_int_equal(info.slot, cases[j].b_newer ? 0 : 1);
+            assert_int_equal(info.seq, (cases[j].b_newer ? sb : sa) + 1u);
+        }
     }
 }
 
@@ -420,6 +469,7 @@ int main(void)
         cmocka_unit_test(test_unknown_header_flag_refused),
         cmocka_unit_test(test_insane_lengths_do_not_count),
         cmocka_unit_test(test_sequence_wraps),
+        cmocka_unit_test(test_newer_by_serial_arithmetic),
         cmocka_unit_test(test_largest_copies_touch_their_own_block),
         cmocka_unit_test(test_info_says_only_what_happened),
         cmocka_unit_test(test_null_arguments),
