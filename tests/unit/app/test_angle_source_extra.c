@@ -394,6 +394,39 @@ static void test_recovery_budget_per_enable(void **st)
     }
 }
 
+/* A recovery whose catch finds the rotor standing has no angle to go on with (the given one is
+ * stale after a loss of lock, and this start does not find one itself): the reason it recovered
+ * from is latched at the catch's end, with recoveries left in the budget (protection.retries 3),
+ * the outputs off: one recovery, never RUN again. (startup.c:281: the catch's outcome knows it
+ * follows a recovery.) */
+static void test_stale_catch_faults_at_once(void **st)
+{
+    (void)st;
+    static rig_t r;
+    test_hold_omega = 0.0f;
+    rig_init(&r, "test_hold");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_protection_retries, 3.0f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    assert_false(r.d.seq.cfg.init_pos);
+    enable_iq(&r, 0.5f, 0.0f);
+    run(&r, 1000);
+    lose_lock(&r);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+    assert_int_equal(mc_drive_telemetry(&r.d)->recoveries, 1u);
+    int n = 0;
+    for (; n < 1000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+        run(&r, 1);
+    }
+    assert_true(n < 1000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_LOSS_OF_LOCK);
+    assert_int_equal(mc_drive_telemetry(&r.d)->recoveries, 1u);
+    assert_false(hal_pwm_enabled(&r.pwm));
+}
+
 /* cfg_of gives the configuration the running source holds; cfg_equal compares two by their
  * fields (not their bytes) and tells a changed one apart. */
 static void test_cfg_of_and_equal(void **st)
@@ -432,6 +465,7 @@ int main(void)
         cmocka_unit_test(test_lock_loss_detected_without_injection),
         cmocka_unit_test(test_lock_loss_recovers_with_v000),
         cmocka_unit_test(test_recovery_budget_per_enable),
+        cmocka_unit_test(test_stale_catch_faults_at_once),
         cmocka_unit_test(test_cfg_of_and_equal),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
