@@ -5,7 +5,9 @@
  *     configuration: its duties, period by period, are those of that program run on its own
  *     with the same inputs;
  *   - RUN entered with the given angle (no steps, no catch): the current references start from
- *     zero and move from there at control.i_slew, with no d-axis step.
+ *     zero and move from there at control.i_slew, with no d-axis step;
+ *   - Step III's convergence test: at least twice startup.step3_hold_s, the estimate at rest for
+ *     the last step3_hold of it.
  * A plant-less rig (the host HAL, zero currents, 300 V), as test_drive.c's. */
 #include <string.h>
 
@@ -13,6 +15,7 @@
 #include "hal_host/host.h"
 #include "mc/drive.h"
 #include "mc/phase_program.h"
+#include "drive_internal.h"   /* mc_drive_startup_reset, mc_drive_step3_check */
 
 typedef struct {
     hal_pwm_t pwm;
@@ -146,11 +149,59 @@ static void test_references_start_from_zero(void **state)
     }
 }
 
+/* Step III hands over to RUN when the low-passed |omega_hat| has stayed below the tolerance for
+ * step3_hold periods and Step III lasted at least twice that: the estimate starts at rest too,
+ * so a hold from its first period alone proves nothing. Periods as the ISR runs them (the
+ * sequencer's tick, then from the second tick on the pipeline and the test): at rest throughout,
+ * the hand-over is at tick 2 step3_hold exactly; one period of a moving estimate (100 x the
+ * tolerance: above it after the 50 Hz low-pass) at tick hold + 2 restarts the hold: the
+ * hand-over comes later than a full hold after it. (startup.c:408.) */
+static void test_step3_lasts_twice_the_hold(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "three_step", "pulses");
+    const uint32_t hold = r.d.cfg->blk.step3_hold;
+    assert_true(hold >= 3u);
+    const float tol = r.d.cfg->blk.step3_speed_tol;
+    for (int c = 0; c < 2; ++c) {
+        mc_drive_startup_reset(&r.d);   /* Step III's convergence state at rest */
+        r.d.seq.state = MC_STATE_INIT_POS;   /* as Step II's end enters Step III */
+        r.d.seq.step = MC_INIT_STEP3;
+        r.d.seq.ticks = 0u;
+        r.d.seq.limit = 0u;   /* no timeout: the test alone decides */
+        const uint32_t spike = c == 0 ? 0u : hold + 2u;
+        uint32_t done = 0u, above = 0u;   /* the last tick the low-passed speed was not below */
+        for (uint32_t t = 0u; t < 10u * hold && done == 0u; ++t) {
+            mc_seq_tick(&r.d.seq);
+            const uint32_t now = r.d.seq.ticks;   /* RUN's entry restarts the count */
+            if (now > 1u) {
+                mc_drive_step3_check(&r.d, now == spike ? 100.0f * tol : 0.0f);
+                if (!(r.d.step3_speed.y < tol)) {
+                    above = now;
+                }
+            }
+            if (r.d.seq.state == MC_STATE_RUN) {
+                done = now;
+            }
+        }
+        if (c == 0) {
+            assert_int_equal(above, 0u);
+            assert_int_equal(done, 2u * hold);
+        } else {
+            /* a full hold of periods below the tolerance after the last one above it */
+            assert_true(above > spike && above + hold > 2u * hold);
+            assert_int_equal(done, above + hold);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_step1_runs_the_selected_program),
         cmocka_unit_test(test_references_start_from_zero),
+        cmocka_unit_test(test_step3_lasts_twice_the_hold),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
