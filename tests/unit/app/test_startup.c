@@ -7,13 +7,15 @@
  *   - RUN entered with the given angle (no steps, no catch): the current references start from
  *     zero and move from there at control.i_slew, with no d-axis step;
  *   - Step III's convergence test: at least twice startup.step3_hold_s, the estimate at rest for
- *     the last step3_hold of it.
+ *     the last step3_hold of it;
+ *   - an angle-sensor drive's wait for a diode pulse's low after the calibration: bounded.
  * A plant-less rig (the host HAL, zero currents, 300 V), as test_drive.c's. */
 #include <string.h>
 
 #include "../mc_test.h"
 #include "hal_host/host.h"
 #include "mc/drive.h"
+#include "mc/catch.h"
 #include "mc/phase_program.h"
 #include "drive_internal.h"   /* mc_drive_startup_reset, mc_drive_step3_check */
 
@@ -196,12 +198,52 @@ static void test_step3_lasts_twice_the_hold(void **state)
     }
 }
 
+/* An angle-sensor drive enabled on a turning rotor waits after the calibration, outputs off, for
+ * a diode pulse's low, at most the catch's longest wait (flying.n_wait_max periods) and never
+ * longer, also with a calibration shorter than that wait (8 samples): with a current that never
+ * comes down to the low (5 A in a and -5 A in b from the calibration's last sample on: 1/8 of
+ * it in the offsets), it enters RUN once it has waited n_wait_max periods, not at the
+ * calibration's timeout. (startup.c:182:
+ * the periods waited counted from the calibration's end.) */
+static void test_sensor_wait_is_bounded(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "encoder", "given", "pulses");
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_control_offset_cal_samples, 8.0f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    const uint32_t samples = r.d.cfg->blk.offs.samples, wait = r.d.cfg->blk.flying.n_wait_max;
+    assert_int_equal(samples, 8u);
+    assert_true(wait > 2u * samples);   /* longer than the calibration, a few times */
+    const float amps = 5.0f, k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
+    const mc_ab_t i_ab = {amps, (amps + 2.0f * amps) / sqrtf(3.0f)};   /* Clarke of (5, -5, 0) A */
+    assert_false(mc_catch_at_low(&r.d.cfg->blk.flying, i_ab));
+    assert_true(amps < r.d.cfg->blk.prot.i_trip);
+    const uint32_t step = 80000u * 1500u / 60u / 10000u;   /* counts per period at 1500 rpm */
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&r.d, &c);
+    uint32_t after = 0u;   /* periods from the calibration's last (included) */
+    for (int n = 0; n < 5000 && mc_drive_state(&r.d) != MC_STATE_RUN && mc_drive_state(&r.d) != MC_STATE_FAULT; ++n) {
+        if (r.d.offs.count + 1u >= samples) {   /* from the sample that ends the calibration */
+            r.adc.sample.i[0] = (uint16_t)lrintf(nominal + amps / k);
+            r.adc.sample.i[1] = (uint16_t)lrintf(nominal - amps / k);
+            ++after;
+        }
+        r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+        run(&r, 1);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    print_message("RUN %u periods after the calibration (n_wait_max %u)\n", after, wait);
+    assert_int_equal(after, 1u + wait);   /* the last sample's period, then n_wait_max waited */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_step1_runs_the_selected_program),
         cmocka_unit_test(test_references_start_from_zero),
         cmocka_unit_test(test_step3_lasts_twice_the_hold),
+        cmocka_unit_test(test_sensor_wait_is_bounded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
