@@ -5,6 +5,7 @@
  *     flag this firmware does not know, a record whose own CRC word is wrong (the payload CRC
  *     does not cover it, format 2), a header of an unknown format, a map beyond the grid
  *     limits: refused, the older copy loads (such a map given to a save: refused untouched);
+ *   - a marker that is not exactly its pattern: no commit;
  *   - headers whose lengths cannot be this device's: they do not count for the next sequence
  *     number (their number is unknown), while a header that checks does, marked or not;
  *   - sequence numbers across 2^31 and 2^32: every save is the newest copy a load returns;
@@ -232,6 +233,32 @@ static void test_unknown_header_flag_refused(void **state)
     put32(slot1 + 12, MC_PSTORE_FLAG_NO_MAP);
     head_crc(slot1);
     loads(cb);
+}
+
+/* The commit marker is exactly its pattern (0x5A, 0xA5, ...): b's marker with any byte not its
+ * pattern, below it (more bits cleared: 0x00, the pattern with a bit cleared, one less, another
+ * write's bytes) or above it (erased 0xFF, a write cut short: a write only clears bits), is no
+ * marker; b is not committed, and a load returns a (the only committed copy: OK).
+ * (param_store.c:524, the marker's compare.) */
+static void test_marker_exactly_its_pattern(void **state)
+{
+    (void)state;
+    two_copies();
+    for (uint32_t k = 0u; k < 8u; ++k) {
+        const uint8_t pat = (k & 1u) != 0u ? 0xA5u : 0x5Au;
+        assert_int_equal(slot1[32u + k], pat);
+        const uint8_t other[] = {0x00u, (uint8_t)(pat & (pat - 1u)), (uint8_t)(pat - 1u), (uint8_t)(pat ^ 0x10u), 0xFFu};
+        for (size_t i = 0; i < sizeof other / sizeof other[0]; ++i) {
+            nvm = snap;
+            slot1[32u + k] = other[i];
+            mc_drive_cfg_t got;
+            mc_pstore_info_t info;
+            assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+            assert_int_equal(info.slot, 0);
+            assert_false(info.fell_back);
+            assert_true(same_cfg_in(&got, ca, false, &got_map));
+        }
+    }
 }
 
 /* The header's format word: 2 (this firmware's) and 1 (the records' CRC words in the payload
@@ -559,6 +586,7 @@ int main(void)
         cmocka_unit_test(test_record_crc_word_flipped),
         cmocka_unit_test(test_unknown_header_flag_refused),
         cmocka_unit_test(test_unknown_format_refused),
+        cmocka_unit_test(test_marker_exactly_its_pattern),
         cmocka_unit_test(test_map_dimensions_beyond_the_limits),
         cmocka_unit_test(test_insane_lengths_do_not_count),
         cmocka_unit_test(test_sequence_wraps),

@@ -8,7 +8,8 @@
  *     zero and move from there at control.i_slew, with no d-axis step;
  *   - Step III's convergence test: at least twice startup.step3_hold_s, the estimate at rest for
  *     the last step3_hold of it;
- *   - an angle-sensor drive's wait for a diode pulse's low after the calibration: bounded.
+ *   - an angle-sensor drive's wait for a diode pulse's low after the calibration: bounded;
+ *   - IDLE and FAULT leave the PWM alone.
  * A plant-less rig (the host HAL, zero currents, 300 V), as test_drive.c's. */
 #include <string.h>
 
@@ -237,6 +238,55 @@ static void test_sensor_wait_is_bounded(void **state)
     assert_int_equal(after, 1u + wait);   /* the last sample's period, then n_wait_max waited */
 }
 
+/* With the outputs off and nothing to run (IDLE, FAULT) the drive leaves the PWM alone: no duty
+ * write and no enable call period after period (the duties it left at 50 % stay latched), only
+ * the one outputs-off of the period it got there. (startup.c:376: outputs off only if on.) */
+static void test_idle_and_fault_leave_the_pwm_alone(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "encoder", "given", "pulses");
+    uint32_t w = r.pwm.writes;
+    run(&r, 50);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    assert_int_equal(r.pwm.writes, w);
+    through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+    run(&r, 20);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    /* disabled: IDLE */
+    const mc_drive_cmd_t off = {.enable = false, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&r.d, &off);
+    run(&r, 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    w = r.pwm.writes;
+    for (int k = 0; k < 50; ++k) {
+        run(&r, 1);
+        assert_int_equal(r.pwm.writes, w);
+        assert_false(hal_pwm_enabled(&r.pwm));
+    }
+    /* a fault: FAULT */
+    through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+    run(&r, 20);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    const float i = r.d.cfg->blk.prot.i_trip + 1.0f;
+    r.adc.sample.i[0] = (uint16_t)lrintf((float)r.d.cfg->blk.offs.nominal + i / r.d.cfg->blk.offs.amps_per_count);
+    run(&r, 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_true(r.pwm.shadow[k] == 0.5f);
+    }
+    w = r.pwm.writes;
+    for (int k = 0; k < 50; ++k) {
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_int_equal(r.pwm.writes, w);
+        assert_false(hal_pwm_enabled(&r.pwm));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -244,6 +294,7 @@ int main(void)
         cmocka_unit_test(test_references_start_from_zero),
         cmocka_unit_test(test_step3_lasts_twice_the_hold),
         cmocka_unit_test(test_sensor_wait_is_bounded),
+        cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -6,6 +6,7 @@
  *     ones are unknown, and looking for them reads nothing outside the table;
  *   - a derived mark after a value for the same parameter (a record spliced by a tool), and the
  *     mark applied on a set where the parameter has a value: the parameter follows its rule again;
+ *   - a record in a buffer larger than itself is read to its own end;
  *   - the encoder refuses a map with fewer than 2 or more than MC_FLUX_MAP_MAX points on either
  *     axis; every status has its own name.
  * Built with ASan and UBSan (tests/unit/app/CMakeLists.txt: store.c and params.c compiled again
@@ -159,6 +160,27 @@ static void test_derived_mark_after_a_value(void **state)
     assert_int_equal(rep.kept, 2u);
 }
 
+/* A parameter record read from a buffer larger than the record (a flash window, the whole
+ * configuration area): its own count says where it ends, the bytes after it are not looked at;
+ * a buffer one word short of the record is BAD_SIZE. */
+static void test_params_record_in_a_larger_buffer(void **state)
+{
+    (void)state;
+    static mc_params_t p, q;
+    moved_set(&p);
+    const size_t n = mc_store_params_encode(&p, buf, sizeof buf);
+    assert_int_equal(n, MC_STORE_PARAMS_MAX);
+    const size_t more[] = {0u, 4u, 7u, 8u, 100u, sizeof buf - n};
+    for (size_t i = 0; i < sizeof more / sizeof more[0]; ++i) {
+        memset(buf + n, (int)(0x11u * i), sizeof buf - n);
+        mc_store_report_t rep;
+        assert_int_equal(mc_store_params_decode(buf, n + more[i], &q, &rep), MC_STORE_OK);
+        assert_int_equal(rep.kept, MC_PARAM_COUNT);
+        assert_same_set(&q, &p);
+    }
+    assert_int_equal(mc_store_params_decode(buf, n - 4u, &q, NULL), MC_STORE_BAD_SIZE);
+}
+
 /* A map the encoder takes has 2 to MC_FLUX_MAP_MAX points on each axis (the thesis' flux map
  * needs two points to interpolate, the record's size bounds it): on each axis, with the other
  * valid, 2 and MC_FLUX_MAP_MAX are written, -1, 0, 1 and MC_FLUX_MAP_MAX + 1 refused (0 bytes,
@@ -218,6 +240,7 @@ int main(void)
         cmocka_unit_test(test_entries_in_any_order),
         cmocka_unit_test(test_more_entries_than_the_table),
         cmocka_unit_test(test_derived_mark_after_a_value),
+        cmocka_unit_test(test_params_record_in_a_larger_buffer),
         cmocka_unit_test(test_model_encode_grid_limits),
         cmocka_unit_test(test_status_names),
     };
