@@ -8,7 +8,8 @@
  *     zero and move from there at control.i_slew, with no d-axis step;
  *   - Step III's convergence test: at least twice startup.step3_hold_s, the estimate at rest for
  *     the last step3_hold of it;
- *   - an angle-sensor drive's wait for a diode pulse's low after the calibration: bounded;
+ *   - an angle-sensor drive's wait for a diode pulse's low after the calibration: bounded; its
+ *     RUN entry with current flowing: references from that current (bumpless);
  *   - IDLE and FAULT leave the PWM alone.
  * A plant-less rig (the host HAL, zero currents, 300 V), as test_drive.c's. */
 #include <string.h>
@@ -238,6 +239,51 @@ static void test_sensor_wait_is_bounded(void **state)
     assert_int_equal(after, 1u + wait);   /* the last sample's period, then n_wait_max waited */
 }
 
+/* Bumpless RUN entry of an angle-sensor drive on a turning rotor (800 rpm, either way: the flux
+ * is held, no field-weakening entry) with 5 A flowing: RUN's first current reference starts from
+ * the current measured, in the frame of the sensor's angle one period on (the frame the pipeline
+ * then uses), and moves one slew step (0.2 A) toward the command (0 A), along the current: its
+ * angle is the current's to within 2 % of the rotor's turn in a period (0.042 rad), from several
+ * rotor angles. (startup.c:207, the frame of RUN's first references: the angle a period old, or
+ * one period back, is a turn off.) */
+static void test_sensor_entry_references_from_the_current(void **state)
+{
+    (void)state;
+    static rig_t r;
+    const int32_t speeds[] = {800, -800};
+    const uint32_t starts[] = {0u, 13000u, 29000u, 51000u, 70000u};
+    for (size_t v = 0; v < 2u; ++v) {
+        for (size_t a = 0; a < sizeof starts / sizeof starts[0]; ++a) {
+            rig_init(&r, "encoder", "given", "pulses");
+            const float amps = 5.0f, k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
+            const uint32_t samples = r.d.cfg->blk.offs.samples;
+            const int32_t step = speeds[v] * 80000 / 60 / 10000;   /* counts per period */
+            r.qep.sample.count = starts[a];
+            const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
+            mc_drive_command(&r.d, &c);
+            for (int n = 0; n < 5000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+                if (r.d.offs.count + 1u >= samples) {
+                    r.adc.sample.i[0] = (uint16_t)lrintf(nominal + amps / k);
+                    r.adc.sample.i[1] = (uint16_t)lrintf(nominal - amps / k);
+                }
+                r.qep.sample.count = (uint32_t)(((int32_t)r.qep.sample.count + step + 80000) % 80000);
+                run(&r, 1);
+            }
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+            const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+            const float slew = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
+            const float dd = tm->i_ref.d - tm->i_dq.d, dq = tm->i_ref.q - tm->i_dq.q;
+            assert_true(hypotf(tm->i_dq.d, tm->i_dq.q) > 4.0f);   /* the current flows */
+            assert_near(sqrtf(dd * dd + dq * dq), slew, 1e-3);        /* one step toward 0 A */
+            /* ... along the current itself: the frames agree to far below a period's turn */
+            const float turn = fabsf(r.d.tm.omega * r.d.cfg->blk.ts);
+            assert_true(turn > 0.03f);
+            const float ang = remainderf(atan2f(tm->i_ref.q, tm->i_ref.d) - atan2f(tm->i_dq.q, tm->i_dq.d), 6.2831853f);
+            assert_true(fabsf(ang) < 0.02f * turn);
+        }
+    }
+}
+
 /* With the outputs off and nothing to run (IDLE, FAULT) the drive leaves the PWM alone: no duty
  * write and no enable call period after period (the duties it left at 50 % stay latched), only
  * the one outputs-off of the period it got there. (startup.c:376: outputs off only if on.) */
@@ -294,6 +340,7 @@ int main(void)
         cmocka_unit_test(test_references_start_from_zero),
         cmocka_unit_test(test_step3_lasts_twice_the_hold),
         cmocka_unit_test(test_sensor_wait_is_bounded),
+        cmocka_unit_test(test_sensor_entry_references_from_the_current),
         cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
