@@ -162,7 +162,8 @@ static void test_derived_mark_after_a_value(void **state)
 
 /* A parameter record read from a buffer larger than the record (a flash window, the whole
  * configuration area): its own count says where it ends, the bytes after it are not looked at;
- * a buffer one word short of the record is BAD_SIZE. */
+ * a buffer one word short of the record is BAD_SIZE. The smallest record, of no values, is read
+ * too. (store.c:216, :220.) */
 static void test_params_record_in_a_larger_buffer(void **state)
 {
     (void)state;
@@ -179,6 +180,21 @@ static void test_params_record_in_a_larger_buffer(void **state)
         assert_same_set(&q, &p);
     }
     assert_int_equal(mc_store_params_decode(buf, n - 4u, &q, NULL), MC_STORE_BAD_SIZE);
+
+    /* a record of no values (20 bytes: a tool's "all defaults"): read, every parameter at its
+     * default; in exactly its 20 bytes too; 16 bytes hold no record */
+    put_word(8u, mc_params_table_hash());
+    const size_t n0 = seal(0u);
+    assert_int_equal(n0, 20u);
+    static mc_params_t d;
+    mc_params_default(&d);
+    for (size_t extra = 0u; extra <= 8u; extra += 4u) {
+        mc_store_report_t rep;
+        assert_int_equal(mc_store_params_decode(buf, n0 + extra, &q, &rep), MC_STORE_OK);
+        assert_int_equal(rep.kept + rep.dropped + rep.unknown, 0u);
+        assert_same_set(&q, &d);
+    }
+    assert_int_equal(mc_store_params_decode(buf, 16u, &q, NULL), MC_STORE_BAD_SIZE);
 }
 
 /* A map the encoder takes has 2 to MC_FLUX_MAP_MAX points on each axis (the thesis' flux map
