@@ -929,6 +929,41 @@ static void test_sensor_entry_corner_needs_overmod(void **st)
     }
 }
 
+/* The entry corner at every rotor angle: an angle-sensor drive enabled at 1500 rpm from rotor
+ * angles a twelfth of an electrical turn apart latches, each time, the corner (C.6) gives for
+ * the angle at its entry, the outputs on with it at once: each of the six corners of the hexagon
+ * (a duty pattern of 0s and 1s) is latched, the first (corner 0) included. (startup.c:151: a
+ * corner index of 0 is a corner.) */
+static void test_sensor_entry_corner_every_sector(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const uint32_t step = 80000u * 1500u / 60u / 10000u;   /* counts per period at 1500 rpm */
+    unsigned seen = 0u;   /* bit p: duty pattern p (a + 2 b + 4 c) latched at an entry */
+    for (uint32_t k = 0u; k < 12u; ++k) {
+        rig_init(&r);
+        const uint32_t turn = 80000u / (uint32_t)r.d.cfg->p.motor_pole_pairs;   /* counts an electrical turn */
+        r.qep.sample.count = k * turn / 12u;
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        for (int n = 0; n < 1000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+            r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_true(r.d.entry.corner);
+        assert_true(hal_pwm_enabled(&r.pwm));
+        /* the corner acting now: the duties latched at the previous period's end */
+        unsigned pat = 0u;
+        for (int ph = 0; ph < 3; ++ph) {
+            assert_true(r.pwm.active[ph] == 0.0f || r.pwm.active[ph] == 1.0f);
+            pat |= (r.pwm.active[ph] == 1.0f ? 1u : 0u) << ph;
+        }
+        assert_true(pat != 0u && pat != 7u);   /* an active corner, not a zero vector */
+        seen |= 1u << pat;
+    }
+    assert_int_equal(seen, 0x7Eu);   /* all six */
+}
+
 /* The flying-start catch's longest wait for the current to rest (mc/catch.h): where the diodes
  * conduct, their current comes in pulses a sixth of a turn apart, and 2.5 of them at
  * omega_ug = Vdc / (sqrt3 psi_pm) are enough; at least 1 ms. The wait is the smallest number of
@@ -1173,6 +1208,7 @@ int main(void)
         cmocka_unit_test(test_protect_current_sum),
         cmocka_unit_test(test_catch_wait_bounded),
         cmocka_unit_test(test_sensor_entry_corner_needs_overmod),
+        cmocka_unit_test(test_sensor_entry_corner_every_sector),
         cmocka_unit_test(test_offset_cal_limit_every_phase),
         cmocka_unit_test(test_config_range_ends),
         cmocka_unit_test(test_numeric_guard),
