@@ -10,7 +10,8 @@
  *     number (their number is unknown), while a header that checks does, marked or not;
  *   - sequence numbers across 2^31 and 2^32: every save is the newest copy a load returns;
  *   - a device of two blocks, each exactly the largest copy: a save erases its own slot only;
- *   - the info a call returns says only what happened, and NULL arguments are refused. */
+ *   - the info a call returns says only what happened, and NULL arguments are refused;
+ *   - a slot smaller than a header and its marker: no room at all; every status's name. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -579,6 +580,49 @@ static void test_null_arguments(void **state)
     assert_true(same_cfg_in(&got, a, false, &got_map));
 }
 
+/* A device whose slot cannot even hold a header and its marker (two blocks of 8 to 32 bytes, the
+ * copy's records starting at byte 40): TOO_LARGE for geometry (no record bytes), save and erase,
+ * before any NVM step; a load finds nothing. (param_store.c:104: no record space below the
+ * records' start, not a wrapped-around one.) */
+static void test_slot_smaller_than_its_header(void **state)
+{
+    (void)state;
+    for (uint32_t bs = 8u; bs <= 32u; bs += 8u) {
+        region[0] = (hal_nvm_region_t){0u, bs, 2u, 0u};
+        assert_true(hal_host_nvm_init_geom(&nvm, &device, 0u, 2u));
+        mc_pstore_geom_t g;
+        assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_TOO_LARGE);
+        assert_int_equal(g.slot_blocks, 1u);
+        assert_int_equal(g.payload_max, 0u);
+        assert_int_equal(g.map_cells_max, 0u);
+        const mc_drive_cfg_t *a = make_cfg(0, 0, 0);
+        static uint8_t big[16384];
+        mc_pstore_info_t info;
+        assert_int_equal(mc_pstore_save(&nvm, a, big, sizeof big, &info), MC_PSTORE_TOO_LARGE);
+        assert_int_equal(info.slot, -1);
+        assert_int_equal(mc_pstore_erase(&nvm, big, sizeof big), MC_PSTORE_TOO_LARGE);
+        assert_int_equal(nvm.steps, 0u);
+        mc_drive_cfg_t got;
+        assert_int_equal(mc_pstore_load(&nvm, &got, &got_map, big, sizeof big, NULL), MC_PSTORE_TOO_LARGE);
+    }
+}
+
+/* Each status its own name (the tools and the log print them). (param_store.c:809.) */
+static void test_status_names(void **state)
+{
+    (void)state;
+    const char *const want[] = {"ok",        "empty",    "fell_back",   "corrupt", "nvm_error",
+                                "too_large", "bad_args", "map_dropped", "partial"};
+    const mc_pstore_status_t st[] = {MC_PSTORE_OK,        MC_PSTORE_EMPTY,    MC_PSTORE_FELL_BACK,
+                                     MC_PSTORE_CORRUPT,   MC_PSTORE_NVM_ERROR, MC_PSTORE_TOO_LARGE,
+                                     MC_PSTORE_BAD_ARGS,  MC_PSTORE_MAP_DROPPED, MC_PSTORE_PARTIAL};
+    for (size_t k = 0; k < sizeof st / sizeof st[0]; ++k) {
+        assert_string_equal(mc_pstore_status_name(st[k]), want[k]);
+    }
+    assert_string_equal(mc_pstore_status_name((mc_pstore_status_t)9), "?");
+    assert_string_equal(mc_pstore_status_name((mc_pstore_status_t)-1), "?");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -594,6 +638,8 @@ int main(void)
         cmocka_unit_test(test_largest_copies_touch_their_own_block),
         cmocka_unit_test(test_info_says_only_what_happened),
         cmocka_unit_test(test_null_arguments),
+        cmocka_unit_test(test_slot_smaller_than_its_header),
+        cmocka_unit_test(test_status_names),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
