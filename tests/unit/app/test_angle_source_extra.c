@@ -356,6 +356,41 @@ static void lose_lock(rig_t *r)
     test_hold_raw_offset = 0.0f;
 }
 
+/* What the drive hands the angle source in RUN's first periods after an enable (the given angle,
+ * no steps): the voltage that acted over the period before, none (the outputs off through the
+ * calibration, then on at 50 % duties), and the current of the sample before. A later enable
+ * starts from the same. (startup.c:58: the voltage history starts at zero with every enable.) */
+static void test_source_inputs_at_run_entry(void **st)
+{
+    (void)st;
+    static rig_t r;
+    test_hold_omega = 0.0f;
+    rig_init(&r, "test_hold");
+    for (int cyc = 0; cyc < 2; ++cyc) {
+        test_hold_steps = 0u;
+        const mc_drive_cmd_t on = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = {0.0f, 1.0f}, .theta_init = 0.25f};
+        mc_drive_command(&r.d, &on);
+        for (int n = 0; n < 1000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_int_equal(test_hold_steps, 1u);   /* RUN's first period: the calibration's last */
+        for (int k = 0; k < 2; ++k) {
+            if (k > 0) {
+                run(&r, 1);
+            }
+            assert_true(test_hold_in.u_ab_applied.alpha == 0.0f && test_hold_in.u_ab_applied.beta == 0.0f);
+            assert_true(fabsf(test_hold_in.i_ab_prev.alpha) < 1e-3f && fabsf(test_hold_in.i_ab_prev.beta) < 1e-3f);
+        }
+        /* the pipeline's voltage for 1 A in q reaches the source from the third period */
+        run(&r, 20);
+        assert_true(hypotf(test_hold_in.u_ab_applied.alpha, test_hold_in.u_ab_applied.beta) > 0.0f);
+        const mc_drive_cmd_t off = {.enable = false, .mode = MC_MODE_CURRENT};
+        mc_drive_command(&r.d, &off);
+        run(&r, 2);
+    }
+}
+
 /* The recovery budget (protection.retries) is per enable: with one retry, a loss of lock in
  * each of two enables recovers (outputs off, the catch). On this dead rig the catch finds the
  * rotor standing, which after a recovery with the given angle is no angle to trust: the reason
@@ -464,6 +499,7 @@ int main(void)
         cmocka_unit_test(test_build_error_reaches_the_drive),
         cmocka_unit_test(test_lock_loss_detected_without_injection),
         cmocka_unit_test(test_lock_loss_recovers_with_v000),
+        cmocka_unit_test(test_source_inputs_at_run_entry),
         cmocka_unit_test(test_recovery_budget_per_enable),
         cmocka_unit_test(test_stale_catch_faults_at_once),
         cmocka_unit_test(test_cfg_of_and_equal),
