@@ -804,10 +804,11 @@ static void test_header_read_back_wrong_once(void **state)
     }
 }
 
-/* A read that fails on a record's CRC word (the work buffer's length puts that word at the start
- * of a read): the copy's state is unknown, so a load is an error and so is a save, which then
- * writes nothing: taken for "damaged", the older copy would load and a save would overwrite the
- * newest, which may be good. (param_store.c:383: a failed read of the CRC word is COPY_IO.) */
+/* A read that fails on a record's CRC word, on the model record's second word or on its map
+ * header (the work buffer's length puts that word at the start of a read): the copy's state is
+ * unknown, so a load is an error and so is a save, which then writes nothing: taken for
+ * "damaged", the older copy would load and a save would overwrite the newest, which may be good.
+ * (param_store.c:383, :434, :451: a failed read is COPY_IO.) */
 static void test_unreadable_record_crc(void **state)
 {
     (void)state;
@@ -815,10 +816,10 @@ static void test_unreadable_record_crc(void **state)
     const uint32_t pl = MC_STORE_PARAMS_MAX, ml = 4u * (14u + 2u * 18u);
     assert_int_equal(pl % 8u, 4u);   /* the chunk lengths below: multiples of 8 */
     const struct {
-        uint32_t crc_at, work_len;   /* the CRC word's payload offset; a multiple of it */
-    } cases[] = {{pl - 4u, pl - 4u}, {pl + ml - 4u, (pl + ml - 4u) / 2u}};
+        uint32_t crc_at, work_len;   /* the word's payload offset; a length it is a multiple of */
+    } cases[] = {{pl - 4u, pl - 4u}, {pl + ml - 4u, (pl + ml - 4u) / 2u}, {pl + 4u, pl + 4u}, {pl + 28u, pl + 28u}};
     const uint32_t pay = (uint32_t)(slot1 - nvm.mem) + PAYLOAD_AT;
-    for (size_t i = 0; i < 2u; ++i) {
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         assert_int_equal(cases[i].crc_at % cases[i].work_len, 0u);
         assert_int_equal(cases[i].work_len % 8u, 0u);
         nvm = snap;
