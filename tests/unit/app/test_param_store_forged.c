@@ -580,6 +580,36 @@ static void test_null_arguments(void **state)
     assert_true(same_cfg_in(&got, a, false, &got_map));
 }
 
+/* With no copy a load returns (a blank device, or both copies damaged) an erase commits its
+ * defaults copy into slot 0, as a save would, and erases slot 1: a load then reports the
+ * defaults copy in slot 0, numbered 1 on the blank device, above the damaged ones otherwise.
+ * (param_store.c:791, the slot an erase writes without a returned copy.) */
+static void test_erase_without_a_copy_writes_slot_0(void **state)
+{
+    (void)state;
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    hal_host_nvm_init(&nvm);
+    assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_OK);
+    assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
+    assert_true(info.defaults);
+    assert_int_equal(info.slot, 0);
+    assert_int_equal(info.seq, 1u);
+    /* both copies damaged (a bit of each one's records) */
+    two_copies();
+    slot0[PAYLOAD_AT + 100u] ^= 0x01u;
+    slot1[PAYLOAD_AT + 100u] ^= 0x01u;
+    assert_int_equal(load(&got, &info), MC_PSTORE_CORRUPT);
+    assert_int_equal(mc_pstore_erase(&nvm, work, sizeof work), MC_PSTORE_OK);
+    assert_int_equal(load(&got, &info), MC_PSTORE_EMPTY);
+    assert_true(info.defaults);
+    assert_int_equal(info.slot, 0);
+    assert_int_equal(info.seq, 3u);
+    for (uint32_t k = 0u; k < 64u; ++k) {
+        assert_int_equal(slot1[k], 0xFF);   /* the other slot erased */
+    }
+}
+
 /* A device whose slot cannot even hold a header and its marker (two blocks of 8 to 32 bytes, the
  * copy's records starting at byte 40): TOO_LARGE for geometry (no record bytes), save and erase,
  * before any NVM step; a load finds nothing. (param_store.c:104: no record space below the
@@ -638,6 +668,7 @@ int main(void)
         cmocka_unit_test(test_largest_copies_touch_their_own_block),
         cmocka_unit_test(test_info_says_only_what_happened),
         cmocka_unit_test(test_null_arguments),
+        cmocka_unit_test(test_erase_without_a_copy_writes_slot_0),
         cmocka_unit_test(test_slot_smaller_than_its_header),
         cmocka_unit_test(test_status_names),
     };
