@@ -6,6 +6,8 @@
  *     with the same inputs;
  *   - RUN entered with the given angle (no steps, no catch): the current references start from
  *     zero and move from there at control.i_slew, with no d-axis step;
+ *   - Steps I-III on a synthetic saturating plant: Step II's decision quantities and flip in the
+ *     telemetry;
  *   - Step III's convergence test: at least twice startup.step3_hold_s, the estimate at rest for
  *     the last step3_hold of it;
  *   - an angle-sensor drive's wait for a diode pulse's low after the calibration: bounded; its
@@ -19,6 +21,7 @@
 #include "mc/drive.h"
 #include "mc/catch.h"
 #include "mc/phase_program.h"
+#include "mc/transforms.h"
 #include "drive_internal.h"   /* mc_drive_startup_reset, mc_drive_step3_check */
 
 typedef struct {
@@ -333,12 +336,50 @@ static void test_idle_and_fault_leave_the_pwm_alone(void **state)
     }
 }
 
+/* Steps I-III on a synthetic plant whose current answers a voltage along +alpha 5/3 times more
+ * than one along -alpha (a d axis saturating with the magnet's flux: the magnet at 0), or the
+ * other way (the magnet at pi): Step I finds the axis (theta1 = 0), Step II (dual-voltage
+ * injection) measures the peak currents of its +V and -V pulses, c1 and c2 in the telemetry, in
+ * the ratio 5/3 or 3/5, and flips to pi in the second case only; Step III hands over to RUN.
+ * (startup.c:344-346: the decision's quantities, as Step II measured them, in the telemetry.) */
+static void test_step2_decision_in_telemetry(void **state)
+{
+    (void)state;
+    static rig_t r;
+    for (int magnet = 0; magnet < 2; ++magnet) {
+        rig_init(&r, "unop", "three_step", "pulses");
+        through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+        const float k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
+        int n = 0;
+        for (; n < 3000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+            /* the current of this period's sample: a resistive answer to the voltage acting */
+            const mc_ab_t v = mc_clarke((mc_abc_t){(r.pwm.active[0] - 0.5f) * 300.0f,
+                                                    (r.pwm.active[1] - 0.5f) * 300.0f,
+                                                    (r.pwm.active[2] - 0.5f) * 300.0f});
+            const float g = (v.alpha > 0.0f) == (magnet == 0) ? 0.05f : 0.03f;
+            const mc_abc_t i = mc_clarke_inv((mc_ab_t){g * v.alpha, g * v.beta});
+            r.adc.sample.i[0] = (uint16_t)lrintf(nominal + i.a / k);
+            r.adc.sample.i[1] = (uint16_t)lrintf(nominal + i.b / k);
+            r.adc.sample.i[2] = (uint16_t)lrintf(nominal + i.c / k);
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+        assert_near(tm->theta1, 0.0f, 1e-3);
+        assert_true(tm->c1 > 1.0f && tm->c2 > 1.0f);
+        assert_near(tm->c1 / tm->c2, magnet == 0 ? 5.0f / 3.0f : 3.0f / 5.0f, 0.02);
+        assert_int_equal(tm->pol_flip, magnet == 1);
+        assert_near(fabsf(tm->theta2), magnet == 0 ? 0.0f : 3.14159265f, 1e-3);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_step1_runs_the_selected_program),
         cmocka_unit_test(test_references_start_from_zero),
         cmocka_unit_test(test_step3_lasts_twice_the_hold),
+        cmocka_unit_test(test_step2_decision_in_telemetry),
         cmocka_unit_test(test_sensor_wait_is_bounded),
         cmocka_unit_test(test_sensor_entry_references_from_the_current),
         cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
