@@ -133,7 +133,8 @@ static void test_step1_runs_the_selected_program(void **state)
 /* RUN with the given angle (startup.init_pos given, no catch), an estimator drive: the current
  * references start from zero, not from what an earlier run left. With zero asked, they stay
  * exactly zero; with 2 A in q asked, q moves up by control.i_slew * ts a period and d stays
- * exactly zero (a d step would be a torque-free current pulse at the start). (startup.c:40.) */
+ * exactly zero (a d step would be a torque-free current pulse at the start); the outputs are on
+ * from the entry period. (startup.c:40; :205, the sensor drive's entry only for a sensor drive.) */
 static void test_references_start_from_zero(void **state)
 {
     (void)state;
@@ -143,6 +144,10 @@ static void test_references_start_from_zero(void **state)
         const float iq = c == 0 ? 0.0f : 2.0f;
         through_calibration(&r, 0.3f, (mc_dq_t){0.0f, iq});
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        /* an estimator drive at rest: the outputs on in the entry period, no entry law waiting
+         * for a diode pulse's low (that is an angle-sensor drive's at speed) */
+        assert_true(hal_pwm_enabled(&r.pwm));
+        assert_false(r.d.entry.gate_on_next);
         const float step = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
         assert_true(step > 0.0f && step < 0.5f);
         /* the pipeline ran in RUN's first period (the calibration's last): one step so far */
