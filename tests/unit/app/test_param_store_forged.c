@@ -262,6 +262,22 @@ static void test_marker_exactly_its_pattern(void **state)
     }
 }
 
+/* The header's magic word is exactly "MCPS": b's header with another one (one above, one below,
+ * another store's), its CRC valid, is not a copy of this store; the older copy loads.
+ * (param_store.c:534, the magic's compare.) */
+static void test_other_magic_refused(void **state)
+{
+    (void)state;
+    two_copies();
+    const uint32_t magics[] = {MC_PSTORE_MAGIC + 1u, MC_PSTORE_MAGIC - 1u, 0xFFFFFFF0u, 0u};
+    for (size_t i = 0; i < sizeof magics / sizeof magics[0]; ++i) {
+        nvm = snap;
+        put32(slot1, magics[i]);
+        head_crc(slot1);
+        loads(ca);
+    }
+}
+
 /* The header's format word: 2 (this firmware's) and 1 (the records' CRC words in the payload
  * CRC: read for the copies written before) are known; b's copy with any other format (0, 3, all
  * ones), its payload CRC as format 2 computes it and its header CRC valid, is not taken: how its
@@ -660,6 +676,7 @@ int main(void)
         cmocka_unit_test(test_record_crc_word_flipped),
         cmocka_unit_test(test_unknown_header_flag_refused),
         cmocka_unit_test(test_unknown_format_refused),
+        cmocka_unit_test(test_other_magic_refused),
         cmocka_unit_test(test_marker_exactly_its_pattern),
         cmocka_unit_test(test_map_dimensions_beyond_the_limits),
         cmocka_unit_test(test_insane_lengths_do_not_count),
