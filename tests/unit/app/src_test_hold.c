@@ -15,6 +15,8 @@
 
 float test_hold_omega = 0.0f;
 float test_hold_raw_offset = 0.0f;
+mc_angle_in_t test_hold_in;
+uint32_t test_hold_steps = 0u;
 
 typedef struct {
     float ts, omega;   /* [s], [rad/s el] */
@@ -61,7 +63,8 @@ static void hold_reset(mc_angle_src_state_t *s, float theta, float omega)
 static void hold_step(mc_angle_src_state_t *s, const mc_angle_in_t *in, mc_angle_out_t *out)
 {
     test_hold_t *h = (test_hold_t *)(void *)s;
-    (void)in;
+    test_hold_in = *in;   /* for the tests: what the drive hands a source */
+    test_hold_steps++;
     out->theta = h->theta;
     out->omega = h->omega;
     h->theta = mc_wrap_pi(h->theta + h->omega * h->cfg.ts);   /* the angle of the next sample */

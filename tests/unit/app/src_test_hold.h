@@ -9,5 +9,10 @@ extern float test_hold_omega;
 /* Added to the raw speed it reports (diag) [rad/s el]: a raw estimate that disagrees with the
  * output, for the loss-of-lock checks. */
 extern float test_hold_raw_offset;
+/* The input of its last step, and its steps so far (a test may zero it). */
+#include <stdint.h>
+#include "mc/angle_source.h"
+extern mc_angle_in_t test_hold_in;
+extern uint32_t test_hold_steps;
 
 #endif

@@ -356,6 +356,41 @@ static void lose_lock(rig_t *r)
     test_hold_raw_offset = 0.0f;
 }
 
+/* What the drive hands the angle source in RUN's first periods after an enable (the given angle,
+ * no steps): the voltage that acted over the period before, none (the outputs off through the
+ * calibration, then on at 50 % duties), and the current of the sample before. A later enable
+ * starts from the same. (startup.c:58: the voltage history starts at zero with every enable.) */
+static void test_source_inputs_at_run_entry(void **st)
+{
+    (void)st;
+    static rig_t r;
+    test_hold_omega = 0.0f;
+    rig_init(&r, "test_hold");
+    for (int cyc = 0; cyc < 2; ++cyc) {
+        test_hold_steps = 0u;
+        const mc_drive_cmd_t on = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = {0.0f, 1.0f}, .theta_init = 0.25f};
+        mc_drive_command(&r.d, &on);
+        for (int n = 0; n < 1000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_int_equal(test_hold_steps, 1u);   /* RUN's first period: the calibration's last */
+        for (int k = 0; k < 2; ++k) {
+            if (k > 0) {
+                run(&r, 1);
+            }
+            assert_true(test_hold_in.u_ab_applied.alpha == 0.0f && test_hold_in.u_ab_applied.beta == 0.0f);
+            assert_true(fabsf(test_hold_in.i_ab_prev.alpha) < 1e-3f && fabsf(test_hold_in.i_ab_prev.beta) < 1e-3f);
+        }
+        /* the pipeline's voltage for 1 A in q reaches the source from the third period */
+        run(&r, 20);
+        assert_true(hypotf(test_hold_in.u_ab_applied.alpha, test_hold_in.u_ab_applied.beta) > 0.0f);
+        const mc_drive_cmd_t off = {.enable = false, .mode = MC_MODE_CURRENT};
+        mc_drive_command(&r.d, &off);
+        run(&r, 2);
+    }
+}
+
 /* The recovery budget (protection.retries) is per enable: with one retry, a loss of lock in
  * each of two enables recovers (outputs off, the catch). On this dead rig the catch finds the
  * rotor standing, which after a recovery with the given angle is no angle to trust: the reason
@@ -392,6 +427,39 @@ static void test_recovery_budget_per_enable(void **st)
         run(&r, 1);
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
     }
+}
+
+/* A recovery whose catch finds the rotor standing has no angle to go on with (the given one is
+ * stale after a loss of lock, and this start does not find one itself): the reason it recovered
+ * from is latched at the catch's end, with recoveries left in the budget (protection.retries 3),
+ * the outputs off: one recovery, never RUN again. (startup.c:281: the catch's outcome knows it
+ * follows a recovery.) */
+static void test_stale_catch_faults_at_once(void **st)
+{
+    (void)st;
+    static rig_t r;
+    test_hold_omega = 0.0f;
+    rig_init(&r, "test_hold");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_protection_retries, 3.0f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    assert_false(r.d.seq.cfg.init_pos);
+    enable_iq(&r, 0.5f, 0.0f);
+    run(&r, 1000);
+    lose_lock(&r);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+    assert_int_equal(mc_drive_telemetry(&r.d)->recoveries, 1u);
+    int n = 0;
+    for (; n < 1000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+        run(&r, 1);
+    }
+    assert_true(n < 1000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_LOSS_OF_LOCK);
+    assert_int_equal(mc_drive_telemetry(&r.d)->recoveries, 1u);
+    assert_false(hal_pwm_enabled(&r.pwm));
 }
 
 /* cfg_of gives the configuration the running source holds; cfg_equal compares two by their
@@ -431,7 +499,9 @@ int main(void)
         cmocka_unit_test(test_build_error_reaches_the_drive),
         cmocka_unit_test(test_lock_loss_detected_without_injection),
         cmocka_unit_test(test_lock_loss_recovers_with_v000),
+        cmocka_unit_test(test_source_inputs_at_run_entry),
         cmocka_unit_test(test_recovery_budget_per_enable),
+        cmocka_unit_test(test_stale_catch_faults_at_once),
         cmocka_unit_test(test_cfg_of_and_equal),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -848,6 +848,38 @@ static void test_protect_overspeed(void **st)
     assert_fault(&r, MC_FAULT_OVERSPEED);
 }
 
+/* The hard trips keep watch while a fault reaction holds the outputs on: at 2000 rpm the
+ * over-speed reaction (hold_fw) brakes with the outputs on; a phase current beyond the trip level
+ * then, on any phase, ends it in the same period: outputs off, FAULT, over-current latched beside
+ * the over-speed. (startup.c:358: protection runs in FAULT_REACTION as in RUN.) */
+static void test_overcurrent_trips_during_fault_reaction(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const uint32_t step = 80000u * 2000u / 60u / 10000u;   /* counts per period at 2000 rpm */
+    for (int ph = 0; ph < 3; ++ph) {
+        rig_init(&r);
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        run(&r, (int)r.d.cfg->p.control_offset_cal_samples + 5);
+        for (int k = 0; k < 1000 && mc_drive_state(&r.d) == MC_STATE_RUN; ++k) {
+            r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT_REACTION);
+        r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT_REACTION);   /* still braking */
+        assert_true(hal_pwm_enabled(&r.pwm));
+        const float i = r.d.cfg->p.control_i_trip_a + 1.0f;
+        r.adc.sample.i[ph] = counts(&r.d, ph == 1 ? -i : i);
+        r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_OVERSPEED | MC_FAULT_OVERCURRENT);
+        assert_false(hal_pwm_enabled(&r.pwm));
+    }
+}
+
 /* An angle-sensor drive enabled on a rotor at 1500 rpm (line-to-line back-EMF ~430 V peak,
  * beyond the 300 V link: the diodes would conduct). With overmodulation (control.u_loop > 1,
  * the default) the field-weakening entry runs: its first corner is latched during the
@@ -895,6 +927,41 @@ static void test_sensor_entry_corner_needs_overmod(void **st)
             assert_true(hal_pwm_enabled(&r.pwm));
         }
     }
+}
+
+/* The entry corner at every rotor angle: an angle-sensor drive enabled at 1500 rpm from rotor
+ * angles a twelfth of an electrical turn apart latches, each time, the corner (C.6) gives for
+ * the angle at its entry, the outputs on with it at once: each of the six corners of the hexagon
+ * (a duty pattern of 0s and 1s) is latched, the first (corner 0) included. (startup.c:151: a
+ * corner index of 0 is a corner.) */
+static void test_sensor_entry_corner_every_sector(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const uint32_t step = 80000u * 1500u / 60u / 10000u;   /* counts per period at 1500 rpm */
+    unsigned seen = 0u;   /* bit p: duty pattern p (a + 2 b + 4 c) latched at an entry */
+    for (uint32_t k = 0u; k < 12u; ++k) {
+        rig_init(&r);
+        const uint32_t turn = 80000u / (uint32_t)r.d.cfg->p.motor_pole_pairs;   /* counts an electrical turn */
+        r.qep.sample.count = k * turn / 12u;
+        command(&r, true, MC_MODE_CURRENT, 0.0f, 0.0f);
+        for (int n = 0; n < 1000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+            r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_true(r.d.entry.corner);
+        assert_true(hal_pwm_enabled(&r.pwm));
+        /* the corner acting now: the duties latched at the previous period's end */
+        unsigned pat = 0u;
+        for (int ph = 0; ph < 3; ++ph) {
+            assert_true(r.pwm.active[ph] == 0.0f || r.pwm.active[ph] == 1.0f);
+            pat |= (r.pwm.active[ph] == 1.0f ? 1u : 0u) << ph;
+        }
+        assert_true(pat != 0u && pat != 7u);   /* an active corner, not a zero vector */
+        seen |= 1u << pat;
+    }
+    assert_int_equal(seen, 0x7Eu);   /* all six */
 }
 
 /* The flying-start catch's longest wait for the current to rest (mc/catch.h): where the diodes
@@ -1210,12 +1277,14 @@ int main(void)
         cmocka_unit_test(test_protect_current_sum),
         cmocka_unit_test(test_catch_wait_bounded),
         cmocka_unit_test(test_sensor_entry_corner_needs_overmod),
+        cmocka_unit_test(test_sensor_entry_corner_every_sector),
         cmocka_unit_test(test_offset_cal_limit_every_phase),
         cmocka_unit_test(test_config_range_ends),
         cmocka_unit_test(test_numeric_guard),
         cmocka_unit_test(test_protect_tracking),
         cmocka_unit_test(test_protect_stall),
         cmocka_unit_test(test_protect_overspeed),
+        cmocka_unit_test(test_overcurrent_trips_during_fault_reaction),
         cmocka_unit_test(test_telemetry_duties_are_the_pwm_duties),
         cmocka_unit_test(test_slew_d_axis),
         cmocka_unit_test(test_config_error_none_after_good_init),

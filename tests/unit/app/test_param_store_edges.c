@@ -11,9 +11,15 @@
  *   - a read that fails while a save looks for the copy a load returns: nothing written;
  *   - an NVM call that fails in the middle of a save (a payload write whose status is lost, a
  *     write that fails, a unit that does not program): the save is an error at once, never a
- *     success, and the set committed before still loads.
+ *     success, and the set committed before still loads;
+ *   - a marker byte that does not program, a header read back wrong once, an unreadable record
+ *     CRC word: the save (or load) is an NVM error, nothing is marked or overwritten;
+ *   - a newest copy whose records contradict its header is refused from its first words, before
+ *     an unreadable rest: the older copy loads;
+ *   - write units below 8 (the layout of 8), blocks of any size (odd too) with byte writes, a
+ *     write unit or block size of 0 (refused).
  * The host NVM model (hal_host) is the device; the faults are put in between the store and it by
- * the linker (--wrap of hal_nvm_read / write / erase / write_unit, tests/unit/app/CMakeLists.txt):
+ * the linker (--wrap of hal_nvm_read / write / erase / write_unit / block_size, CMakeLists.txt):
  * the firmware calls the wrappers below, which count the calls and inject the faults, then call
  * the model. */
 #include <setjmp.h>
@@ -48,20 +54,39 @@ typedef struct {
                                   0xFF whatever is written; UINT32_MAX: none                   */
     uint32_t reads;            /* read calls since fault_arm()                                */
     uint32_t fail_read;        /* this read call (1: the first) fails, nothing read; 0: none   */
+    uint32_t bad_at, bad_len;  /* device bytes [bad_at, bad_at + bad_len) cannot be read: a
+                                  read call that touches one fails (a page ECC cannot correct) */
+    uint32_t flip_block;       /* with flip_nth: a read at offset 0 of this block ...          */
+    uint32_t flip_nth;         /* ... the n-th such after the first write call (1: the first)
+                                  returns its bit flip_bit flipped (a marginal cell, once)      */
+    uint32_t flip_bit;
+    uint32_t failed_off;       /* the device address of the read that failed                  */
 } fault_t;
-static fault_t fault = {0u, 0u, 0u, false, 0u, UINT32_MAX, 0u, 0u};   /* no fault */
+static fault_t fault = {.stuck_at = UINT32_MAX};   /* no fault */
 /* The write unit the device reports, 0: the host model's (8). A larger one (a multiple of 8) is
- * enforced here as a device with that unit would: a write at another offset or length fails. */
+ * enforced here as a device with that unit would: a write at another offset or length fails; a
+ * smaller one (1, 2, 4) is programmed by small_unit_write(). */
 static uint32_t unit;
+/* The block size the device reports: the host model's unless block_zero (a device description
+ * that lost its erase size). */
+static bool block_zero;
+static bool unit_zero;   /* the write unit reported as 0 */
+uint32_t __real_hal_nvm_block_size(const hal_nvm_t *nvm);
+uint32_t __wrap_hal_nvm_block_size(const hal_nvm_t *nvm);
+
+uint32_t __wrap_hal_nvm_block_size(const hal_nvm_t *nvm)
+{
+    return block_zero ? 0u : __real_hal_nvm_block_size(nvm);
+}
 
 uint32_t __wrap_hal_nvm_write_unit(const hal_nvm_t *nvm)
 {
-    return unit != 0u ? unit : __real_hal_nvm_write_unit(nvm);
+    return unit_zero ? 0u : unit != 0u ? unit : __real_hal_nvm_write_unit(nvm);
 }
 
 static void fault_arm(uint32_t fail_write, bool carried_out, uint32_t stuck_at)
 {
-    fault = (fault_t){0u, 0u, fail_write, carried_out, 0u, stuck_at, 0u, 0u};
+    fault = (fault_t){.fail_write = fail_write, .carried_out = carried_out, .stuck_at = stuck_at};
 }
 
 /* no fault but the n-th read call from now failing */
@@ -79,11 +104,33 @@ static void count_call(void)
 bool __wrap_hal_nvm_read(const hal_nvm_t *nvm, uint32_t block, uint32_t offset, void *data, uint32_t len)
 {
     count_call();
-    if (++fault.reads == fault.fail_read) {
+    const uint32_t at = block * nvm->block_size + offset;
+    if (++fault.reads == fault.fail_read ||
+        (fault.bad_len != 0u && at < fault.bad_at + fault.bad_len && fault.bad_at < at + len)) {
         fault.failed_at = fault.calls;
+        fault.failed_off = at;
         return false;
     }
-    return __real_hal_nvm_read(nvm, block, offset, data, len);
+    const bool ok = __real_hal_nvm_read(nvm, block, offset, data, len);
+    if (ok && fault.flip_nth != 0u && block == fault.flip_block && offset == 0u && fault.writes > 0u &&
+        --fault.flip_nth == 0u && fault.flip_bit / 8u < len) {
+        ((uint8_t *)data)[fault.flip_bit / 8u] ^= (uint8_t)(1u << (fault.flip_bit % 8u));
+    }
+    return ok;
+}
+
+/* A device whose unit is 1, 2 or 4 bytes, programmed here as it would be (the host model takes
+ * whole 8-byte units only): a write only clears bits, within the block. */
+static bool small_unit_write(hal_nvm_t *nvm, uint32_t block, uint32_t offset, const void *data, uint32_t len)
+{
+    const uint32_t bs = nvm->block_size;
+    if (nvm->dead || block >= nvm->blocks || offset > bs || len > bs - offset) {
+        return false;
+    }
+    for (uint32_t k = 0u; k < len; ++k) {
+        nvm->mem[block * bs + offset + k] &= ((const uint8_t *)data)[k];
+    }
+    return true;
 }
 
 bool __wrap_hal_nvm_write(hal_nvm_t *nvm, uint32_t block, uint32_t offset, const void *data, uint32_t len)
@@ -96,7 +143,8 @@ bool __wrap_hal_nvm_write(hal_nvm_t *nvm, uint32_t block, uint32_t offset, const
     const bool fail = fault.writes == fault.fail_write;
     bool ok = false;
     if (!fail || fault.carried_out) {
-        ok = __real_hal_nvm_write(nvm, block, offset, data, len);
+        ok = unit != 0u && unit < 8u ? small_unit_write(nvm, block, offset, data, len)
+                                     : __real_hal_nvm_write(nvm, block, offset, data, len);
         const uint32_t at = block * nvm->block_size + offset;
         if (ok && fault.stuck_at != UINT32_MAX && fault.stuck_at >= at && fault.stuck_at - at < len) {
             nvm->mem[fault.stuck_at] = 0xFFu;
@@ -712,11 +760,226 @@ static void test_unprogrammed_byte_fails_the_read_back(void **state)
     a_still_loads();
 }
 
+/* A marker byte that does not program (it reads erased, the write call succeeding): the copy is
+ * not committed, the save says so (NVM_ERROR: the marker's read-back differed) and the set
+ * committed before still loads. (param_store.c:658, the marker's write and its read-back.) */
+static void test_unprogrammed_marker_fails_the_save(void **state)
+{
+    (void)state;
+    committed_a();
+    mc_pstore_geom_t g;
+    assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);
+    for (uint32_t k = 0u; k < 8u; ++k) {
+        nvm = snap;
+        const uint32_t at = g.slot_first[1] * nvm.block_size + 32u + k;   /* the marker's byte k */
+        fault_arm(0u, false, at);
+        save_b_fails();
+        assert_int_equal(nvm.mem[at], 0xFF);   /* the fault was hit */
+        a_still_loads();
+    }
+}
+
+/* The header read back wrong once after it was written (a marginal cell, a bus glitch: the
+ * flash holds it right): by the bit-exact compare (the first read at the slot's start after the
+ * writes) or by the load's header check (the second), any of its 256 bits: the save fails, the
+ * copy is not marked, the set committed before loads. (param_store.c:643: a read-back header
+ * that does not check ends the save.) */
+static void test_header_read_back_wrong_once(void **state)
+{
+    (void)state;
+    committed_a();
+    mc_pstore_geom_t g;
+    assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);
+    for (uint32_t nth = 1u; nth <= 2u; ++nth) {
+        for (uint32_t bit = 0u; bit < 256u; ++bit) {
+            nvm = snap;
+            fault_arm(0u, false, UINT32_MAX);
+            fault.flip_block = g.slot_first[1];
+            fault.flip_nth = nth;
+            fault.flip_bit = bit;
+            save_b_fails();
+            assert_int_equal(fault.flip_nth, 0u);   /* the flip was made */
+            a_still_loads();
+        }
+    }
+}
+
+/* A read that fails on a record's CRC word, on the model record's second word or on its map
+ * header (the work buffer's length puts that word at the start of a read): the copy's state is
+ * unknown, so a load is an error and so is a save, which then writes nothing: taken for
+ * "damaged", the older copy would load and a save would overwrite the newest, which may be good.
+ * (param_store.c:383, :434, :451: a failed read is COPY_IO.) */
+static void test_unreadable_record_crc(void **state)
+{
+    (void)state;
+    two_copies();   /* cb's map 6 x 3: parameter record 780 bytes, model record 200 */
+    const uint32_t pl = MC_STORE_PARAMS_MAX, ml = 4u * (14u + 2u * 18u);
+    assert_int_equal(pl % 8u, 4u);   /* the chunk lengths below: multiples of 8 */
+    const struct {
+        uint32_t crc_at, work_len;   /* the word's payload offset; a length it is a multiple of */
+    } cases[] = {{pl - 4u, pl - 4u}, {pl + ml - 4u, (pl + ml - 4u) / 2u}, {pl + 4u, pl + 4u}, {pl + 28u, pl + 28u}};
+    const uint32_t pay = (uint32_t)(slot1 - nvm.mem) + PAYLOAD_AT;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        assert_int_equal(cases[i].crc_at % cases[i].work_len, 0u);
+        assert_int_equal(cases[i].work_len % 8u, 0u);
+        nvm = snap;
+        fault_arm(0u, false, UINT32_MAX);
+        fault.bad_at = pay + cases[i].crc_at;
+        fault.bad_len = 4u;
+        mc_drive_cfg_t got = *ca;
+        assert_int_equal(mc_pstore_load(&nvm, &got, &got_map, big, cases[i].work_len, NULL), MC_PSTORE_NVM_ERROR);
+        assert_int_equal(fault.failed_off, pay + cases[i].crc_at);   /* the read of that word */
+        assert_memory_equal(&got, ca, sizeof got);
+        const mc_drive_cfg_t *c = make_cfg(2, 3, 3);
+        assert_int_equal(mc_pstore_save(&nvm, c, big, cases[i].work_len, NULL), MC_PSTORE_NVM_ERROR);
+        assert_int_equal(mc_pstore_erase(&nvm, big, cases[i].work_len), MC_PSTORE_NVM_ERROR);
+        assert_int_equal(nvm.steps, snap.steps);
+        assert_memory_equal(nvm.mem, snap.mem, sizeof nvm.mem);
+        fault_arm(0u, false, UINT32_MAX);
+        loads(cb);
+    }
+}
+
+/* A newest copy whose records do not match its header's lengths, and whose rest cannot be read
+ * (a page the ECC cannot correct): it is refused as soon as its first words show the mismatch,
+ * without reading on, so the older copy loads (FELL_BACK, not an NVM error):
+ *   - a model record without a map, 32 bytes, under a header claiming 40 (param_store.c:446);
+ *   - a parameter record claiming 2^29 - 2 values in a 4-byte record, the count whose length
+ *     4 (5 + 2 n) wraps to 4 in 32 bits (param_store.c:402, the count bounded by the length
+ *     first). */
+static void test_mismatch_refused_before_an_unreadable_rest(void **state)
+{
+    (void)state;
+    two_copies();
+    const uint32_t pay = (uint32_t)(slot1 - nvm.mem) + PAYLOAD_AT;
+    static uint8_t pr[MC_STORE_PARAMS_MAX], mr[MC_STORE_MODEL_MAX];
+    const uint32_t pl = (uint32_t)mc_store_params_encode(&cb->p, pr, sizeof pr);
+    const mc_est_model_t nomap = {cb->est.rs, cb->est.ld, cb->est.lq, cb->est.psi_pm, NULL};
+    assert_int_equal(mc_store_model_encode(&nomap, mr, sizeof mr), 32u);
+    memset(mr + 32, 0, 8u);
+    /* the model record 8 bytes short of its header's length; reads of 808 bytes: the first ends
+     * right before the model record's CRC word, the unreadable rest from there */
+    nvm = snap;
+    forge_b(pr, pl, mr, 40u, MC_PSTORE_FORMAT);
+    fault_arm(0u, false, UINT32_MAX);
+    fault.bad_at = pay + pl + 28u;
+    fault.bad_len = 12u;
+    mc_drive_cfg_t got;
+    mc_pstore_info_t info;
+    assert_int_equal(load_with(big, pl + 28u, &got, &info), MC_PSTORE_FELL_BACK);
+    assert_int_equal(info.slot, 0);
+    assert_true(same_cfg(&got, ca, false));
+    assert_int_equal(fault.failed_at, 0u);   /* nothing unreadable was read */
+
+    /* the count: 4 (5 + 2 (2^29 - 2)) = 2^32 + 4 */
+    static uint8_t p4[1000];
+    memset(p4, 0xAB, sizeof p4);
+    const uint32_t w[] = {MC_STORE_MAGIC_PARAMS, MC_STORE_PARAMS_VERSION, mc_params_table_hash(), 0x1FFFFFFEu};
+    for (int k = 0; k < 4; ++k) {
+        put32(p4 + 4 * k, w[k]);
+    }
+    assert_int_equal((uint32_t)(4u * (5u + 2u * w[3])), 4u);
+    nvm = snap;
+    forge_b(p4, 4u, p4 + 4, sizeof p4 - 4u, MC_PSTORE_FORMAT);
+    fault_arm(0u, false, UINT32_MAX);
+    fault.bad_at = pay + 64u;
+    fault.bad_len = sizeof p4 - 64u;
+    assert_int_equal(load(&got, &info), MC_PSTORE_FELL_BACK);
+    assert_int_equal(info.slot, 0);
+    assert_true(same_cfg(&got, ca, false));
+    assert_int_equal(fault.failed_at, 0u);
+}
+
+/* Write units below 8 (1, 2, 4 bytes: a NOR flash, an EEPROM) use the layout of 8: header at 0,
+ * an 8-byte marker at 32 (a marker shorter than 8 bytes would be a weaker commit), records at
+ * 40; a unit of 0 is refused before any NVM step. (param_store.c:94, the alignment of at least 8;
+ * :90, 0 refused and 1 a power of two.) */
+static void test_write_units_below_8(void **state)
+{
+    (void)state;
+    const uint32_t units[] = {1u, 2u, 4u};
+    for (size_t i = 0; i < sizeof units / sizeof units[0]; ++i) {
+        nvm_blocks(4096u, 4u);
+        unit = units[i];
+        mc_pstore_geom_t g;
+        assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);
+        assert_int_equal(g.slot_first[1], 2u);
+        assert_int_equal(g.slot_blocks, 2u);
+        assert_int_equal(g.payload_max, 8192u - PAYLOAD_AT);
+        const mc_drive_cfg_t *a = make_cfg(0, 5, 4);
+        mc_pstore_info_t info;
+        mc_drive_cfg_t got;
+        assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, &info), MC_PSTORE_OK);
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_true(same_cfg(&got, a, false));
+        for (uint32_t k = 0u; k < 8u; ++k) {
+            assert_int_equal(nvm.mem[32u + k], (k & 1u) != 0u ? 0xA5 : 0x5A);
+        }
+        static uint8_t rec[MC_STORE_PARAMS_MAX];
+        assert_int_equal(mc_store_params_encode(&a->p, rec, sizeof rec), MC_STORE_PARAMS_MAX);
+        assert_memory_equal(nvm.mem + PAYLOAD_AT, rec, MC_STORE_PARAMS_MAX);
+    }
+}
+
+/* A write unit of 1 (an EEPROM, a NOR flash written by bytes) allows a block of any size, odd
+ * too: a write that crosses a block's end is split there, and each part written whole, down to a
+ * last part of a single byte. Block sizes 3937 to 3951 bytes with the smallest work buffer: one
+ * of the payload's 64-byte writes crosses each of them with 1 to 15 bytes left (3943: 1 byte);
+ * both slots' sets come back bit-exact. (param_store.c:177, slot_write's loop to the last byte.) */
+static void test_any_block_size_with_byte_writes(void **state)
+{
+    (void)state;
+    for (uint32_t bs = 3937u; bs <= 3951u; ++bs) {
+        nvm_blocks(bs, 4u);
+        unit = 1u;
+        const mc_drive_cfg_t *a = make_cfg(0, 20, 20), *b = make_cfg(1, 21, 19);
+        assert_true(MC_STORE_PARAMS_MAX + 4u * (14u + 2u * 400u) > 3944u - PAYLOAD_AT);   /* it crosses */
+        mc_pstore_info_t info;
+        mc_drive_cfg_t got;
+        assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, &info), MC_PSTORE_OK);
+        assert_int_equal(info.slot, 0);
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_true(same_cfg(&got, a, false));
+        assert_int_equal(mc_pstore_save(&nvm, b, work, sizeof work, &info), MC_PSTORE_OK);
+        assert_int_equal(info.slot, 1);
+        assert_int_equal(load(&got, &info), MC_PSTORE_OK);
+        assert_true(same_cfg(&got, b, false));
+    }
+}
+
+/* A device that reports a write unit of 0 or a block size of 0 (a description that lost them) is
+ * refused (BAD_ARGS) by geometry, save, load and erase before any NVM step, with no layout.
+ * (param_store.c:90.) */
+static void test_zero_sizes_refused(void **state)
+{
+    (void)state;
+    for (int k = 0; k < 2; ++k) {
+        nvm_blocks(4096u, 4u);
+        unit_zero = k == 0;
+        block_zero = k == 1;
+        assert_int_equal(hal_nvm_write_unit(&nvm), k == 0 ? 0u : 8u);
+        assert_int_equal(hal_nvm_block_size(&nvm), k == 1 ? 0u : 4096u);
+        mc_pstore_geom_t g;
+        memset(&g, 0xA5, sizeof g);
+        assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_BAD_ARGS);
+        assert_int_equal(g.slot_blocks, 0u);
+        assert_int_equal(g.payload_max, 0u);
+        const mc_drive_cfg_t *a = make_cfg(0, 3, 3);
+        mc_drive_cfg_t got;
+        assert_int_equal(mc_pstore_save(&nvm, a, big, sizeof big, NULL), MC_PSTORE_BAD_ARGS);
+        assert_int_equal(load_with(big, sizeof big, &got, NULL), MC_PSTORE_BAD_ARGS);
+        assert_int_equal(mc_pstore_erase(&nvm, big, sizeof big), MC_PSTORE_BAD_ARGS);
+        assert_int_equal(nvm.steps, 0u);
+    }
+}
+
 /* every test starts with the host model's write unit and no fault */
 static int no_fault(void **state)
 {
     (void)state;
     unit = 0u;
+    unit_zero = false;
+    block_zero = false;
     fault_arm(0u, false, UINT32_MAX);
     return 0;
 }
@@ -736,6 +999,13 @@ int main(void)
         cmocka_unit_test_setup(test_failed_payload_write_is_not_a_success, no_fault),
         cmocka_unit_test_setup(test_failed_payload_write_ends_the_save, no_fault),
         cmocka_unit_test_setup(test_unprogrammed_byte_fails_the_read_back, no_fault),
+        cmocka_unit_test_setup(test_unprogrammed_marker_fails_the_save, no_fault),
+        cmocka_unit_test_setup(test_header_read_back_wrong_once, no_fault),
+        cmocka_unit_test_setup(test_unreadable_record_crc, no_fault),
+        cmocka_unit_test_setup(test_mismatch_refused_before_an_unreadable_rest, no_fault),
+        cmocka_unit_test_setup(test_write_units_below_8, no_fault),
+        cmocka_unit_test_setup(test_any_block_size_with_byte_writes, no_fault),
+        cmocka_unit_test_setup(test_zero_sizes_refused, no_fault),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

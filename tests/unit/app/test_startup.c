@@ -1,0 +1,393 @@
+/* The drive's startup sequencing (startup.c) at the hand-overs a mutation run showed untested
+ * (issue 30):
+ *   - the calibration's end with the three-step start: the outputs come on in that period at
+ *     zero voltage, and Step I runs the program startup.step1_method selects, with its
+ *     configuration: its duties, period by period, are those of that program run on its own
+ *     with the same inputs;
+ *   - RUN entered with the given angle (no steps, no catch): the current references start from
+ *     zero and move from there at control.i_slew, with no d-axis step;
+ *   - Steps I-III on a synthetic saturating plant: Step II's decision quantities and flip in the
+ *     telemetry;
+ *   - Step III's convergence test: at least twice startup.step3_hold_s, the estimate at rest for
+ *     the last step3_hold of it;
+ *   - an angle-sensor drive's wait for a diode pulse's low after the calibration: bounded; its
+ *     RUN entry with current flowing: references from that current (bumpless);
+ *   - IDLE and FAULT leave the PWM alone.
+ * A plant-less rig (the host HAL, zero currents, 300 V), as test_drive.c's. */
+#include <string.h>
+
+#include "../mc_test.h"
+#include "hal_host/host.h"
+#include "mc/drive.h"
+#include "mc/catch.h"
+#include "mc/phase_program.h"
+#include "mc/transforms.h"
+#include "drive_internal.h"   /* mc_drive_startup_reset, mc_drive_step3_check */
+
+typedef struct {
+    hal_pwm_t pwm;
+    hal_adc_t adc;
+    hal_qep_t qep;
+    mc_drive_cfg_t cfg;
+    mc_drive_link_t link;
+    mc_drive_t d;
+} rig_t;
+
+/* source "encoder" or "unop"; init_pos "given" or "three_step"; step1 "pulses" or "three_phase"
+ * (Step II dvi and the linear cost: no flux map needed) */
+static void rig_init(rig_t *r, const char *source, const char *init_pos, const char *step1)
+{
+    memset(r, 0, sizeof *r);
+    hal_host_pwm_init(&r->pwm, 1e-4f, 0.5e-6f);
+    r->qep = (hal_qep_t){.counts_per_rev = 80000u};
+    mc_drive_cfg_default(&r->cfg);
+    mc_params_t *p = &r->cfg.p;
+    assert_true(mc_param_set_choice(p, MC_PARAM_control_angle_source, source, NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_estimator_model, "const", NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_startup_catch, "off", NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_startup_init_pos, init_pos, NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_startup_step1_method, step1, NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_startup_step1_cost, "linear", NULL));
+    assert_true(mc_param_set_choice(p, MC_PARAM_startup_polarity, "dvi", NULL));
+    /* no plant: no voltage explains the currents (test_drive.c's rig) */
+    assert_true(mc_param_set(p, MC_PARAM_protection_residual_time_s, 0.0f, NULL));
+    /* a slew of 0.2 A a period: a reference step of 1 A takes 5 periods */
+    assert_true(mc_param_set(p, MC_PARAM_control_i_slew_a_per_s, 2e3f, NULL));
+    if (!mc_drive_init(&r->d, &r->link, &r->cfg, &r->adc, &r->pwm, &r->qep)) {
+        const mc_param_err_t *e = mc_drive_config_error(&r->d);
+        fail_msg("config refused: %s (parameter %d)", e->text, e->param);
+    }
+    for (int k = 0; k < 3; ++k) {
+        r->adc.sample.i[k] = (uint16_t)r->d.cfg->blk.offs.nominal;   /* zero current */
+    }
+    r->adc.sample.vdc = (uint16_t)lrintf(300.0f / r->d.cfg->blk.volts_per_count);
+}
+
+static void run(rig_t *r, int n)
+{
+    for (int k = 0; k < n; ++k) {
+        hal_host_pwm_latch(&r->pwm);
+        mc_drive_isr(&r->d);
+        assert_int_equal(r->pwm.nonfinite, 0u);
+    }
+}
+
+/* enabled; run until the calibration ends (the period it does included) */
+static void through_calibration(rig_t *r, float theta_init, mc_dq_t i_ref)
+{
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = i_ref, .theta_init = theta_init};
+    mc_drive_command(&r->d, &c);
+    const int limit = (int)r->d.cfg->p.control_offset_cal_samples + 10;
+    int n = 0;
+    run(r, 1);
+    for (; n < limit && mc_drive_state(&r->d) == MC_STATE_OFFSET_CAL; ++n) {
+        run(r, 1);
+    }
+    assert_true(n < limit);
+}
+
+/* The three-step start (UNOP) at the calibration's end: state INIT_POS, Step I, the outputs on
+ * at zero voltage (50 % duties) in that very period (the first pulse is written the next); Step
+ * I is the selected program with its configuration from the derived set: over its first periods
+ * (up to 40) the drive writes the duties that program writes when run on its own with the same
+ * measured currents (zero) and link voltage. (startup.c:105, the selection.) */
+static void test_step1_runs_the_selected_program(void **state)
+{
+    (void)state;
+    static rig_t r;
+    const char *const methods[] = {"pulses", "three_phase"};
+    for (int m = 0; m < 2; ++m) {
+        rig_init(&r, "unop", "three_step", methods[m]);
+        through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+        assert_int_equal(r.d.seq.step, MC_INIT_STEP1);
+        assert_true(hal_pwm_enabled(&r.pwm));
+        for (int k = 0; k < 3; ++k) {
+            assert_true(r.pwm.shadow[k] == 0.5f);
+        }
+        const mc_drive_blk_t *b = &r.d.cfg->blk;
+        const mc_phase_program_t *prog = m == 1 ? &mc_phase_step1_pulse3 : &mc_phase_step1_pulses;
+        assert_ptr_equal(r.d.phase.prog, prog);
+        static mc_phase_t own;
+        assert_true(mc_phase_begin(&own, prog, m == 1 ? (const void *)&b->pulse3 : (const void *)&b->step1, 0.0f));
+        const mc_phase_in_t in = {.i_ab = {0.0f, 0.0f}, .vdc = 300.0f};
+        int periods = 0;
+        for (; periods < 40; ++periods) {
+            mc_phase_out_t out;
+            if (mc_phase_step(&own, &in, &out) != MC_IP_RUNNING) {
+                break;
+            }
+            run(&r, 1);
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+            assert_int_equal(r.d.seq.step, MC_INIT_STEP1);
+            assert_true(hal_pwm_enabled(&r.pwm));
+            assert_near(r.pwm.shadow[0], out.duty.a, 1e-6);
+            assert_near(r.pwm.shadow[1], out.duty.b, 1e-6);
+            assert_near(r.pwm.shadow[2], out.duty.c, 1e-6);
+        }
+        print_message("%s: %d periods compared\n", methods[m], periods);
+        assert_true(periods >= 5);
+    }
+}
+
+/* RUN with the given angle (startup.init_pos given, no catch), an estimator drive: the current
+ * references start from zero, not from what an earlier run left. With zero asked, they stay
+ * exactly zero; with 2 A in q asked, q moves up by control.i_slew * ts a period and d stays
+ * exactly zero (a d step would be a torque-free current pulse at the start); the outputs are on
+ * from the entry period. (startup.c:40; :205, the sensor drive's entry only for a sensor drive.) */
+static void test_references_start_from_zero(void **state)
+{
+    (void)state;
+    static rig_t r;
+    for (int c = 0; c < 2; ++c) {
+        rig_init(&r, "unop", "given", "pulses");
+        const float iq = c == 0 ? 0.0f : 2.0f;
+        through_calibration(&r, 0.3f, (mc_dq_t){0.0f, iq});
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        /* an estimator drive at rest: the outputs on in the entry period, no entry law waiting
+         * for a diode pulse's low (that is an angle-sensor drive's at speed) */
+        assert_true(hal_pwm_enabled(&r.pwm));
+        assert_false(r.d.entry.gate_on_next);
+        const float step = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
+        assert_true(step > 0.0f && step < 0.5f);
+        /* the pipeline ran in RUN's first period (the calibration's last): one step so far */
+        for (int k = 1; k <= 12; ++k) {
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+            const mc_dq_t ref = mc_drive_telemetry(&r.d)->i_ref;
+            assert_true(ref.d == 0.0f);
+            assert_near(ref.q, fminf(iq, (float)k * step), 1e-5);
+            run(&r, 1);
+        }
+    }
+}
+
+/* Step III hands over to RUN when the low-passed |omega_hat| has stayed below the tolerance for
+ * step3_hold periods and Step III lasted at least twice that: the estimate starts at rest too,
+ * so a hold from its first period alone proves nothing. Periods as the ISR runs them (the
+ * sequencer's tick, then from the second tick on the pipeline and the test): at rest throughout,
+ * the hand-over is at tick 2 step3_hold exactly; one period of a moving estimate (100 x the
+ * tolerance: above it after the 50 Hz low-pass) at tick hold + 2 restarts the hold: the
+ * hand-over comes later than a full hold after it. (startup.c:408.) */
+static void test_step3_lasts_twice_the_hold(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "three_step", "pulses");
+    const uint32_t hold = r.d.cfg->blk.step3_hold;
+    assert_true(hold >= 3u);
+    const float tol = r.d.cfg->blk.step3_speed_tol;
+    for (int c = 0; c < 2; ++c) {
+        mc_drive_startup_reset(&r.d);   /* Step III's convergence state at rest */
+        r.d.seq.state = MC_STATE_INIT_POS;   /* as Step II's end enters Step III */
+        r.d.seq.step = MC_INIT_STEP3;
+        r.d.seq.ticks = 0u;
+        r.d.seq.limit = 0u;   /* no timeout: the test alone decides */
+        const uint32_t spike = c == 0 ? 0u : hold + 2u;
+        uint32_t done = 0u, above = 0u;   /* the last tick the low-passed speed was not below */
+        for (uint32_t t = 0u; t < 10u * hold && done == 0u; ++t) {
+            mc_seq_tick(&r.d.seq);
+            const uint32_t now = r.d.seq.ticks;   /* RUN's entry restarts the count */
+            if (now > 1u) {
+                mc_drive_step3_check(&r.d, now == spike ? 100.0f * tol : 0.0f);
+                if (!(r.d.step3_speed.y < tol)) {
+                    above = now;
+                }
+            }
+            if (r.d.seq.state == MC_STATE_RUN) {
+                done = now;
+            }
+        }
+        if (c == 0) {
+            assert_int_equal(above, 0u);
+            assert_int_equal(done, 2u * hold);
+        } else {
+            /* a full hold of periods below the tolerance after the last one above it */
+            assert_true(above > spike && above + hold > 2u * hold);
+            assert_int_equal(done, above + hold);
+        }
+    }
+}
+
+/* An angle-sensor drive enabled on a turning rotor waits after the calibration, outputs off, for
+ * a diode pulse's low, at most the catch's longest wait (flying.n_wait_max periods) and never
+ * longer, also with a calibration shorter than that wait (8 samples): with a current that never
+ * comes down to the low (5 A in a and -5 A in b from the calibration's last sample on: 1/8 of
+ * it in the offsets), it enters RUN once it has waited n_wait_max periods, not at the
+ * calibration's timeout. (startup.c:182:
+ * the periods waited counted from the calibration's end.) */
+static void test_sensor_wait_is_bounded(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "encoder", "given", "pulses");
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_control_offset_cal_samples, 8.0f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    const uint32_t samples = r.d.cfg->blk.offs.samples, wait = r.d.cfg->blk.flying.n_wait_max;
+    assert_int_equal(samples, 8u);
+    assert_true(wait > 2u * samples);   /* longer than the calibration, a few times */
+    const float amps = 5.0f, k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
+    const mc_ab_t i_ab = {amps, (amps + 2.0f * amps) / sqrtf(3.0f)};   /* Clarke of (5, -5, 0) A */
+    assert_false(mc_catch_at_low(&r.d.cfg->blk.flying, i_ab));
+    assert_true(amps < r.d.cfg->blk.prot.i_trip);
+    const uint32_t step = 80000u * 1500u / 60u / 10000u;   /* counts per period at 1500 rpm */
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&r.d, &c);
+    uint32_t after = 0u;   /* periods from the calibration's last (included) */
+    for (int n = 0; n < 5000 && mc_drive_state(&r.d) != MC_STATE_RUN && mc_drive_state(&r.d) != MC_STATE_FAULT; ++n) {
+        if (r.d.offs.count + 1u >= samples) {   /* from the sample that ends the calibration */
+            r.adc.sample.i[0] = (uint16_t)lrintf(nominal + amps / k);
+            r.adc.sample.i[1] = (uint16_t)lrintf(nominal - amps / k);
+            ++after;
+        }
+        r.qep.sample.count = (r.qep.sample.count + step) % 80000u;
+        run(&r, 1);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    print_message("RUN %u periods after the calibration (n_wait_max %u)\n", after, wait);
+    assert_int_equal(after, 1u + wait);   /* the last sample's period, then n_wait_max waited */
+}
+
+/* Bumpless RUN entry of an angle-sensor drive on a turning rotor (800 rpm, either way: the flux
+ * is held, no field-weakening entry) with 5 A flowing: RUN's first current reference starts from
+ * the current measured, in the frame of the sensor's angle one period on (the frame the pipeline
+ * then uses), and moves one slew step (0.2 A) toward the command (0 A), along the current: its
+ * angle is the current's to within 2 % of the rotor's turn in a period (0.042 rad), from several
+ * rotor angles. (startup.c:207, the frame of RUN's first references: the angle a period old, or
+ * one period back, is a turn off.) */
+static void test_sensor_entry_references_from_the_current(void **state)
+{
+    (void)state;
+    static rig_t r;
+    const int32_t speeds[] = {800, -800};
+    const uint32_t starts[] = {0u, 13000u, 29000u, 51000u, 70000u};
+    for (size_t v = 0; v < 2u; ++v) {
+        for (size_t a = 0; a < sizeof starts / sizeof starts[0]; ++a) {
+            rig_init(&r, "encoder", "given", "pulses");
+            const float amps = 5.0f, k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
+            const uint32_t samples = r.d.cfg->blk.offs.samples;
+            const int32_t step = speeds[v] * 80000 / 60 / 10000;   /* counts per period */
+            r.qep.sample.count = starts[a];
+            const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
+            mc_drive_command(&r.d, &c);
+            for (int n = 0; n < 5000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+                if (r.d.offs.count + 1u >= samples) {
+                    r.adc.sample.i[0] = (uint16_t)lrintf(nominal + amps / k);
+                    r.adc.sample.i[1] = (uint16_t)lrintf(nominal - amps / k);
+                }
+                r.qep.sample.count = (uint32_t)(((int32_t)r.qep.sample.count + step + 80000) % 80000);
+                run(&r, 1);
+            }
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+            const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+            const float slew = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
+            const float dd = tm->i_ref.d - tm->i_dq.d, dq = tm->i_ref.q - tm->i_dq.q;
+            assert_true(hypotf(tm->i_dq.d, tm->i_dq.q) > 4.0f);   /* the current flows */
+            assert_near(sqrtf(dd * dd + dq * dq), slew, 1e-3);        /* one step toward 0 A */
+            /* ... along the current itself: the frames agree to far below a period's turn */
+            const float turn = fabsf(r.d.tm.omega * r.d.cfg->blk.ts);
+            assert_true(turn > 0.03f);
+            const float ang = remainderf(atan2f(tm->i_ref.q, tm->i_ref.d) - atan2f(tm->i_dq.q, tm->i_dq.d), 6.2831853f);
+            assert_true(fabsf(ang) < 0.02f * turn);
+        }
+    }
+}
+
+/* With the outputs off and nothing to run (IDLE, FAULT) the drive leaves the PWM alone: no duty
+ * write and no enable call period after period (the duties it left at 50 % stay latched), only
+ * the one outputs-off of the period it got there. (startup.c:376: outputs off only if on.) */
+static void test_idle_and_fault_leave_the_pwm_alone(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "encoder", "given", "pulses");
+    uint32_t w = r.pwm.writes;
+    run(&r, 50);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    assert_int_equal(r.pwm.writes, w);
+    through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+    run(&r, 20);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    /* disabled: IDLE */
+    const mc_drive_cmd_t off = {.enable = false, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&r.d, &off);
+    run(&r, 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    w = r.pwm.writes;
+    for (int k = 0; k < 50; ++k) {
+        run(&r, 1);
+        assert_int_equal(r.pwm.writes, w);
+        assert_false(hal_pwm_enabled(&r.pwm));
+    }
+    /* a fault: FAULT */
+    through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+    run(&r, 20);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    const float i = r.d.cfg->blk.prot.i_trip + 1.0f;
+    r.adc.sample.i[0] = (uint16_t)lrintf((float)r.d.cfg->blk.offs.nominal + i / r.d.cfg->blk.offs.amps_per_count);
+    run(&r, 1);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    for (int k = 0; k < 3; ++k) {
+        assert_true(r.pwm.shadow[k] == 0.5f);
+    }
+    w = r.pwm.writes;
+    for (int k = 0; k < 50; ++k) {
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_int_equal(r.pwm.writes, w);
+        assert_false(hal_pwm_enabled(&r.pwm));
+    }
+}
+
+/* Steps I-III on a synthetic plant whose current answers a voltage along +alpha 5/3 times more
+ * than one along -alpha (a d axis saturating with the magnet's flux: the magnet at 0), or the
+ * other way (the magnet at pi): Step I finds the axis (theta1 = 0), Step II (dual-voltage
+ * injection) measures the peak currents of its +V and -V pulses, c1 and c2 in the telemetry, in
+ * the ratio 5/3 or 3/5, and flips to pi in the second case only; Step III hands over to RUN.
+ * (startup.c:344-346: the decision's quantities, as Step II measured them, in the telemetry.) */
+static void test_step2_decision_in_telemetry(void **state)
+{
+    (void)state;
+    static rig_t r;
+    for (int magnet = 0; magnet < 2; ++magnet) {
+        rig_init(&r, "unop", "three_step", "pulses");
+        through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+        const float k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
+        int n = 0;
+        for (; n < 3000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+            /* the current of this period's sample: a resistive answer to the voltage acting */
+            const mc_ab_t v = mc_clarke((mc_abc_t){(r.pwm.active[0] - 0.5f) * 300.0f,
+                                                    (r.pwm.active[1] - 0.5f) * 300.0f,
+                                                    (r.pwm.active[2] - 0.5f) * 300.0f});
+            const float g = (v.alpha > 0.0f) == (magnet == 0) ? 0.05f : 0.03f;
+            const mc_abc_t i = mc_clarke_inv((mc_ab_t){g * v.alpha, g * v.beta});
+            r.adc.sample.i[0] = (uint16_t)lrintf(nominal + i.a / k);
+            r.adc.sample.i[1] = (uint16_t)lrintf(nominal + i.b / k);
+            r.adc.sample.i[2] = (uint16_t)lrintf(nominal + i.c / k);
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+        assert_near(tm->theta1, 0.0f, 1e-3);
+        assert_true(tm->c1 > 1.0f && tm->c2 > 1.0f);
+        assert_near(tm->c1 / tm->c2, magnet == 0 ? 5.0f / 3.0f : 3.0f / 5.0f, 0.02);
+        assert_int_equal(tm->pol_flip, magnet == 1);
+        assert_near(fabsf(tm->theta2), magnet == 0 ? 0.0f : 3.14159265f, 1e-3);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_step1_runs_the_selected_program),
+        cmocka_unit_test(test_references_start_from_zero),
+        cmocka_unit_test(test_step3_lasts_twice_the_hold),
+        cmocka_unit_test(test_step2_decision_in_telemetry),
+        cmocka_unit_test(test_sensor_wait_is_bounded),
+        cmocka_unit_test(test_sensor_entry_references_from_the_current),
+        cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
