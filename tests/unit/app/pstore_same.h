@@ -41,4 +41,33 @@ static inline bool same_cfg_in(const mc_drive_cfg_t *got, const mc_drive_cfg_t *
            memcmp(g->psi_q, w->psi_q, cells * sizeof(float)) == 0;
 }
 
+/* Set k in storage c (its map in m): a few parameters moved, the model's scalars, an nd x nq map
+ * (0: none). Uses cmocka's assert_true: include cmocka.h first. */
+static inline const mc_drive_cfg_t *pstore_make_cfg(mc_drive_cfg_t *c, mc_flux_map_t *m, int k, int nd, int nq)
+{
+    mc_params_default(&c->p);
+    assert_true(mc_param_set(&c->p, mc_param_find("control.ts_s"), 1e-4f - 1e-6f * (float)k, NULL));
+    assert_true(mc_param_set(&c->p, mc_param_find("hw.encoder_lines"), (float)(1000 + k), NULL));
+    c->est.rs = 0.1f + 0.01f * (float)k;
+    c->est.ld = 1e-3f * (float)(k + 1);
+    c->est.lq = 2e-3f * (float)(k + 1);
+    c->est.psi_pm = 0.05f + 0.001f * (float)k;
+    c->est.map = NULL;
+    if (nd > 0) {
+        memset(m, 0, sizeof *m);
+        m->n_d = nd;
+        m->n_q = nq;
+        m->id0 = -10.0f - (float)k;
+        m->did = 0.5f;
+        m->iq0 = -20.0f;
+        m->diq = 0.25f;
+        for (int i = 0; i < nd * nq; ++i) {
+            m->psi_d[i] = 0.001f * (float)i + (float)k;
+            m->psi_q[i] = -0.002f * (float)i - (float)k;
+        }
+        c->est.map = m;
+    }
+    return c;
+}
+
 #endif
