@@ -23,6 +23,12 @@ static float or_motor(float v, float motor)
     return isnan(v) ? motor : v;
 }
 
+/* The estimator's model as the flux-model blocks take it: its map, or (none) its constants. */
+static mc_flux_model_t est_flux_model(const mc_est_model_t *m)
+{
+    return (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+}
+
 /* The estimator's model: the motor's unless given, each value as plausible as the motor entry
  * it stands for; the flux map's grid must fit the table and hold finite numbers only. */
 static bool check_model(const mc_params_t *p, const mc_est_model_t *in, mc_est_model_t *m, bool need_map,
@@ -103,15 +109,11 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
  * by Ld at i = 0 overshoots there (brodatzki-35kw: 213 A for a 160 A limit). */
 static float flux_room(const mc_est_model_t *m, float i_lim)
 {
-    const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
-    mc_dq_t p0, pd, nd, pq;
-    float l[4];
-    mc_flux_eval(&fm, (mc_dq_t){0.0f, 0.0f}, &p0, l, NULL);
-    mc_flux_eval(&fm, (mc_dq_t){i_lim, 0.0f}, &pd, l, NULL);
-    mc_flux_eval(&fm, (mc_dq_t){-i_lim, 0.0f}, &nd, l, NULL);
-    mc_flux_eval(&fm, (mc_dq_t){0.0f, i_lim}, &pq, l, NULL);
-    const float a = pd.d - p0.d, b = p0.d - nd.d, c = pq.q - p0.q;
-    const float r = a < b ? a : b;
+    const mc_flux_model_t fm = est_flux_model(m);
+    mc_dq_t p0, pq;
+    mc_flux_eval(&fm, (mc_dq_t){0.0f, 0.0f}, &p0, NULL, NULL);
+    mc_flux_eval(&fm, (mc_dq_t){0.0f, i_lim}, &pq, NULL, NULL);
+    const float r = mc_flux_swing_d(&fm, i_lim), c = pq.q - p0.q;
     return r < c ? r : c;
 }
 
@@ -121,7 +123,7 @@ static float flux_room(const mc_est_model_t *m, float i_lim)
  * at least 4 quanta keep one quantum within 1/8 rad (7 deg) of angle. */
 static bool saliency_usable(const mc_params_t *p, const mc_est_model_t *m)
 {
-    const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+    const mc_flux_model_t fm = est_flux_model(m);
     mc_dq_t psi;
     float l[4];
     mc_flux_eval(&fm, (mc_dq_t){0.0f, 0.0f}, &psi, l, NULL);
@@ -139,7 +141,7 @@ static void build_startup(const mc_params_t *p, const mc_est_model_t *m, mc_driv
     b->step1.ld = m->ld;
     b->step1.lq = m->lq;
     b->step1.cost = (mc_ip_cost_t)p->startup_step1_cost;
-    b->step1.model = (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+    b->step1.model = est_flux_model(m);
     b->step1.m = (int)p->startup_step1_m;
     /* the pulse's current by the model, not Ld at i = 0: at most 0.9 i_max (the 2/3 Vdc of a
      * direct vector for m periods) */
@@ -202,7 +204,7 @@ static bool build_source(const mc_params_t *p, const mc_est_model_t *m, mc_drive
 {
     const mc_angle_src_desc_t *src = mc_angle_src_get(p->control_angle_source);
     b->src.rs = m->rs;
-    b->src.model = p->estimator_model == MC_CHOICE_estimator_model_fluxmap ? (mc_flux_model_t){MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map}
+    b->src.model = p->estimator_model == MC_CHOICE_estimator_model_fluxmap ? est_flux_model(m)
                                      : (mc_flux_model_t){MC_FLUX_CONST, m->ld, m->lq, m->psi_pm, 0};
     if (!src->build(p, b->src.rs, &b->src.model, &b->src.cfg, err)) {
         return false;
@@ -278,7 +280,7 @@ static void build_polcheck(const mc_params_t *p, const mc_est_model_t *m, mc_dri
     /* the polarity re-check's expected HF ratio from the map's l_dd at +-I_b (none: 0) */
     pc->log_ratio = 0.0f;
     if (m->map != 0) {
-        const mc_flux_model_t fm = {MC_FLUX_MAP, m->ld, m->lq, m->psi_pm, m->map};
+        const mc_flux_model_t fm = est_flux_model(m);
         mc_dq_t psi;
         float lp[4], ln[4];
         mc_flux_eval(&fm, (mc_dq_t){p->protection_polarity_bias_a, 0.0f}, &psi, lp, 0);

@@ -77,3 +77,13 @@ void mc_flux_eval(const mc_flux_model_t *m, mc_dq_t i, mc_dq_t *psi, float L[4],
         }
     }
 }
+
+float mc_flux_swing_d(const mc_flux_model_t *m, float i_lim)
+{
+    mc_dq_t p0, pd, nd;
+    mc_flux_eval(m, (mc_dq_t){0.0f, 0.0f}, &p0, NULL, NULL);
+    mc_flux_eval(m, (mc_dq_t){i_lim, 0.0f}, &pd, NULL, NULL);
+    mc_flux_eval(m, (mc_dq_t){-i_lim, 0.0f}, &nd, NULL, NULL);
+    const float up = pd.d - p0.d, dn = p0.d - nd.d;
+    return up < dn ? up : dn;
+}

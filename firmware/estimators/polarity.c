@@ -158,13 +158,7 @@ static int retry_n(const mc_polarity_t *s)
     if (!(im > 0.0f) || !(s->v_real > 0.0f)) {
         return 0;
     }
-    mc_dq_t psi0, psip, psin;
-    float l[4];
-    mc_flux_eval(&s->cfg.model, (mc_dq_t){0.0f, 0.0f}, &psi0, l, NULL);
-    mc_flux_eval(&s->cfg.model, (mc_dq_t){im, 0.0f}, &psip, l, NULL);
-    mc_flux_eval(&s->cfg.model, (mc_dq_t){-im, 0.0f}, &psin, l, NULL);
-    const float up = psip.d - psi0.d, dn = psi0.d - psin.d;
-    float n = floorf((up < dn ? up : dn) / (s->v_real * s->cfg.ts));
+    float n = floorf(mc_flux_swing_d(&s->cfg.model, im) / (s->v_real * s->cfg.ts));
     n = n > (float)s->cfg.n ? n : (float)s->cfg.n;   /* at least the first train's length */
     int nmax = (MC_IP_REC_MAX - s->n_valid) / 4;
     nmax = nmax < MC_POL_N_MAX ? nmax : MC_POL_N_MAX;

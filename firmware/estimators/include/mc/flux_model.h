@@ -39,6 +39,10 @@ typedef struct {
  *                                        d2psi_q/did2, d2psi_q/diddiq, d2psi_q/diq2]. */
 void mc_flux_eval(const mc_flux_model_t *m, mc_dq_t i, mc_dq_t *psi, float L[4], float dL[6]);
 
+/* The d-axis flux swing [Wb] from i = 0 that takes i_d to +i_lim or to -i_lim, the smaller of the
+ * two (a pulse program along d sized by the model's saturation, not by l_dd at 0). */
+float mc_flux_swing_d(const mc_flux_model_t *m, float i_lim);
+
 /* The same model: kind, constants and the same map (by address: the map is data, not copied). */
 static inline bool mc_flux_model_same(const mc_flux_model_t *a, const mc_flux_model_t *b)
 {
