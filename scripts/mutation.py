@@ -486,13 +486,22 @@ def main() -> int:
     journal = out / "journal.jsonl"
     if a.summarize:
         index = {mkey(m): m for f in files for m in all_mutants[f]}
-        results = []
+        # journals put together (shards, per-file runs, a re-test of survivors): the last result of
+        # a mutant counts; results of a file's older content do not match its key and are left out
+        last = {}
         for ln in (journal.read_text().splitlines() if journal.exists() else []):
             r = json.loads(ln)
             if r.get("key") in index:
-                results.append(dict(index[r["key"]], **{k: r[k] for k in ("status", "by", "reason", "of", "seconds") if k in r}))
-        results.sort(key=lambda m: (m["file"], m["line"], m["mutated"]))
-        summary = summarize(results, files, a, generated, lang, time.monotonic() - t_start)
+                last[r["key"]] = dict(index[r["key"]], **{k: r[k] for k in ("status", "by", "reason", "of", "seconds") if k in r})
+        # a survivor judged equivalent since its run is reported so, with the list's reason
+        judged = {(f, ln, mu): why for (f, ln, mu, why) in load_equivalent(ROOT / a.equivalent)}
+        for m in last.values():
+            why = judged.get((m["file"], m["line"], m["mutated"].strip()))
+            if m["status"] == "survived" and why:
+                m.update(status="equivalent", reason=why)
+        results = sorted(last.values(), key=lambda m: (m["file"], m["line"], m["mutated"]))
+        summary = summarize(results, files, a, generated, lang, time.monotonic() - t_start,
+                            {f: len(all_mutants[f]) for f in files})
         summary["from_journal"] = True
         (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
         (out / "report.md").write_text(report(summary))
@@ -654,7 +663,8 @@ def main() -> int:
         r.build_mutant(a.build_timeout)   # leave the copies' builds unmutated
     results.sort(key=lambda m: (m["file"], m["line"], m["mutated"]))
 
-    summary = summarize(results, files, a, generated, lang, time.monotonic() - t_start)
+    summary = summarize(results, files, a, generated, lang, time.monotonic() - t_start,
+                            {f: len(all_mutants[f]) for f in files})
     (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     (out / "report.md").write_text(report(summary))
     s = summary["totals"]
@@ -690,7 +700,7 @@ def wilson(k: int, n: int) -> list[float] | None:
     return [round(100 * max(0.0, c - h), 1), round(100 * min(1.0, c + h), 1)]
 
 
-def summarize(results, files, a, generated, lang, seconds):
+def summarize(results, files, a, generated, lang, seconds, gen_per_file=None):
     def pick(st):
         return [{k: m[k] for k in ("file", "line", "original", "mutated", "by", "reason", "of", "seconds")
                  if k in m} for m in results if m["status"] == st]
@@ -703,6 +713,8 @@ def summarize(results, files, a, generated, lang, seconds):
         den = c["killed"] + c["survived"]
         c["score"] = round(100.0 * c["killed"] / den, 1) if den else None
         c["ci95"] = wilson(c["killed"], den)
+        c["results"] = len(rs)   # of the file's generated mutants: all of them in a full run
+        c["generated"] = (gen_per_file or {}).get(f)
         per_file[f] = c
     tot = {st: sum(1 for m in results if m["status"] == st) for st in STATUSES}
     tot["not_covered"] = sum(1 for m in results if m["status"] == "survived" and m.get("reason"))
@@ -741,12 +753,12 @@ def report(s) -> str:
          f"{t['duplicate']} duplicate, {t['no_compile']} not compiling: "
          f"score {t['score']:.1f} % of the non-equivalent, non-duplicate mutants that build.", "",
          f"95 % interval of the score (Wilson): {t['ci95']} %." if t.get("ci95") else "", "",
-         "| file | killed | survived | equivalent | duplicate | not compiling | score | 95 % interval |",
-         "|---|---:|---:|---:|---:|---:|---:|---|"]
+         "| file | results of generated | killed | survived | equivalent | duplicate | not compiling | score | 95 % interval |",
+         "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for f, c in s["per_file"].items():
         sc = f"{c['score']:.1f} %" if c["score"] is not None else "-"
         ci = f"{c['ci95'][0]:.0f}-{c['ci95'][1]:.0f} %" if c.get("ci95") else "-"
-        L.append(f"| {f} | {c['killed']} | {c['survived']} | {c['equivalent']} | {c['duplicate']} | {c['no_compile']} | {sc} | {ci} |")
+        L.append(f"| {f} | {c.get('results', '-')} of {c.get('generated') or '-'} | {c['killed']} | {c['survived']} | {c['equivalent']} | {c['duplicate']} | {c['no_compile']} | {sc} | {ci} |")
     L += ["", "## Survivors", ""]
     for m in s["survived"] or []:
         L += [f"- `{m['file']}:{m['line']}`{' (' + m['reason'] + ')' if m.get('reason') else ''}",

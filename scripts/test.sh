@@ -21,6 +21,9 @@ for img in build/host/images/*/firmware/image/mc_image_*.elf; do
   python3 scripts/image_budget.py "$img" --code 98304 --ram 24576 | grep -E "^-- (image|code)" || status=1
 done
 echo "== mutation sample (docs/testing.md): the safety-relevant files, fixed seed, covering tests only"
+# the lists of equivalent and must-kill mutants must sit on the lines they judge (after an edit:
+# scripts/mutation_lists.py --remap BASE)
+python3 scripts/mutation_lists.py --check || status=1
 # A change that weakens the tests of protection, start-up, the store or CiA 402 shows here: the
 # run fails if a mutant of scripts/mutation_must_kill.txt survives or the score falls below the
 # threshold (docs/testing.md says why this one). The full run is scripts/mutation.sh (a benchmark).
