@@ -10,6 +10,7 @@
 #include "mc/filters.h"
 #include "mc/fw_entry.h"
 #include "mc/handover.h"
+#include "mc/if_start.h"
 #include "mc/injection.h"
 #include "mc/initpos.h"
 #include "mc/phase_program.h"
@@ -95,6 +96,10 @@ typedef struct {
     uint32_t polarity_checks, polarity_flips;   /* running polarity re-checks, and reversals */
     int      polarity_last;      /* last verdict: +1 reversed, -1 right, 0 inconclusive       */
     mc_cmd_reject_t cmd_reject_last;
+    bool     if_on;              /* the drive runs I/f below the hand-over speed (mc/if_start.h) */
+    uint8_t  if_mode;            /* mc_if_mode_t: 0 the estimator's angle, 1 open loop, 2 reducing */
+    float    if_delta;           /* I/f: estimated load angle [rad]                          */
+    uint32_t if_handovers;       /* I/f -> estimator hand-overs since the enable             */
 } mc_drive_telem_t;
 
 typedef struct {
@@ -128,6 +133,9 @@ typedef struct {
     mc_fwe_cfg_t fw_entry;       /* the field-weakening entry (mc/fw_entry.h)                    */
     mc_protect_cfg_t prot;       /* protection: hard trips, detectors, reactions (mc/protect.h)  */
     mc_polcheck_cfg_t pol;       /* the running polarity re-check (mc/polcheck.h)                */
+    mc_if_cfg_t ifs;             /* I/f below the hand-over speed (mc/if_start.h), where if_on   */
+    bool  if_on;                 /* no usable saliency (or startup.init_pos = if_start): I/f     */
+    bool  if_from_zero;          /* startup.init_pos = if_start: no angle known, the frame at 0  */
     mc_offsets_cfg_t offs;       /* the current offsets' calibration and scaling (mc/offset_cal.h) */
 } mc_drive_blk_t;
 
@@ -182,6 +190,9 @@ typedef struct {
     mc_protect_t prot;           /* protection's detectors and recoveries (mc/protect.h)      */
     uint32_t step3_count;
     mc_polcheck_t pol;           /* the running polarity re-check (mc/polcheck.h)             */
+    mc_if_t ifs;                 /* I/f (mc/if_start.h)                                       */
+    mc_if_out_t if_out;          /* its output this period                                    */
+    bool if_fresh;               /* RUN not yet entered since the enable                      */
     mc_cc_t cc;
     mc_sc_t sc;
     mc_tref_t tref;
