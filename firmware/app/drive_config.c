@@ -320,13 +320,17 @@ static bool build_if(const mc_params_t *p, bool salient, mc_drive_blk_t *b, mc_p
     }
     const float el = RPM_TO_RAD_S * (float)p->motor_pole_pairs;
     const float w_h = p->startup_if_handover_rpm * el;
+    /* the alignment steps last one period of the rotor's swing about the frame under I_f, whose
+     * stiffness is the peak torque per electrical radian: 2 pi / sqrt(1.5 p psi I_f p / J) */
+    const float k_el = 1.5f * (float)p->motor_pole_pairs * p->motor_psi_pm_wb * p->startup_if_i_a * (float)p->motor_pole_pairs;
+    const float t_swing = MC_2PI / sqrtf(fmaxf(k_el / p->motor_inertia_kgm2, 1e-6f));
     /* the rotor swings about the frame (nothing damps it but the load): synchronous within a
      * third of w_h for 10 ms; I_f then falls to nothing in 0.1 s unless the load angle reaches
      * 20 deg first (the torque balances with 6 % to spare) */
     b->ifs = (mc_if_cfg_t){.ts = p->control_ts_s, .i_f = p->startup_if_i_a, .accel = p->startup_if_accel_rpm_s * el,
                            .w_h = w_h, .w_l = 0.5f * w_h, .w_tol = w_h / 3.0f, .n_sync = periods_up(0.01f / p->control_ts_s),
                            .i_drop = 10.0f * p->startup_if_i_a, .i_min = 0.1f * p->startup_if_i_a, .delta_h = 0.35f,
-                           .damp = 0.5f};
+                           .damp = 0.5f, .n_align = periods_up(t_swing / p->control_ts_s)};
     if (p->startup_if_i_a > p->control_i_max_a * (1.0f - p->control_i_headroom)) {
         return mc_param_fail(err, MC_PERR_CROSS, MC_PARAM_startup_if_i_a, p->startup_if_i_a,
                              "the I/f current must stay within control.i_max_a (1 - control.i_headroom)");

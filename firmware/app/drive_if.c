@@ -35,19 +35,21 @@ bool mc_drive_if_step(mc_drive_t *d, mc_angle_out_t *ang, mc_ab_t i_ab)
     }
     if (d->if_fresh) {
         d->if_fresh = false;
-        if (b->if_from_zero) {
-            /* no angle known: the frame, and the estimator with it, start at 0 (the rotor then
-             * pulls itself to the frame; the given angle is not used) */
+        if (b->if_from_zero && !(fabsf(ang->omega) >= b->ifs.w_l)) {
+            /* standing, no angle known: the frame, and the estimator with it, start at 0 (the
+             * rotor pulls itself to the frame; the given angle is not used). A rotor caught
+             * turning keeps the catch's estimate. */
             d->src->reset(&d->src_state, 0.0f, 0.0f);
             ang->theta = 0.0f;
             ang->omega = 0.0f;
+            mc_if_align(&d->ifs, &b->ifs, 0.0f, d->cmd.mode == MC_MODE_SPEED ? d->cmd.speed_ref : d->cmd.torque_ref);
         }
-        mc_if_enter(&d->ifs, &b->ifs, ang->theta, 0.0f, d->cmd.mode == MC_MODE_SPEED ? d->cmd.speed_ref : d->cmd.torque_ref);
     }
     const bool speed = d->cmd.mode == MC_MODE_SPEED;
     const mc_if_in_t in = {.omega_target = speed ? d->cmd.speed_ref * (float)b->pole_pairs : 0.0f,
                            .theta_est = ang->theta, .omega_est = ang->omega,
-                           .torque_sign = d->tm.torque_ref < 0.0f ? -1.0f : 1.0f, .est_only = !speed};
+                           .torque_sign = d->tm.torque_ref != 0.0f ? d->tm.torque_ref : (speed ? d->cmd.speed_ref : d->cmd.torque_ref),
+                           .est_only = !speed};
     mc_if_step(&d->ifs, &b->ifs, &in, &d->if_out);
     d->tm.if_mode = (uint8_t)d->ifs.mode;
     d->tm.if_delta = d->if_out.delta;

@@ -18,7 +18,13 @@ void mc_if_init(mc_if_t *s)
 void mc_if_enter(mc_if_t *s, const mc_if_cfg_t *c, float theta, float omega, float sign)
 {
     *s = (mc_if_t){.mode = MC_IF_OPEN, .theta = mc_wrap_pi(theta), .omega = omega, .i_mag = c->i_f,
-                   .sign = sign < 0.0f ? -1.0f : 1.0f, .n = 0u};
+                   .sign = sign < 0.0f ? -1.0f : 1.0f, .n = 0u, .align = 0u};
+}
+
+void mc_if_align(mc_if_t *s, const mc_if_cfg_t *c, float theta, float sign)
+{
+    mc_if_enter(s, c, theta, 0.0f, sign);
+    s->align = 2u * c->n_align;
 }
 
 /* Synchronous above w_h: the ramp and the command on the same side beyond w_h, and the
@@ -69,6 +75,15 @@ void mc_if_step(mc_if_t *s, const mc_if_cfg_t *c, const mc_if_in_t *in, mc_if_ou
         /* below w_l the EMF no longer carries the estimate: open loop from where it is */
         mc_if_enter(s, c, in->theta_est, in->omega_est, in->torque_sign);
         out->entered = true;
+    }
+    if (s->align > 0u) {
+        s->align--;
+        out->open = true;
+        out->theta = s->align >= c->n_align ? mc_wrap_pi(s->theta - s->sign * 0.5f * MC_PI) : s->theta;
+        out->omega = 0.0f;
+        out->delta = s->sign * mc_wrap_pi(in->theta_est - s->theta);
+        out->i_ref = (mc_dq_t){0.0f, s->sign * s->i_mag};
+        return;
     }
     /* this period's frame; then the ramp (accel ts per period) and the integration for the next */
     out->theta = s->theta;

@@ -30,6 +30,7 @@ typedef struct {
     float i_drop;      /* [A/s] rate at which I_f is reduced before the hand-over             */
     float i_min;       /* [A] the reduction stops here (then hands over anyway)               */
     float delta_h;     /* [rad] hand over once the estimated load angle is below this         */
+    uint32_t n_align;  /* [periods] each of the two alignment steps of mc_if_align            */
     float damp;        /* [0..1) share of the estimate's speed deviation the frame follows from
                         * w_l on (nothing else damps the rotor's swing about the frame)       */
 } mc_if_cfg_t;
@@ -47,6 +48,7 @@ typedef struct {
     float i_mag;       /* [A] present magnitude (I_f, or less while reducing)                 */
     float sign;        /* +1 / -1: the torque direction the current is placed for            */
     uint32_t n;        /* periods the hand-over condition held                                */
+    uint32_t align;    /* alignment periods left (mc_if_align)                                */
 } mc_if_t;
 
 typedef struct {
@@ -80,6 +82,10 @@ bool mc_if_cfg_valid(const mc_if_cfg_t *c);
 void mc_if_init(mc_if_t *s);
 /* Into open loop at (theta, omega), the current placed for torque of sign `sign` (0 counts +). */
 void mc_if_enter(mc_if_t *s, const mc_if_cfg_t *c, float theta, float omega, float sign);
+/* As mc_if_enter at standstill with no angle known, after an alignment so the start does not
+ * jerk backwards: the frame held at theta - sign 90 deg, then at theta, n_align periods each (a
+ * rotor at the first step's unstable point, 180 deg off, meets the full torque in the second). */
+void mc_if_align(mc_if_t *s, const mc_if_cfg_t *c, float theta, float sign);
 /* One period. In closed loop it only watches for |omega_est| < w_l (then enters at the
  * estimate). */
 void mc_if_step(mc_if_t *s, const mc_if_cfg_t *c, const mc_if_in_t *in, mc_if_out_t *out);
