@@ -314,7 +314,7 @@ static bool running_fault(mc_drive_t *d, const mc_angle_out_t *ang, mc_dq_t i_re
                                 .omega_raw = d->tm.omega_raw, .i_ref = i_ref, .i_fb = i_fb, .u_dq = d->cc.u,
                                 .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
                                 .speed_ref = d->cmd.speed_ref, .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
-                                .lock_paused = mc_polcheck_active(&d->pol), .open_loop = d->if_out.open};
+                                .lock_paused = mc_polcheck_active(&d->pol), .open_loop = d->if_open};
     bool doubt = false;
     const uint32_t reason = mc_protect_running(&d->prot, &d->cfg->blk.prot, &in, &doubt);
     if (doubt) {
@@ -410,7 +410,8 @@ void mc_drive_isr(mc_drive_t *d)
     angle_source(d, &ain, &ang);
     /* 4a. Below the hand-over speed without usable saliency: the I/f frame instead (drive_if.c;
      *     the lock checks wait, the estimator has nothing to lock on there). */
-    const bool open = mc_drive_if_step(d, &ang, i_ab);
+    mc_dq_t if_ref = {0.0f, 0.0f};
+    const bool open = mc_drive_if_step(d, &ang, i_ab, &if_ref);
 
     /* 5. Park (2.5) into the controller's frame, and the loop's feedback (notched while
      *    injecting). */
@@ -423,7 +424,7 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 6. References: current, torque (MTPA / field weakening) or speed; zero during Step III. */
     const bool step3 = d->seq.state == MC_STATE_INIT_POS;
-    mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : (open ? slew(d, d->if_out.i_ref) : references(d, ang.omega, vdc));
+    mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : (open ? slew(d, if_ref) : references(d, ang.omega, vdc));
     if (open) {
         d->tm.torque_ref = 0.0f;   /* no torque command: the frame's current pulls the rotor */
     }

@@ -1,7 +1,9 @@
 /* The drive's I/f hook (mc/if_start.h, issue 24 Deliver 4): below the hand-over speed, on a
  * motor whose saliency the injection cannot read (or with startup.init_pos = if_start), the
  * current loop runs on the I/f frame instead of the estimator's angle; the estimator runs on in
- * parallel and takes over above it, its speed loop preset with the torque then produced. */
+ * parallel and takes over above it, its speed loop preset with the torque then produced. The
+ * I/f state shares the phase programs' workspace (they never run in RUN): it is set up again at
+ * every RUN entry (the sequencer's first RUN period). */
 #include <math.h>
 #include "drive_internal.h"
 #include "mc/angle.h"
@@ -10,10 +12,8 @@
 
 void mc_drive_if_reset(mc_drive_t *d)
 {
-    mc_if_init(&d->ifs);
-    d->if_out = (mc_if_out_t){.open = false};
-    d->if_fresh = true;
-    d->tm.if_handovers = 0u;
+    d->if_open = false;
+    d->tm.if_mode = 0u;
 }
 
 /* The torque of the current i_dq in the controller's model [N m] (1.5 p (psi i_q + (Ld - Lq)
@@ -24,52 +24,57 @@ static float torque_of(const mc_drive_t *d, mc_dq_t i)
     return 1.5f * (float)d->cfg->blk.pole_pairs * (m->psi_pm * i.q + (m->ld - m->lq) * i.d * i.q);
 }
 
-bool mc_drive_if_step(mc_drive_t *d, mc_angle_out_t *ang, mc_ab_t i_ab)
+/* RUN entered (from the calibration, Step III or a catch): closed loop; standing with no angle
+ * known (if_start, or auto without saliency), the frame and the estimator start at 0 after the
+ * alignment (the given angle is not used); a rotor caught turning keeps the catch's estimate. */
+static void run_entry(mc_drive_t *d, const mc_drive_blk_t *b, mc_angle_out_t *ang)
+{
+    mc_if_init(&d->ifs);
+    if (b->if_from_zero && !(fabsf(ang->omega) >= b->ifs.w_l)) {
+        d->src->reset(&d->src_state, 0.0f, 0.0f);
+        ang->theta = 0.0f;
+        ang->omega = 0.0f;
+        mc_if_align(&d->ifs, &b->ifs, 0.0f, d->cmd.mode == MC_MODE_SPEED ? d->cmd.speed_ref : d->cmd.torque_ref);
+    }
+}
+
+bool mc_drive_if_step(mc_drive_t *d, mc_angle_out_t *ang, mc_ab_t i_ab, mc_dq_t *i_ref)
 {
     const mc_drive_blk_t *b = &d->cfg->blk;
     d->tm.if_on = b->if_on;
+    d->if_open = false;
+    d->tm.if_mode = 0u;
     if (!b->if_on || d->seq.state != MC_STATE_RUN || d->cmd.mode == MC_MODE_CURRENT) {
-        d->if_out.open = false;
-        d->tm.if_mode = 0u;
         return false;
     }
-    if (d->if_fresh) {
-        d->if_fresh = false;
-        if (b->if_from_zero && !(fabsf(ang->omega) >= b->ifs.w_l)) {
-            /* standing, no angle known: the frame, and the estimator with it, start at 0 (the
-             * rotor pulls itself to the frame; the given angle is not used). A rotor caught
-             * turning keeps the catch's estimate. */
-            d->src->reset(&d->src_state, 0.0f, 0.0f);
-            ang->theta = 0.0f;
-            ang->omega = 0.0f;
-            mc_if_align(&d->ifs, &b->ifs, 0.0f, d->cmd.mode == MC_MODE_SPEED ? d->cmd.speed_ref : d->cmd.torque_ref);
-        }
+    if (d->seq.ticks == 1u) {
+        run_entry(d, b, ang);
     }
     const bool speed = d->cmd.mode == MC_MODE_SPEED;
     const mc_if_in_t in = {.omega_target = speed ? d->cmd.speed_ref * (float)b->pole_pairs : 0.0f,
                            .theta_est = ang->theta, .omega_est = ang->omega,
                            .torque_sign = d->tm.torque_ref != 0.0f ? d->tm.torque_ref : (speed ? d->cmd.speed_ref : d->cmd.torque_ref),
                            .est_only = !speed};
-    mc_if_step(&d->ifs, &b->ifs, &in, &d->if_out);
+    mc_if_out_t out;
+    mc_if_step(&d->ifs, &b->ifs, &in, &out);
     d->tm.if_mode = (uint8_t)d->ifs.mode;
-    d->tm.if_delta = d->if_out.delta;
-    if (d->if_out.handover) {
+    if (out.handover) {
         /* the loop goes on from the current that flows, seen in the estimator's frame, and the
          * speed loop from the torque it makes */
         const mc_dq_t i_est = mc_park(i_ab, mc_sincos(ang->theta));
         d->i_ref_prev = i_est;
         mc_sc_reset(&d->sc, torque_of(d, i_est));
-        d->tm.if_handovers++;
-        d->tm.if_mode = (uint8_t)MC_IF_CLOSED;
         return false;
     }
-    if (!d->if_out.open) {
+    if (!out.open) {
         return false;
     }
-    if (d->if_out.reseed) {
-        d->src->reset(&d->src_state, mc_wrap_pi(d->if_out.theta + d->ifs.sign * 0.25f * MC_PI), d->if_out.omega);
+    if (out.reseed) {
+        d->src->reset(&d->src_state, mc_wrap_pi(out.theta + d->ifs.sign * 0.25f * MC_PI), out.omega);
     }
-    ang->theta = d->if_out.theta;
-    ang->omega = d->if_out.omega;
+    ang->theta = out.theta;
+    ang->omega = out.omega;
+    *i_ref = out.i_ref;
+    d->if_open = true;
     return true;
 }

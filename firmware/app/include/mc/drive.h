@@ -87,19 +87,18 @@ typedef struct {
     float    c1, c2;             /* (5.7) costs, or DVI peak currents        */
     bool     pol_flip;           /* Step II added pi                         */
     uint8_t  pol_verdict;        /* Step II: mc_pol_verdict_t (mc/polarity.h) */
+    uint8_t  if_mode;            /* I/f (mc/if_start.h): mc_if_mode_t, 0 the estimator's angle,
+                                    1 open loop, 2 reducing toward the hand-over                 */
     float    pol_z;              /* Step II confidence |b| / se(b)           */
     float    duty[3];
     bool     u_limited, fw_active;
+    bool     if_on;              /* configured to run I/f below the hand-over speed          */
     uint32_t cmd_rejected;       /* commands refused at the hand-over        */
     uint32_t recoveries;         /* recoveries since the enable (protection.lock_action)      */
     uint32_t recovered_from;     /* the reasons that started them (fault bits, or-ed)         */
     uint32_t polarity_checks, polarity_flips;   /* running polarity re-checks, and reversals */
     int      polarity_last;      /* last verdict: +1 reversed, -1 right, 0 inconclusive       */
     mc_cmd_reject_t cmd_reject_last;
-    bool     if_on;              /* the drive runs I/f below the hand-over speed (mc/if_start.h) */
-    uint8_t  if_mode;            /* mc_if_mode_t: 0 the estimator's angle, 1 open loop, 2 reducing */
-    float    if_delta;           /* I/f: estimated load angle [rad]                          */
-    uint32_t if_handovers;       /* I/f -> estimator hand-overs since the enable             */
 } mc_drive_telem_t;
 
 typedef struct {
@@ -178,6 +177,7 @@ typedef struct {
     mc_offsets_t offs;           /* the current offsets and their calibration (mc/offset_cal.h) */
     mc_catch_entry_t entry;      /* a RUN entry at speed: the corner latched, the gates' enable
                                     next period (mc/catch.h) */
+    bool if_open;                /* I/f's open loop runs this period (mc/if_start.h)           */
     mc_fwe_t fw_entry;           /* a RUN entry at speed: the flux into the voltage limit first
                                     (mc/fw_entry.h) */
 
@@ -185,14 +185,15 @@ typedef struct {
     mc_angle_src_state_t src_state;
     mc_inj_t inj;
     mc_biquad_t notch_d, notch_q;
-    mc_phase_t phase;            /* the running phase program (Step I, II) and its workspace */
+    union {
+        mc_phase_t phase;        /* the running phase program (Step I, II, the catch) and its workspace */
+        mc_if_t ifs;             /* RUN only, where no phase program runs: I/f (mc/if_start.h), set
+                                    up again at every RUN entry (drive_if.c)                    */
+    };
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
     mc_protect_t prot;           /* protection's detectors and recoveries (mc/protect.h)      */
     uint32_t step3_count;
     mc_polcheck_t pol;           /* the running polarity re-check (mc/polcheck.h)             */
-    mc_if_t ifs;                 /* I/f (mc/if_start.h)                                       */
-    mc_if_out_t if_out;          /* its output this period                                    */
-    bool if_fresh;               /* RUN not yet entered since the enable                      */
     mc_cc_t cc;
     mc_sc_t sc;
     mc_tref_t tref;
