@@ -416,10 +416,12 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
          * hand-over and room to accelerate; 0.8 x the limit keeps the peak well within it */
         return nice2(0.8f * p->control_i_max_a);
     case MC_RULE_IF_ACCEL: {
-        /* a quarter of the I/f current's torque on the motor's inertia: the rest carries the
-         * load (a load inertia the motor data leaves out needs a lower ramp) */
+        /* an eighth of the I/f current's torque on the motor's inertia: the rest carries the
+         * load and the rotor's swing about the frame (a quarter peaked at 1.10 x the current
+         * limit starting siemens-1ft7044-spm under 50 % load; a load inertia the motor data leaves
+         * out needs a lower ramp) */
         const float t_if = 1.5f * (float)p->motor_pole_pairs * p->motor_psi_pm_wb * p->startup_if_i_a;
-        return nice2(0.25f * t_if / p->motor_inertia_kgm2 * 60.0f / pi2);
+        return nice2(0.125f * t_if / p->motor_inertia_kgm2 * 60.0f / pi2);
     }
     case MC_RULE_IF_W_H: {
         /* the EMF-based estimate is good where the back-EMF psi_pm w is 5 x the voltage error

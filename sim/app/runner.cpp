@@ -565,6 +565,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         smp.theta2_deg = tm.theta2 * deg;
         smp.direction = direction;
         smp.ts = r.ts;
+        smp.if_on = tm.if_on;
+        smp.if_open = running && tm.if_mode != 0u;
         metrics.add(smp);
         if (trace.wants(k)) trace.row(t, plant, tm, smp, is_inertia ? load.at(t) : NAN, p, estimator);
 

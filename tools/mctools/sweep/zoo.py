@@ -330,10 +330,14 @@ def judge_run(r: Run, need_windows: bool) -> tuple[bool, list[str], dict]:
     if faults:
         reasons.append(", ".join(faults) + (f" at {t:.2f} s" if t is not None else ""))
     steady = number(mx.get("angle_err_steady_max_deg"))
+    # windows the drive spent in I/f's open loop (no estimated angle: the frame's load angle is
+    # left out of the angle error by mcsim; the window still counts for faults and current)
+    wins = mx.get("windows") or {}
+    in_if = [k for k, w in wins.items() if (number((w or {}).get("if_open_share")) or 0.0) >= 0.5]
     if need_windows:
         if steady is None:
             if not faults:
-                reasons.append("no steady window ran")
+                reasons.append("in I/f (open loop) in every window" if in_if else "no steady window ran")
         elif abs(steady) > STEADY_MAX_DEG:
             reasons.append(f"steady {abs(steady):.1f}°")
     peak, lim = _peak(mx)
@@ -342,7 +346,7 @@ def judge_run(r: Run, need_windows: bool) -> tuple[bool, list[str], dict]:
             reasons.append(f"peak {peak:.3g} A = {peak / lim:.2f} × limit")
     nums = {"faults": faults, "fault_time_s": t, "steady_deg": None if steady is None else abs(steady),
             "angle_err_max_deg": number(mx.get("angle_err_max_deg")), "current_peak_a": peak,
-            "current_limit_a": lim, "final_state": mx.get("final_state")}
+            "current_limit_a": lim, "final_state": mx.get("final_state"), "if_windows": in_if}
     return not reasons, reasons, nums
 
 
@@ -456,7 +460,8 @@ def judge_cell(test: str, runs: list[Run]) -> Cell:
         if ok:
             pk, lim = nums["current_peak_a"], nums["current_limit_a"]
             parts.append(f"{pre}{nums['steady_deg']:.1f}°"
-                         + (f", peak {pk / lim:.2f}×" if pk is not None and lim else ""))
+                         + (f", peak {pk / lim:.2f}×" if pk is not None and lim else "")
+                         + (f" (I/f in {', '.join(nums['if_windows'])})" if nums["if_windows"] else ""))
         else:
             parts.append(f"{pre}{'; '.join(reasons)}")
     text = ("pass " if all_ok else "**FAIL** ") + " / ".join(parts)

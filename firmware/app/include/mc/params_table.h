@@ -159,7 +159,7 @@ X(startup, polarity_z_min,            F32, "1",       0,     1000,   3,        N
 X(estimator, l_adapt_s,               F32, "s",       0,     10,     0.01f,    L_ADAPT, ESTIMATOR, STANDSTILL, MC_NO_CHOICES, "Time constant of UNOP's inductance-scale adaptation while injecting; 0: off (default: 5 injection periods).") \
 /* ---- startup: the I/f open loop for motors without usable saliency (mc/if_start.h), appended ---- */ \
 X(startup, if_i_a,                    F32, "A",       1e-3f, 10000,  10.6f,    IF_I,     STARTUP, STANDSTILL, MC_NO_CHOICES, "I/f: the open loop's current magnitude on the frame's q axis (default: 0.8 x control.i_max_a: half the rated torque and room to accelerate).") \
-X(startup, if_accel_rpm_s,            F32, "rpm/s",   1e-3f, 1e7f,   2900,     IF_ACCEL, STARTUP, STANDSTILL, MC_NO_CHOICES, "I/f: ramp of the frame's speed (default: a quarter of the torque of startup.if_i_a on motor.inertia_kgm2).") \
+X(startup, if_accel_rpm_s,            F32, "rpm/s",   1e-3f, 1e7f,   2900,     IF_ACCEL, STARTUP, STANDSTILL, MC_NO_CHOICES, "I/f: ramp of the frame's speed (default: an eighth of the torque of startup.if_i_a on motor.inertia_kgm2).") \
 X(startup, if_handover_rpm,           F32, "rpm",     1e-3f, 1e5f,   100,      IF_W_H,   STARTUP, STANDSTILL, MC_NO_CHOICES, "I/f: the estimator takes over above this, I/f again below half of it (default: where the back-EMF is 5 x the voltage error: dead time, device drops, half of Rs x startup.if_i_a).")
 /* clang-format on */
 
