@@ -79,7 +79,10 @@ void mc_if_step(mc_if_t *s, const mc_if_cfg_t *c, const mc_if_in_t *in, mc_if_ou
     if (s->align > 0u) {
         s->align--;
         out->open = true;
-        out->theta = s->align >= c->n_align ? mc_wrap_pi(s->theta - s->sign * 0.5f * MC_PI) : s->theta;
+        /* the first step held, the second turned to theta over its length: a jump of the frame
+         * would be a current step the loop's delay overshoots (a tracking fault at 2 kHz) */
+        const float back = s->align >= c->n_align ? 1.0f : (float)s->align / (float)c->n_align;
+        out->theta = mc_wrap_pi(s->theta - s->sign * 0.5f * MC_PI * back);
         out->omega = 0.0f;
         out->delta = s->sign * mc_wrap_pi(in->theta_est - s->theta);
         out->i_ref = (mc_dq_t){0.0f, s->sign * s->i_mag};

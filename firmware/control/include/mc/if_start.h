@@ -82,9 +82,10 @@ bool mc_if_cfg_valid(const mc_if_cfg_t *c);
 void mc_if_init(mc_if_t *s);
 /* Into open loop at (theta, omega), the current placed for torque of sign `sign` (0 counts +). */
 void mc_if_enter(mc_if_t *s, const mc_if_cfg_t *c, float theta, float omega, float sign);
-/* As mc_if_enter at standstill with no angle known, after an alignment so the start does not
- * jerk backwards: the frame held at theta - sign 90 deg, then at theta, n_align periods each (a
- * rotor at the first step's unstable point, 180 deg off, meets the full torque in the second). */
+/* As mc_if_enter at standstill with no angle known, after an alignment so the ramp does not
+ * start from the unstable point: the frame held at theta - sign 90 deg for n_align periods, then
+ * turned to theta over n_align more (a rotor at the first step's unstable point, 180 deg off,
+ * meets torque in the second). */
 void mc_if_align(mc_if_t *s, const mc_if_cfg_t *c, float theta, float sign);
 /* One period. In closed loop it only watches for |omega_est| < w_l (then enters at the
  * estimate). */
