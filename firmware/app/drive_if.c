@@ -30,11 +30,19 @@ static float torque_of(const mc_drive_t *d, mc_dq_t i)
 static void run_entry(mc_drive_t *d, const mc_drive_blk_t *b, mc_angle_out_t *ang)
 {
     mc_if_init(&d->ifs);
-    if (b->if_from_zero && !(fabsf(ang->omega) >= b->ifs.w_l)) {
+    if (fabsf(ang->omega) >= b->ifs.w_l) {
+        return;
+    }
+    const float sign = (d->cmd.mode == MC_MODE_SPEED ? d->cmd.speed_ref : d->cmd.torque_ref) < 0.0f ? -1.0f : 1.0f;
+    if (b->if_from_zero) {
         d->src->reset(&d->src_state, 0.0f, 0.0f);
         ang->theta = 0.0f;
         ang->omega = 0.0f;
-        mc_if_align(&d->ifs, &b->ifs, 0.0f, d->cmd.mode == MC_MODE_SPEED ? d->cmd.speed_ref : d->cmd.torque_ref);
+        mc_if_align(&d->ifs, &b->ifs, 0.0f, sign);
+    } else {
+        /* an angle known (given): the frame a quarter turn behind the rotor, where an unloaded
+         * rotor rests under I_f (the current on its d axis), not a swing of 90 deg first */
+        mc_if_enter(&d->ifs, &b->ifs, mc_wrap_pi(ang->theta - sign * 0.5f * MC_PI), 0.0f, sign);
     }
 }
 
