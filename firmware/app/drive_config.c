@@ -309,6 +309,11 @@ static bool build_if(const mc_params_t *p, bool salient, mc_drive_blk_t *b, mc_p
 {
     const int ip = p->startup_init_pos;
     const bool estimator = mc_angle_src_get(p->control_angle_source)->cls == MC_ANGLE_ESTIMATOR;
+    if (ip == MC_CHOICE_startup_init_pos_if_start && !estimator) {
+        return mc_param_fail(err, MC_PERR_CROSS, MC_PARAM_startup_init_pos, (float)ip,
+                             "the I/f start is for a sensorless angle source (control.angle_source = unop): an angle "
+                             "sensor knows the angle");
+    }
     if (ip == MC_CHOICE_startup_init_pos_auto) {
         b->three_step = salient && estimator;
         b->seq.init_pos = b->three_step;

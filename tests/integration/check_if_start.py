@@ -4,7 +4,8 @@
 reactive load, startup.init_pos = auto, at 8 rotor angles. Each run must reach RUN without a fault,
 must have run I/f (if_open_s > 0) and handed over (the steady window after it has an estimated
 angle), with the steady angle error <= 3 deg and the peak phase current <= 1.1 x the limit. Also:
-an explicit three_step on this motor is still refused at configuration, with the reason."""
+an explicit three_step on this motor is still refused at configuration, with the reason, and so
+is if_start with an angle sensor."""
 import json
 import subprocess
 import sys
@@ -47,6 +48,11 @@ ref = subprocess.run([mcsim, "check", str(scen), "--set", 'startup.init_pos="thr
                      capture_output=True, text=True)
 if ref.returncode != 2 or "startup.init_pos" not in ref.stderr or "saliency" not in ref.stderr:
     errors.append(f"three_step not refused with the reason (exit {ref.returncode}): {ref.stderr[-300:]}")
+# ... and the I/f start with an angle sensor is refused (it knows the angle)
+enc = subprocess.run([mcsim, "check", str(scen), "--set", 'startup.init_pos="if_start"',
+                      "--set", 'control.angle_source="encoder"'], capture_output=True, text=True)
+if enc.returncode != 2 or "sensorless" not in enc.stderr:
+    errors.append(f"if_start with an encoder not refused (exit {enc.returncode}): {enc.stderr[-300:]}")
 if errors:
     sys.exit("if_start_spm: " + "; ".join(errors))
 print("if_start_spm: ok (8 angles)")
