@@ -314,7 +314,7 @@ static bool running_fault(mc_drive_t *d, const mc_angle_out_t *ang, mc_dq_t i_re
                                 .omega_raw = d->tm.omega_raw, .i_ref = i_ref, .i_fb = i_fb, .u_dq = d->cc.u,
                                 .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
                                 .speed_ref = d->cmd.speed_ref, .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
-                                .lock_paused = mc_polcheck_active(&d->pol)};
+                                .lock_paused = mc_polcheck_active(&d->pol), .open_loop = d->if_open};
     bool doubt = false;
     const uint32_t reason = mc_protect_running(&d->prot, &d->cfg->blk.prot, &in, &doubt);
     if (doubt) {
@@ -408,6 +408,10 @@ void mc_drive_isr(mc_drive_t *d)
     /* 4. Angle source. */
     hal_stage_mark(HAL_STAGE_ANGLE);
     angle_source(d, &ain, &ang);
+    /* 4a. Below the hand-over speed without usable saliency: the I/f frame instead (drive_if.c;
+     *     the lock checks wait, the estimator has nothing to lock on there). */
+    mc_dq_t if_ref = {0.0f, 0.0f};
+    const bool open = mc_drive_if_step(d, &ang, i_ab, &if_ref);
 
     /* 5. Park (2.5) into the controller's frame, and the loop's feedback (notched while
      *    injecting). */
@@ -420,7 +424,10 @@ void mc_drive_isr(mc_drive_t *d)
 
     /* 6. References: current, torque (MTPA / field weakening) or speed; zero during Step III. */
     const bool step3 = d->seq.state == MC_STATE_INIT_POS;
-    mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : references(d, ang.omega, vdc);
+    mc_dq_t i_ref = step3 ? slew(d, (mc_dq_t){0.0f, 0.0f}) : (open ? slew(d, if_ref) : references(d, ang.omega, vdc));
+    if (open) {
+        d->tm.torque_ref = 0.0f;   /* no torque command: the frame's current pulls the rotor */
+    }
 
     /* 7. Current loop (or the field-weakening entry's voltage while it runs) and the HF
      *    injection. The voltage acting until the next sample: the duties latched last period,
@@ -430,7 +437,9 @@ void mc_drive_isr(mc_drive_t *d)
     const mc_dq_t u_dq = current_loop(d, c, &ang, i_dq, i_fb, &i_ref, u_acting, sc_u, vdc);
 
     /* 7a. The running polarity re-check. */
-    polarity_recheck(d, &ang, i_dq, i_fb);
+    if (!open) {
+        polarity_recheck(d, &ang, i_dq, i_fb);
+    }
 
     /* 7b. Plausibility: a fault turns the outputs off (or reacts) before the duties. */
     if (running_fault(d, &ang, i_ref, i_fb, vdc)) {

@@ -35,6 +35,7 @@ void mc_drive_init_blocks(mc_drive_t *d)
     mc_inj_init(&d->inj, &b->inj);
     d->notch_d = b->notch;
     d->notch_q = b->notch;
+    mc_drive_if_reset(d);
 }
 
 /* While running: only RUNTIME parameters (and the rules that follow them) can have changed; the

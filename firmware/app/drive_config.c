@@ -301,6 +301,52 @@ static void build_polcheck(const mc_params_t *p, const mc_est_model_t *m, mc_dri
     pc->avg_k = b->prot.avg_k;
 }
 
+/* startup.init_pos = auto resolved (three_step where the injection reads the saliency, else
+ * if_start), and I/f (mc/if_start.h; Fatu et al. 2008) below the hand-over speed wherever the
+ * estimator has no saliency to read, or with if_start. Sets three_step, the sequencer's
+ * init_pos and the polarity re-check's view of them before build_polcheck. */
+static bool build_if(const mc_params_t *p, bool salient, mc_drive_blk_t *b, mc_param_err_t *err)
+{
+    const int ip = p->startup_init_pos;
+    const bool estimator = mc_angle_src_get(p->control_angle_source)->cls == MC_ANGLE_ESTIMATOR;
+    if (ip == MC_CHOICE_startup_init_pos_if_start && !estimator) {
+        return mc_param_fail(err, MC_PERR_CROSS, MC_PARAM_startup_init_pos, (float)ip,
+                             "the I/f start is for a sensorless angle source (control.angle_source = unop): an angle "
+                             "sensor knows the angle");
+    }
+    if (ip == MC_CHOICE_startup_init_pos_auto) {
+        b->three_step = salient && estimator;
+        b->seq.init_pos = b->three_step;
+    }
+    b->if_from_zero = estimator && (ip == MC_CHOICE_startup_init_pos_if_start || (ip == MC_CHOICE_startup_init_pos_auto && !salient));
+    b->if_on = estimator && (b->if_from_zero || !salient);
+    if (!b->if_on) {
+        return true;
+    }
+    const float el = RPM_TO_RAD_S * (float)p->motor_pole_pairs;
+    const float w_h = p->startup_if_handover_rpm * el;
+    /* the alignment steps last one period of the rotor's swing about the frame under I_f, whose
+     * stiffness is the peak torque per electrical radian: 2 pi / sqrt(1.5 p psi I_f p / J) */
+    const float k_el = 1.5f * (float)p->motor_pole_pairs * p->motor_psi_pm_wb * p->startup_if_i_a * (float)p->motor_pole_pairs;
+    const float t_swing = MC_2PI / sqrtf(fmaxf(k_el / p->motor_inertia_kgm2, 1e-6f));
+    /* the rotor swings about the frame (nothing damps it but the load): synchronous within a
+     * third of w_h for 10 ms; I_f then falls to nothing in 0.1 s unless the load angle reaches
+     * 20 deg first (the torque balances with 6 % to spare) */
+    b->ifs = (mc_if_cfg_t){.ts = p->control_ts_s, .i_f = p->startup_if_i_a, .accel = p->startup_if_accel_rpm_s * el,
+                           .w_h = w_h, .w_l = 0.5f * w_h, .w_tol = w_h / 3.0f, .n_sync = periods_up(0.01f / p->control_ts_s),
+                           .i_drop = 10.0f * p->startup_if_i_a, .i_min = 0.1f * p->startup_if_i_a, .delta_h = 0.35f,
+                           .damp = 0.5f, .n_align = periods_up(t_swing / p->control_ts_s)};
+    if (p->startup_if_i_a > p->control_i_max_a * (1.0f - p->control_i_headroom)) {
+        return mc_param_fail(err, MC_PERR_CROSS, MC_PARAM_startup_if_i_a, p->startup_if_i_a,
+                             "the I/f current must stay within control.i_max_a (1 - control.i_headroom)");
+    }
+    if (!mc_if_cfg_valid(&b->ifs)) {
+        return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_startup_if_handover_rpm, p->startup_if_handover_rpm,
+                             "the I/f configuration is not usable (speeds, current, ramp must be finite and > 0)");
+    }
+    return true;
+}
+
 bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err)
 {
     out->p = cfg->p;
@@ -312,18 +358,19 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     /* the flux map: where the source needs it with this estimator.model, and for Steps I-II's
      * l_dd profile and nonlinear costs */
     const bool need_map = (mc_angle_src_get(p->control_angle_source)->map_models & 1u << p->estimator_model) != 0u ||
-                          (p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step &&
+                          ((p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step || p->startup_init_pos == MC_CHOICE_startup_init_pos_auto) &&
                            (p->startup_polarity == MC_CHOICE_startup_polarity_generalized ||
                             (p->startup_step1_method == MC_CHOICE_startup_step1_method_pulses && p->startup_step1_cost != MC_CHOICE_startup_step1_cost_linear)));
     mc_est_model_t m;
     if (!check_model(p, &cfg->est, &m, need_map, err)) {
         return false;
     }
-    if (p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step && !saliency_usable(p, &m)) {
+    const bool salient = saliency_usable(p, &m);
+    if (p->startup_init_pos == MC_CHOICE_startup_init_pos_three_step && !salient) {
         return mc_param_fail(err, MC_PERR_MODEL, MC_PARAM_startup_init_pos, (float)p->startup_init_pos,
                              "needs saliency, and the motor model has none to read (l_qq = l_dd at i = 0, or their "
                              "injection currents differ by less than 4 ADC counts): start with a known angle "
-                             "(startup.init_pos = given) or an encoder");
+                             "(startup.init_pos = given), the I/f start (if_start, or auto: it chooses) or an encoder");
     }
     mc_drive_blk_t *b = &out->blk;
     *b = (mc_drive_blk_t){0};
@@ -342,6 +389,9 @@ bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_e
     b->offs.samples = (uint32_t)p->control_offset_cal_samples;
     build_startup(p, &m, b);
     if (!build_source(p, &m, b, err)) {
+        return false;
+    }
+    if (!build_if(p, salient, b, err)) {
         return false;
     }
     build_protection(p, b);

@@ -50,6 +50,12 @@ bool mc_drive_recover(mc_drive_t *d, uint32_t reason, float vdc);
 bool mc_drive_react(mc_drive_t *d, uint32_t reason, float omega, float vdc);
 /* Outputs off, duties at 50 %, the reason latched (FAULT until disable + enable). */
 void mc_drive_trip(mc_drive_t *d, uint32_t reason);
+/* I/f (drive_if.c, mc/if_start.h): its flags back to the start (every enable edge), and ISR
+ * step 4a: true while the open loop runs (ang then holds the frame's angle and speed, *i_ref
+ * its current reference); on the hand-over the speed loop is preset and the references start
+ * from the current that flows. */
+void mc_drive_if_reset(mc_drive_t *d);
+bool mc_drive_if_step(mc_drive_t *d, mc_angle_out_t *ang, mc_ab_t i_ab, mc_dq_t *i_ref);
 /* Step III convergence test, after the pipeline ran; hands over to RUN. */
 void mc_drive_step3_check(mc_drive_t *d, float omega_hat);
 

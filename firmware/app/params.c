@@ -411,6 +411,29 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
          * x1.2 lost lock 18 ms after the enable), and calm enough that Step III's convergence
          * test is not delayed (2 periods: 50.4 ms instead of 36.7 at one angle of 12) */
         return 5.0f / p->injection_f_hz;
+    case MC_RULE_IF_I:
+        /* I/f (Fatu et al. 2008): a current that carries the load the speed loop will meet at the
+         * hand-over and room to accelerate; 0.8 x the limit keeps the peak well within it */
+        return nice2(0.8f * p->control_i_max_a);
+    case MC_RULE_IF_ACCEL: {
+        /* an eighth of the I/f current's torque on the motor's inertia: the rest carries the
+         * load and the rotor's swing about the frame (a quarter peaked at 1.10 x the current
+         * limit starting siemens-1ft7044-spm under 50 % load; a load inertia the motor data leaves
+         * out needs a lower ramp) */
+        const float t_if = 1.5f * (float)p->motor_pole_pairs * p->motor_psi_pm_wb * p->startup_if_i_a;
+        return nice2(0.125f * t_if / p->motor_inertia_kgm2 * 60.0f / pi2);
+    }
+    case MC_RULE_IF_W_H: {
+        /* the EMF-based estimate is good where the back-EMF psi_pm w is 5 x the voltage error
+         * the estimator does not model: the dead time's Vdc t_dead / Ts (compensated: a quarter
+         * of it left), two device drops, and half of Rs I_f (Rs known to +-50 %, warm / cold);
+         * at least 2 % of the speed at which the back-EMF reaches Vdc / sqrt3 */
+        const float dt = p->hw_vdc_nominal_v * p->hw_dead_time_s / p->control_ts_s * (p->control_deadtime_comp != 0 ? 0.25f : 1.0f);
+        const float dv = dt + 2.0f * p->hw_device_drop_v + 0.5f * p->motor_rs_ohm * p->startup_if_i_a;
+        const float psi = maxf(p->motor_psi_pm_wb, 1e-6f);
+        const float w_el = maxf(5.0f * dv, 0.02f * p->hw_vdc_nominal_v * 0.57735027f) / psi;
+        return nice2(w_el * 60.0f / (pi2 * (float)p->motor_pole_pairs));
+    }
     case MC_RULE_NONE:
     case MC_RULE_COUNT:
     default:

@@ -99,7 +99,7 @@ uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc
     const float dev2 = avg(&s->w_dev2, dev * dev, k);
     const bool swing = b->lock_n > 0u && dev2 > b->lock_floor * b->lock_floor;
     const bool lock_doubt = swing || !(fabsf(w_raw - omega) <= lock_band);
-    if (in->lock_paused) {
+    if (in->lock_paused || in->open_loop) {
         /* the re-check's bias moves the estimate: the lock checks wait for its verdict */
     } else if (persists(&s->lock_n, lock_doubt, b->lock_n)) {
         return MC_FAULT_LOSS_OF_LOCK;
@@ -110,7 +110,7 @@ uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc
      * that runs away does so in a few milliseconds (an inductance error at standstill under load:
      * 25 -> 150 deg in 8 ms), faster than the averages above can say */
     const float innov = fabsf(mc_wrap_pi(in->theta_raw - in->theta));
-    if (persists(&s->jump_n, b->jump_n > 0u && !(innov <= b->jump), b->jump_n)) {
+    if (persists(&s->jump_n, b->jump_n > 0u && !in->open_loop && !(innov <= b->jump), b->jump_n)) {
         return MC_FAULT_LOSS_OF_LOCK;
     }
     /* (c) the current does not follow its reference (a wrong angle, a missing phase at
@@ -132,7 +132,7 @@ uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc
     const mc_dq_t r = mc_protect_residual(b, (mc_dq_t){ud, uq}, (mc_dq_t){id, iq}, w);
     const float rd = r.d, rq = r.q;
     const float r_max = b->resid_v + b->resid_w_coef * fabsf(w);
-    if (persists(&s->resid_n, !(rd * rd + rq * rq <= r_max * r_max), b->resid_n)) {
+    if (persists(&s->resid_n, !in->open_loop && !(rd * rd + rq * rq <= r_max * r_max), b->resid_n)) {
         return MC_FAULT_VOLTAGE_MODEL;
     }
     /* (d) speed mode: the speed loop asks for (nearly) all its torque and the rotor does not turn */

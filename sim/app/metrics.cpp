@@ -90,8 +90,13 @@ void Metrics::acc_add(Acc& a, const Sample& s) const
     a.tq_all_sum += s.torque;
     if (!s.running) return;
     a.run_n += 1;
-    a.err_sum += s.angle_err_deg;
-    a.err_absmax = std::max(a.err_absmax, std::fabs(s.angle_err_deg));
+    if (s.if_open) {
+        a.if_n += 1;   // the I/f frame's angle is no estimate: its load angle is not an error
+    } else {
+        a.err_n += 1;
+        a.err_sum += s.angle_err_deg;
+        a.err_absmax = std::max(a.err_absmax, std::fabs(s.angle_err_deg));
+    }
     a.id_sum += s.id;
     a.iq_sum += s.iq;
     a.tq_sum += s.torque;
@@ -164,6 +169,8 @@ void Metrics::add(const Sample& s)
         iter_n_ += 1;
         iter_max_ = std::max(iter_max_, s.iters);
     }
+    if_seen_ = if_seen_ || s.if_on;
+    if (s.running && s.if_open) if_open_s_ += s.ts;
     if (s.t >= start_) {
         i_peak_ = std::max(i_peak_, s.i_peak);
         if (s.running) angle_err_max_ = std::max(angle_err_max_, std::fabs(s.angle_err_deg));
@@ -207,8 +214,12 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
     std::ostringstream os;
     os << "{\n";
     os << "  \"angle_err_max_deg\": " << json_number(angle_err_max_) << ",\n";
-    os << "  \"angle_err_steady_mean_deg\": " << json_number(mean(steady_.err_sum, steady_.run_n)) << ",\n";
-    os << "  \"angle_err_steady_max_deg\": " << json_number(steady_.run_n > 0 ? steady_.err_absmax : NAN) << ",\n";
+    os << "  \"angle_err_steady_mean_deg\": " << json_number(mean(steady_.err_sum, steady_.err_n)) << ",\n";
+    os << "  \"angle_err_steady_max_deg\": " << json_number(steady_.err_n > 0 ? steady_.err_absmax : NAN) << ",\n";
+    if (if_seen_) {
+        os << "  \"if_open_s\": " << json_number(if_open_s_) << ",\n";
+        os << "  \"if_open_steady_share\": " << json_number(steady_.run_n > 0 ? steady_.if_n / steady_.run_n : NAN) << ",\n";
+    }
     os << "  \"speed_err_steady_rms_rpm\": " << json_number(steady_.sp_n > 0 ? std::sqrt(steady_.sp_sq / steady_.sp_n) : NAN) << ",\n";
     os << "  \"speed_err_steady_max_rpm\": " << json_number(steady_.sp_n > 0 ? steady_.sp_max_abs : NAN) << ",\n";
     // Relative error is per window (each against its own reference); the headline is the worst.
@@ -256,8 +267,8 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
         os << (w ? "," : "") << "\n    " << json_string(windows_[w].name) << ": {"
            << "\"from_s\": " << json_number(windows_[w].from_s)
            << ", \"to_s\": " << json_number(windows_[w].to_s)
-           << ", \"angle_err_mean_deg\": " << json_number(mean(a.err_sum, a.run_n))
-           << ", \"angle_err_max_deg\": " << json_number(a.run_n > 0 ? a.err_absmax : NAN)
+           << ", \"angle_err_mean_deg\": " << json_number(mean(a.err_sum, a.err_n))
+           << ", \"angle_err_max_deg\": " << json_number(a.err_n > 0 ? a.err_absmax : NAN)
            << ", \"speed_err_rms_rpm\": " << json_number(a.sp_n > 0 ? std::sqrt(a.sp_sq / a.sp_n) : NAN)
            << ", \"speed_err_max_rpm\": " << json_number(a.sp_n > 0 ? a.sp_max_abs : NAN)
            << ", \"speed_err_max_pct\": " << json_number(pct(a))
@@ -268,7 +279,9 @@ std::string Metrics::json(const std::vector<std::string>& faults, const std::str
            << ", \"torque_mean_nm\": " << json_number(mean(a.tq_sum, a.run_n))
            << ", \"shaft_torque_mean_nm\": " << json_number(mean(a.tq_all_sum, a.n))
            << ", \"current_peak_a\": " << json_number(a.i_peak)
-           << ", \"samples\": " << json_number(a.n) << "}";
+           << ", \"samples\": " << json_number(a.n);
+        if (if_seen_) os << ", \"if_open_share\": " << json_number(a.run_n > 0 ? a.if_n / a.run_n : NAN);
+        os << "}";
     }
     os << (windows_.empty() ? "" : "\n  ") << "}\n}\n";
     return os.str();

@@ -25,6 +25,9 @@ struct Sample {
     double theta1_deg = NAN, theta2_deg = NAN;   // Step I (mod 180) and Step II results
     double direction = 1;         // sign of the intended rotation
     double ts = 1e-4;
+    bool if_on = false;           // the drive is configured for I/f (mc/if_start.h)
+    bool if_open = false;         // ... and its open loop runs: the angle is the frame's, not an
+                                  // estimate (left out of the angle-error statistics)
 };
 
 class Metrics {
@@ -42,6 +45,7 @@ private:
         double id_sum = 0, iq_sum = 0, tq_sum = 0, i_peak = 0, speed_sum = 0;
         double tq_all_sum = 0;   // the machine's torque over every sample, running or not
         double run_n = 0;
+        double err_n = 0, if_n = 0;   // running samples with an estimated angle / in I/f's open loop
     };
     void acc_add(Acc& a, const Sample& s) const;
     void add_startup(const Sample& s);
@@ -51,6 +55,8 @@ private:
     std::vector<Acc> win_acc_;
     Acc steady_;
     double angle_err_max_ = 0, i_peak_ = 0;
+    bool if_seen_ = false;        // I/f configured: its metrics are written (else the keys are absent)
+    double if_open_s_ = 0;        // time in I/f's open loop
     double iter_sum_ = 0, iter_n_ = 0;
     double e0_ = NAN, t90_ = NAN, t10_ = NAN;   // rise time of the settle signal's error
     // startup

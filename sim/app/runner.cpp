@@ -308,6 +308,16 @@ DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& m
     if (!mc_drive_build(&ds.cfg, built.get(), &err)) throw ScenarioError(explain_config_error(sc, err));
     ds.resolved = built->p;
     ds.estimator = src != nullptr && src->cls == MC_ANGLE_ESTIMATOR;
+    if (built->blk.if_on) {
+        // what the drive chose at configuration (mc/if_start.h): said once, as a drive would log it
+        std::fprintf(stderr,
+                     "mcsim: note: the drive runs I/f below %g rpm (startup.if_handover_rpm; %g A, %g rpm/s)%s\n",
+                     static_cast<double>(built->p.startup_if_handover_rpm), static_cast<double>(built->p.startup_if_i_a),
+                     static_cast<double>(built->p.startup_if_accel_rpm_s),
+                     built->blk.if_from_zero ? ", started by I/f: the motor model's saliency is not usable for the "
+                                               "injection (or startup.init_pos = if_start)"
+                                             : ": the motor model's saliency is not usable for the injection");
+    }
     return ds;
 }
 
@@ -565,6 +575,8 @@ RunSummary run_scenario(const Scenario& sc, const RunOptions& opt)
         smp.theta2_deg = tm.theta2 * deg;
         smp.direction = direction;
         smp.ts = r.ts;
+        smp.if_on = tm.if_on;
+        smp.if_open = running && tm.if_mode != 0u;
         metrics.add(smp);
         if (trace.wants(k)) trace.row(t, plant, tm, smp, is_inertia ? load.at(t) : NAN, p, estimator);
 

@@ -11,7 +11,7 @@ import pytest
 from fakes import write_fake_mcsim
 from mctools import cli
 from mctools.sweep.zoo import (TESTS, Motor, Run, build_runs, demo_toml, judge_cell, judge_start,
-                               motor_info, torque_toml)
+                               if_start_toml, motor_info, torque_toml, uses_if)
 
 # Stands in for mcsim: brodatzki trips loss_of_lock in the demo and gets the polarity wrong at
 # 90 deg; the fly runs at negative speed exceed the current limit; a dyno speed of exactly 0 is
@@ -90,10 +90,39 @@ def test_demo_scaled_to_the_motor():
 
 def test_torque_steps_scaled():
     d = tomllib.loads(torque_toml(THESIS, short=False))
-    assert d["control"]["mode"] == "torque" and d["startup"]["init_pos"] == "three_step"
+    # the drive picks the start: three_step where the saliency is usable, else I/f
+    assert d["control"]["mode"] == "torque" and d["startup"]["init_pos"] == "auto"
     assert d["mechanics"]["dyno_speed_rpm"][-1] == [0.4, 89.0]
     t = [v for _, v in d["control"]["torque_ref_nm"]]
     assert max(t) == pytest.approx(0.76 * 29.7) and min(t) == pytest.approx(-0.76 * 29.7)
+
+
+def test_if_start_for_motors_without_saliency(tmp_path):
+    spm = Motor("spm", 7155.0, 5.0, 8.06, 8000.0, 1.0)
+    assert uses_if(spm) and not uses_if(THESIS)
+    d = tomllib.loads(if_start_toml(spm))
+    assert d["mechanics"]["mode"] == "inertia" and d["mechanics"]["load_kind"] == "reactive"
+    assert d["mechanics"]["load_torque_nm"] == 2.5
+    assert d["startup"]["init_pos"] == "auto" and d["control"]["mode"] == "speed"
+    assert d["control"]["speed_ref_rpm"][-1] == [0.25, pytest.approx(0.2 * 7155.0, abs=0.1)]
+    runs = build_runs([spm, THESIS], tmp_path, (0.0, 90.0), short=True)
+    starts = {(r.motor, r.label): r.scenario.name for r in runs if r.test == "start"}
+    assert starts[("spm", "theta0=90")] == "start_if.toml"
+    assert starts[(THESIS.name, "theta0=90")] == "initpos_sweep.toml"
+
+
+def test_if_windows_judged(tmp_path):
+    """A window the drive spent in I/f has no estimated angle: named, not an angle error; a run
+    still in I/f in every window fails with that reason."""
+    def run(wins, steady):
+        r = Run("spm", "demo", "demo", tmp_path / "x.toml", (), tmp_path)
+        r.metrics = {"faults": [], "angle_err_steady_max_deg": steady, "current_peak_a": 5.0,
+                     "current_limit_a": 8.0, "final_state": "RUN", "windows": wins}
+        return r
+    ok = judge_cell("demo", [run({"standstill": {"if_open_share": 1.0}, "plus": {"if_open_share": 0.0}}, 0.8)])
+    assert ok.passed and "I/f in standstill" in ok.text
+    bad = judge_cell("demo", [run({"standstill": {"if_open_share": 1.0}}, None)])
+    assert not bad.passed and "in I/f (open loop) in every window" in bad.text
 
 
 def test_runs_per_motor(tmp_path):

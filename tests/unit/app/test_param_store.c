@@ -130,14 +130,14 @@ static void test_geometry(void **state)
         assert_false(hal_host_nvm_init_geom(&bad, m, 0x7E0000u, 3u));   /* above the model's capacity */
         return;
     }
-    /* 2 blocks a slot: 8192 - 40 bytes of records; 796 of parameters, 56 + 8 per map point */
+    /* 2 blocks a slot: 8192 - 40 bytes of records; 820 of parameters, 56 + 8 per map point */
     assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_MAP_DROPPED);
     assert_int_equal(g.slot_first[0], 0u);
     assert_int_equal(g.slot_first[1], 2u);
     assert_int_equal(g.slot_blocks, 2u);
     assert_int_equal(g.payload_max, 8152u);
     assert_int_equal(g.map_cells_max, (8152u - MC_STORE_PARAMS_MAX - 56u) / 8u);
-    assert_int_equal(g.map_cells_max, 912u);
+    assert_int_equal(g.map_cells_max, 909u);
     assert_int_equal(mc_pstore_geometry(NULL, &g), MC_PSTORE_BAD_ARGS);
     assert_string_equal(mc_pstore_status_name(MC_PSTORE_FELL_BACK), "fell_back");
     assert_string_equal(mc_pstore_status_name(MC_PSTORE_MAP_DROPPED), "map_dropped");
@@ -510,21 +510,21 @@ static void test_defaults_head_with_records_refused(void **state)
 }
 
 /* The smallest slot the store takes holds the parameter record and the model without a map
- * (796 + 32 bytes after the 40-byte header and marker): a device of two 848-byte sectors
- * (808 bytes of payload a slot) is refused before anything is written; one of two 872-byte
- * sectors (832) takes a set, without its map, and loads it back. */
+ * (820 + 32 bytes after the 40-byte header and marker): a device of two 872-byte sectors
+ * (832 bytes of payload a slot) is refused before anything is written; one of two 896-byte
+ * sectors (856) takes a set, without its map, and loads it back. */
 static void test_slot_too_small_refused(void **state)
 {
     (void)state;
-    static const hal_nvm_region_t small_r[1] = {{0u, 848u, 2u, 0u}}, fits_r[1] = {{0u, 872u, 2u, 0u}};
-    static const hal_nvm_geometry_t small = {2u * 848u, 8u, 1u, small_r}, fits = {2u * 872u, 8u, 1u, fits_r};
+    static const hal_nvm_region_t small_r[1] = {{0u, 872u, 2u, 0u}}, fits_r[1] = {{0u, 896u, 2u, 0u}};
+    static const hal_nvm_geometry_t small = {2u * 872u, 8u, 1u, small_r}, fits = {2u * 896u, 8u, 1u, fits_r};
     mc_pstore_geom_t g;
     mc_pstore_info_t info;
     mc_drive_cfg_t got;
     const mc_drive_cfg_t *a = make_cfg(5, 3, 3);
     assert_true(hal_host_nvm_init_geom(&nvm, &small, 0u, 2u));
     assert_int_equal(mc_pstore_geometry(&nvm, &g), MC_PSTORE_TOO_LARGE);
-    assert_int_equal(g.payload_max, 808u);
+    assert_int_equal(g.payload_max, 832u);
     assert_true(g.payload_max < MC_STORE_PARAMS_MAX + 32u);
     assert_int_equal(mc_pstore_save(&nvm, a, work, sizeof work, NULL), MC_PSTORE_TOO_LARGE);
     assert_int_equal(nvm.steps, 0u);   /* nothing erased, nothing written */

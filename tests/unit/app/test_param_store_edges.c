@@ -793,7 +793,7 @@ static void test_unreadable_record_crc(void **state)
     assert_int_equal(pl % 8u, 4u);   /* the chunk lengths below: multiples of 8 */
     const struct {
         uint32_t crc_at, work_len;   /* the word's payload offset; a length it is a multiple of */
-    } cases[] = {{pl - 4u, pl - 4u}, {pl + ml - 4u, (pl + ml - 4u) / 2u}, {pl + 4u, pl + 4u}, {pl + 28u, pl + 28u}};
+    } cases[] = {{pl - 4u, pl - 4u}, {pl + ml - 4u, pl + ml - 4u}, {pl + 4u, pl + 4u}, {pl + 28u, pl + 28u}};
     const uint32_t pay = (uint32_t)(slot1 - nvm.mem) + PAYLOAD_AT;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         assert_int_equal(cases[i].crc_at % cases[i].work_len, 0u);

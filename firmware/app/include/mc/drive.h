@@ -10,6 +10,7 @@
 #include "mc/filters.h"
 #include "mc/fw_entry.h"
 #include "mc/handover.h"
+#include "mc/if_start.h"
 #include "mc/injection.h"
 #include "mc/initpos.h"
 #include "mc/phase_program.h"
@@ -86,9 +87,12 @@ typedef struct {
     float    c1, c2;             /* (5.7) costs, or DVI peak currents        */
     bool     pol_flip;           /* Step II added pi                         */
     uint8_t  pol_verdict;        /* Step II: mc_pol_verdict_t (mc/polarity.h) */
+    uint8_t  if_mode;            /* I/f (mc/if_start.h): mc_if_mode_t, 0 the estimator's angle,
+                                    1 open loop, 2 reducing toward the hand-over                 */
     float    pol_z;              /* Step II confidence |b| / se(b)           */
     float    duty[3];
     bool     u_limited, fw_active;
+    bool     if_on;              /* configured to run I/f below the hand-over speed          */
     uint32_t cmd_rejected;       /* commands refused at the hand-over        */
     uint32_t recoveries;         /* recoveries since the enable (protection.lock_action)      */
     uint32_t recovered_from;     /* the reasons that started them (fault bits, or-ed)         */
@@ -128,6 +132,9 @@ typedef struct {
     mc_fwe_cfg_t fw_entry;       /* the field-weakening entry (mc/fw_entry.h)                    */
     mc_protect_cfg_t prot;       /* protection: hard trips, detectors, reactions (mc/protect.h)  */
     mc_polcheck_cfg_t pol;       /* the running polarity re-check (mc/polcheck.h)                */
+    mc_if_cfg_t ifs;             /* I/f below the hand-over speed (mc/if_start.h), where if_on   */
+    bool  if_on;                 /* no usable saliency (or startup.init_pos = if_start): I/f     */
+    bool  if_from_zero;          /* startup.init_pos = if_start: no angle known, the frame at 0  */
     mc_offsets_cfg_t offs;       /* the current offsets' calibration and scaling (mc/offset_cal.h) */
 } mc_drive_blk_t;
 
@@ -170,6 +177,7 @@ typedef struct {
     mc_offsets_t offs;           /* the current offsets and their calibration (mc/offset_cal.h) */
     mc_catch_entry_t entry;      /* a RUN entry at speed: the corner latched, the gates' enable
                                     next period (mc/catch.h) */
+    bool if_open;                /* I/f's open loop runs this period (mc/if_start.h)           */
     mc_fwe_t fw_entry;           /* a RUN entry at speed: the flux into the voltage limit first
                                     (mc/fw_entry.h) */
 
@@ -177,7 +185,11 @@ typedef struct {
     mc_angle_src_state_t src_state;
     mc_inj_t inj;
     mc_biquad_t notch_d, notch_q;
-    mc_phase_t phase;            /* the running phase program (Step I, II) and its workspace */
+    union {
+        mc_phase_t phase;        /* the running phase program (Step I, II, the catch) and its workspace */
+        mc_if_t ifs;             /* RUN only, where no phase program runs: I/f (mc/if_start.h), set
+                                    up again at every RUN entry (drive_if.c)                    */
+    };
     mc_lpf1_t step3_speed;       /* |omega_hat| low-passed for the convergence test */
     mc_protect_t prot;           /* protection's detectors and recoveries (mc/protect.h)      */
     uint32_t step3_count;

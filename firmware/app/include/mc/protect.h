@@ -59,6 +59,8 @@ typedef struct {
     bool reacting;               /* in the fault reaction: over-speed is latched already        */
     bool lock_paused;            /* the polarity re-check's bias moves the estimate: the averaged
                                     lock checks wait for its verdict                            */
+    bool open_loop;              /* I/f (mc/if_start.h) runs: the frame is not the estimate, the
+                                    lock checks (both) and the voltage model wait               */
 } mc_protect_in_t;
 
 /* The residual of the steady-state model (5.1) for voltage u, current i at speed w [V, A, rad/s el]:
