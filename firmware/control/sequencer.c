@@ -94,7 +94,12 @@ void mc_seq_fault_reaction(mc_seq_t *s, uint32_t reason)
 
 void mc_seq_tick(mc_seq_t *s)
 {
-    s->ticks++;
+    /* saturates, never wraps: RUN has no limit, and code that acts on its first ticks (the I/f
+     * entry, the protection's running flag) must not see them again after 2^32 periods (5 days
+     * at 10 kHz) */
+    if (s->ticks < UINT32_MAX) {
+        s->ticks++;
+    }
     if (s->limit != 0u && s->ticks > s->limit) {
         mc_seq_fault(s, MC_FAULT_TIMEOUT);
     }

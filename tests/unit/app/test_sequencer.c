@@ -127,6 +127,24 @@ static void test_seq_extreme_timeouts(void **st)
     }
 }
 
+/* A drive may stay in RUN for weeks: the period count there saturates instead of wrapping to
+ * the values that mean "RUN just began" (the I/f entry and the running flag read them). */
+static void test_seq_ticks_saturate(void **st)
+{
+    (void)st;
+    mc_seq_t s = seq_new(false);
+    mc_seq_enable(&s, true);
+    mc_seq_event(&s, MC_SEQ_CAL_DONE);
+    assert_int_equal(s.state, MC_STATE_RUN);
+    assert_int_equal(s.limit, 0u);
+    s.ticks = UINT32_MAX - 2u;   /* 5 days at 10 kHz */
+    for (int k = 0; k < 5; ++k) {
+        mc_seq_tick(&s);
+        assert_int_equal(s.state, MC_STATE_RUN);
+    }
+    assert_true(s.ticks == UINT32_MAX);
+}
+
 /* ---------------------------------------------------------------- the drive with a plant */
 
 #define LD 10.5e-3
@@ -760,6 +778,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_seq_path_and_timeouts),
         cmocka_unit_test(test_seq_extreme_timeouts),
+        cmocka_unit_test(test_seq_ticks_saturate),
         cmocka_unit_test(test_seq_catch),
         cmocka_unit_test(test_seq_fault_reaction),
         cmocka_unit_test(test_catch_first),
