@@ -239,6 +239,50 @@ static void test_polarity_noise_never_wrong(void **st)
     assert_true(wrong_blind > 0);   /* the noise is heavy enough to matter */
 }
 
+/* A current sample held for one period (a stuck conversion) inside the train: the interval it
+ * closes shows no current change, so (5.6) has no slope there; it is left out of (5.7) (15 of the
+ * 16 intervals used) and c1, c2 stay finite: a decision is taken. (The next interval then carries
+ * two periods' change, half the slope, which may tip a blind (5.7) decision: its rightness is
+ * the sweeps' business, not asserted here.) */
+static void test_polarity_skips_a_flat_interval(void **st)
+{
+    (void)st;
+    mc_polarity_cfg_t c;
+    mc_polarity_cfg_default(&c);
+    c.ts = (float)SUN_TS;
+    c.rs = (float)SUN_RS;
+    c.model = map_model();
+    for (int a = 0; a < 360; a += 30) {
+        for (int hold = 4; hold <= 12; hold += 4) {
+            plant_t p;
+            plant_init(&p, 1, a);
+            int calls = 0;
+            const float th1 = step1(&p, &calls);
+            mc_polarity_t s;
+            assert_true(mc_polarity_start(&s, &c, th1));
+            mc_ip_status_t stt = MC_IP_RUNNING;
+            mc_ab_t last = {0.0f, 0.0f};
+            for (int k = 0; k < 400 && stt == MC_IP_RUNNING; ++k) {
+                mc_ab_t i = plant_sample(&p);
+                if (k == hold) {
+                    i = last;   /* the previous conversion once more */
+                }
+                last = i;
+                mc_abc_t d;
+                stt = mc_polarity_step(&s, i, (float)VDC, &d);
+                plant_advance(&p, p.pending, VDC);
+                p.pending = d;
+            }
+            assert_int_equal(stt, MC_IP_DONE);
+            assert_int_equal(s.verdict, MC_POL_DECIDED);
+            assert_int_equal(s.n_valid, 4 * c.n - 1);
+            if (!isfinite(s.c1) || !isfinite(s.c2)) {
+                fail_msg("%d deg, sample %d held: c1 %g, c2 %g", a, hold, (double)s.c1, (double)s.c2);
+            }
+        }
+    }
+}
+
 static void test_hexagon_and_record(void **st)
 {
     (void)st;
@@ -369,6 +413,7 @@ static void test_dvi_confidence(void **st)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_polarity_skips_a_flat_interval),
         cmocka_unit_test(test_hexagon_and_record),
         cmocka_unit_test(test_polarity_sweep),
         cmocka_unit_test(test_polarity_needs_asymmetry),
