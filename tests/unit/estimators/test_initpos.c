@@ -100,6 +100,21 @@ static void test_vectors(void **st)
     double mag = hypot(d.u_real.alpha, d.u_real.beta);
     assert_near(mag, 173.205 / cos(11.5 * DEG), 0.05);
     assert_true(d.saturated);
+    /* every direct pattern, written over that saturated result: the switches' states as duties,
+     * the corner 2/3 vdc at 60 k deg (V(000), V(111): zero), never a scaled-back request */
+    for (unsigned pat = 0u; pat < 8u; ++pat) {
+        mc_ip_direct(pat, 300.0f, &d);
+        assert_false(d.saturated);
+        assert_true(d.a == ((pat & MC_IP_V100) ? 1.0f : 0.0f));
+        assert_true(d.b == ((pat & MC_IP_V010) ? 1.0f : 0.0f));
+        assert_true(d.c == ((pat & MC_IP_V001) ? 1.0f : 0.0f));
+        const double va = d.a - 0.5, vb = d.b - 0.5, vc = d.c - 0.5;
+        assert_near(d.u_real.alpha, 300.0 * (2.0 * va - vb - vc) / 3.0, 1e-3);
+        assert_near(d.u_real.beta, 300.0 * (vb - vc) / sqrt(3.0), 1e-3);
+        const double m = hypot(d.u_real.alpha, d.u_real.beta);
+        assert_near(m, (pat == 0u || pat == 7u) ? 0.0 : 200.0, 1e-3);
+        mc_svpwm(u, 300.0f, &d);
+    }
 }
 
 /* The record must hold the vector that really acted between the two samples: with the plant's
@@ -349,9 +364,34 @@ static void test_gap_waits_for_decay(void **st)
     assert_true(timeout);
 }
 
+/* The thesis defaults (initpos.h; on a struct full of garbage): m = 5, one direction, the linear
+ * cost, a 36-point grid, a 0.05 deg bracket, 12 evaluations a call, gaps of 2..50 periods ending
+ * at 0.3 A, no trip; ts, rs, ld, lq, the pulse voltage zero (the caller's) and no map. */
+static void test_defaults(void **st)
+{
+    (void)st;
+    mc_initpos_cfg_t c;
+    memset(&c, 0xA5, sizeof c);
+    mc_initpos_cfg_default(&c);
+    assert_true(c.ts == 0.0f && c.rs == 0.0f && c.ld == 0.0f && c.lq == 0.0f && c.v_pulse == 0.0f);
+    assert_int_equal(c.model.kind, MC_FLUX_CONST);
+    assert_null(c.model.map);
+    assert_int_equal(c.cost, MC_IP_COST_LINEAR);
+    assert_int_equal(c.m, 5);
+    assert_int_equal(c.n_dir, 1);
+    assert_false(c.all_pulses);
+    assert_int_equal(c.grid, 36);
+    assert_near(c.tol, 0.05 * DEG, 1e-9);
+    assert_int_equal(c.evals_per_call, 12);
+    assert_int_equal(c.gap_min, 2);
+    assert_int_equal(c.gap_max, 50);
+    assert_true(c.i_rest == 0.3f && c.i_trip == 0.0f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_vectors),
         cmocka_unit_test(test_short_pulse_vectors),
         cmocka_unit_test(test_timing_record),

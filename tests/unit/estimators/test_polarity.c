@@ -410,9 +410,39 @@ static void test_dvi_confidence(void **st)
     assert_true(wrong_blind >= 6);   /* the larger peak alone guesses on the linear plant */
 }
 
+/* The thesis defaults (polarity.h; on structs full of garbage): Step II v_pol 200 V, half pulses
+ * of 4 periods, l at the mean current, i_rest 0.3 A, no trip, no confidence check and no retry
+ * (z_min 0, i_max 0), ts, rs unset and a constant model without a map; DVI 200 V pulses of 6
+ * periods (7.2.2), gaps of 2..50 periods ending at 0.3 A, no check, one repetition. */
+static void test_defaults(void **st)
+{
+    (void)st;
+    mc_polarity_cfg_t c;
+    memset(&c, 0xA5, sizeof c);
+    mc_polarity_cfg_default(&c);
+    assert_true(c.ts == 0.0f && c.rs == 0.0f);
+    assert_int_equal(c.model.kind, MC_FLUX_CONST);
+    assert_null(c.model.map);
+    assert_true(c.v_pol == 200.0f);
+    assert_int_equal(c.n, 4);
+    assert_false(c.l_at_end);
+    assert_true(c.i_rest == 0.3f && c.i_trip == 0.0f);
+    assert_true(c.z_min == 0.0f && c.i_max == 0.0f);
+    mc_dvi_cfg_t d;
+    memset(&d, 0xA5, sizeof d);
+    mc_dvi_cfg_default(&d);
+    assert_true(d.rs == 0.0f && d.v == 200.0f);
+    assert_int_equal(d.n, 6);
+    assert_int_equal(d.gap_min, 2);
+    assert_int_equal(d.gap_max, 50);
+    assert_true(d.i_rest == 0.3f && d.i_trip == 0.0f && d.z_min == 0.0f);
+    assert_int_equal(d.reps_max, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_polarity_skips_a_flat_interval),
         cmocka_unit_test(test_hexagon_and_record),
         cmocka_unit_test(test_polarity_sweep),
