@@ -643,6 +643,68 @@ static void test_l_scale_adapts(void **st)
     assert_true(fabsf(b.b0 - 0.5f * (1.0f - cfg.bp_a2)) < 1e-7f && cfg.bp_a1 == b.a1);
 }
 
+/* step_max bounds one Newton step in the scaled variables (theta [rad], omega / omega_base):
+ * from 25 deg and 40 rad/s off, one iteration moves the estimate by at most step_max (and by
+ * more than half of it: the full step is far longer), at both signs of speed; with step_max 0
+ * (no bound) the same step is longer than the bound. */
+static void test_step_bounded(void **st)
+{
+    (void)st;
+    for (int sg = -1; sg <= 1; sg += 2) {
+        const double om = sg * RPM_TO_WE(400.0);
+        for (int lim = 0; lim < 2; ++lim) {
+            mc_unop_cfg_t cfg = sun_cfg(NULL, 1);
+            cfg.iter_max = 1;
+            cfg.step_max = lim ? 0.02f : 0.0f;
+            mc_unop_t s;
+            mc_unop_init(&s, &cfg);
+            dsample_t d;
+            double thk;
+            dgen_sample(&cfg, &TRAJ_RUN, 1.0, om, 1, &d, &thk);
+            const mc_angle_in_t in = to_in(&d);
+            const float th0 = (float)(thk + 25.0 * DEG), om0 = (float)(om + 40.0);
+            mc_unop_reset(&s, th0, om0);
+            const double th_pred = (double)s.theta + (double)s.omega * SUN_TS;
+            mc_angle_out_t out;
+            mc_unop_step(&s, &in, &out);
+            const double dx = wrapd((double)s.theta - th_pred), dw = ((double)s.omega - om0) / cfg.omega_base;
+            const double step = hypot(dx, dw);
+            if (lim) {
+                assert_true(step <= 0.02 * (1.0 + 1e-4) + 1e-6);
+                assert_true(step >= 0.01);
+                assert_true(dx < 0.0);   /* toward the true angle */
+            } else {
+                assert_true(step > 0.05);
+            }
+        }
+    }
+}
+
+/* A reset clears the search's diagnostics (the telemetry's est_iters, est_cost, est_cond) left
+ * by the last step: no iterations, zero cost, a well-conditioned Hessian, not modified. */
+static void test_reset_clears_diagnostics(void **st)
+{
+    (void)st;
+    const double om = RPM_TO_WE(400.0);
+    mc_unop_cfg_t cfg = sun_cfg(NULL, 1);
+    mc_unop_t s;
+    mc_unop_init(&s, &cfg);
+    assert_int_equal(s.iters, 0);
+    assert_true(s.cost == 0.0f && s.cond == 1.0f && !s.modified);
+    dsample_t d;
+    double thk;
+    dgen_sample(&cfg, &TRAJ_RUN, 1.0, om, 1, &d, &thk);
+    const mc_angle_in_t in = to_in(&d);
+    /* far off (170 deg): the Hessian is modified, the cost large */
+    mc_unop_reset(&s, (float)(thk + 170.0 * DEG), (float)om);
+    mc_angle_out_t out;
+    mc_unop_step(&s, &in, &out);
+    assert_true(s.iters >= 1 && s.cost > 0.0f && s.cond < 1.0f);
+    mc_unop_reset(&s, 0.5f, (float)om);
+    assert_int_equal(s.iters, 0);
+    assert_true(s.cost == 0.0f && s.cond == 1.0f && !s.modified);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -658,6 +720,8 @@ int main(void)
         cmocka_unit_test(test_cost_derivatives_alone),
         cmocka_unit_test(test_reported_cost_is_at_the_estimate),
         cmocka_unit_test(test_l_scale_adapts),
+        cmocka_unit_test(test_step_bounded),
+        cmocka_unit_test(test_reset_clears_diagnostics),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
