@@ -450,9 +450,98 @@ static void test_passive_sign_without_link_voltage(void **st)
     }
 }
 
+/* (C.1)-(C.3) with two pulses on the exact plant (R = 0, no drop), 30 to 850 rpm, both signs,
+ * eight angles: the rotation between the pulses' ends gives the speed (C.3) and (C.2) the angle,
+ * both exact here up to float rounding (angle within 0.01 deg, speed within 0.05 %), the second
+ * pulse fits (C.1) (fit 1 within 0.1 %), and the peak current the catch reports is the largest
+ * it sampled. */
+static void test_two_pulses_exact(void **st)
+{
+    (void)st;
+    const double rpm[] = {30, 40, 60, 100, 200, 400, 700, 850};
+    for (size_t k = 0; k < sizeof rpm / sizeof rpm[0]; ++k) {
+        for (int sg = -1; sg <= 1; sg += 2) {
+            for (int a = 0; a < 8; ++a) {
+                const double w = sg * RPM(rpm[k]), th0 = -2.9 + 0.77 * a;
+                plant_t p = {.ld = LD, .lq = LQ, .w = w, .th = th0};
+                const mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+                const outcome_t o = run_plant(p, &cfg);
+                assert_int_equal(o.st, MC_IP_DONE);
+                assert_true(o.c.moving);
+                assert_false(o.c.single);
+                if (ang_err_deg(o.c.theta, o.th_true) > 0.01 || fabs(o.c.omega / w - 1.0) > 5e-4 ||
+                    fabs(o.c.fit - 1.0) > 1e-3) {
+                    fail_msg("%g rpm th0 %g: angle error %.4f deg, speed error %.4f %%, fit %.5f", sg * rpm[k], th0,
+                             ang_err_deg(o.c.theta, o.th_true), 100.0 * (o.c.omega / w - 1.0), (double)o.c.fit);
+                }
+                /* the rotation between the pulses' ends is omega T12, near the 0.35 rad aimed at */
+                assert_true(o.c.rotation * w > 0.0);
+                assert_true(fabs(o.c.rotation) > 0.2 && fabs(o.c.rotation) < 0.6);
+                assert_near(o.c.i_peak, o.i_peak, 1e-5 * o.i_peak);
+            }
+        }
+    }
+}
+
+/* (C.1) as the plausibility: the catch's magnet flux wrong by more than a factor of 2 either way
+ * makes the second current misfit beyond [0.5, 2]: FAILED (the drive faults) rather than a catch
+ * at a wrong speed; within it (x 0.52 .. x 1.9) the catch holds, its angle still right (it does
+ * not depend on psi_pm), and fit reads the error (1 / factor). */
+static void test_model_far_off_refused(void **st)
+{
+    (void)st;
+    const double factor[] = {0.45, 0.48, 0.52, 0.8, 1.25, 1.9, 2.1, 2.5};
+    for (size_t k = 0; k < sizeof factor / sizeof factor[0]; ++k) {
+        for (int sg = -1; sg <= 1; sg += 2) {
+            plant_t p = {.ld = LD, .lq = LQ, .w = sg * RPM(200.0), .th = 0.3};
+            mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+            cfg.psi_pm = (float)(PSI * factor[k]);
+            const outcome_t o = run_plant(p, &cfg);
+            const bool fits = factor[k] > 0.5 && factor[k] < 2.0;
+            assert_int_equal(o.st, fits ? MC_IP_DONE : MC_IP_FAILED);
+            assert_int_equal(o.c.moving, fits);
+            assert_near(o.c.fit, 1.0 / factor[k], 2e-3);
+            if (fits) {
+                assert_true(ang_err_deg(o.c.theta, o.th_true) < 0.01);
+            }
+        }
+    }
+}
+
+/* The least rotation that gives the sign, 5 deg between the pulses' ends: small pulses (1 A)
+ * and a gap of at most 4 periods make it 8 periods at ~200 rpm; 205 rpm turns 4.9 deg (FAILED:
+ * no sign, the drive faults rather than guess), 212 rpm 5.1 deg (DONE, right). */
+static void test_least_rotation(void **st)
+{
+    (void)st;
+    for (int sg = -1; sg <= 1; sg += 2) {
+        for (int k = 0; k < 2; ++k) {
+            const double w = sg * RPM(k ? 212.0 : 205.0);
+            plant_t p = {.ld = LD, .lq = LQ, .w = w, .th = -1.1};
+            mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+            cfg.i_pulse = 1.0f;
+            cfg.i_detect = 0.25f;
+            cfg.n_gap_max = 4u;
+            cfg.n_wait_max = 2u;
+            const outcome_t o = run_plant(p, &cfg);
+            assert_int_equal(o.c.n1 + o.c.n_gap, 8u);
+            assert_near(fabs(o.c.rotation), fabs(w) * 8.0 * TS, 1e-4);
+            assert_int_equal(o.st, k ? MC_IP_DONE : MC_IP_FAILED);
+            assert_int_equal(o.c.moving, k == 1);
+            if (k) {
+                assert_true(ang_err_deg(o.c.theta, o.th_true) < 0.01);
+                assert_true(o.c.omega * w > 0.0);
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_two_pulses_exact),
+        cmocka_unit_test(test_model_far_off_refused),
+        cmocka_unit_test(test_least_rotation),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),
