@@ -159,6 +159,7 @@ typedef struct {
     double ld, lq, w, th;      /* machine, electrical speed and angle */
     double pa, pb;             /* stator flux in the stator frame */
     double v_dev, i_band;      /* the devices' drop and its soft sign [V, A] */
+    double ts;                 /* the period [s] (0: TS) */
     bool on;
 } plant_t;
 
@@ -189,9 +190,10 @@ static void drop_ab(const plant_t *p, double ia, double ib, double *ua, double *
  * i = 0 in the period (the link takes the current) */
 static void plant_period(plant_t *p)
 {
+    const double ts = p->ts > 0.0 ? p->ts : TS;
     if (p->on && p->v_dev > 0.0) {
         const int n = 20;
-        const double h = TS / n;
+        const double h = ts / n;
         for (int k = 0; k < n; ++k) {
             double ka[4], kb[4], ia, ib;
             const double th = p->th + p->w * h * k;
@@ -207,7 +209,7 @@ static void plant_period(plant_t *p)
             p->pb += h / 6.0 * (kb[0] + 2.0 * kb[1] + 2.0 * kb[2] + kb[3]);
         }
     }
-    p->th += p->w * TS;
+    p->th += p->w * ts;
     if (!p->on) {
         p->pa = PSI * cos(p->th);
         p->pb = PSI * sin(p->th);
@@ -536,12 +538,44 @@ static void test_least_rotation(void **st)
     }
 }
 
+/* A low sampling rate at speed (4 kHz, 1300-1500 rpm: one period's rise 4.2-4.8 A, above
+ * i_pulse): the single pulse would need two samples and reach 2 x 4.8 A, so instead two
+ * one-period pulses (C.3), still exact here, and the current peaks at one period's rise. */
+static void test_one_period_pulses_at_a_low_rate(void **st)
+{
+    (void)st;
+    const double ts = 2.5e-4;
+    for (int sg = -1; sg <= 1; sg += 2) {
+        for (int r = 1300; r <= 1500; r += 100) {
+            for (int a = 0; a < 4; ++a) {
+                const double w = sg * RPM(r), th0 = -2.0 + 1.3 * a;
+                plant_t p = {.ld = LD, .lq = LQ, .w = w, .th = th0, .ts = ts};
+                mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+                cfg.ts = (float)ts;
+                const outcome_t o = run_plant_vdc(p, &cfg, VDC);
+                const double rise = fabs(w) * PSI * ts / LQ;   /* (C.1) to first order */
+                assert_true(rise > cfg.i_pulse && rise < 2.0 * cfg.i_pulse);
+                assert_int_equal(o.st, MC_IP_DONE);
+                assert_true(o.c.moving);
+                assert_false(o.c.single);
+                assert_int_equal(o.c.n1, 1u);
+                if (ang_err_deg(o.c.theta, o.th_true) > 0.01 || fabs(o.c.omega / w - 1.0) > 5e-4) {
+                    fail_msg("%d rpm th0 %g: angle error %.4f deg, speed error %.4f %%", sg * r, th0,
+                             ang_err_deg(o.c.theta, o.th_true), 100.0 * (o.c.omega / w - 1.0));
+                }
+                assert_true(o.c.i_peak < 1.1 * rise);
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_two_pulses_exact),
         cmocka_unit_test(test_model_far_off_refused),
         cmocka_unit_test(test_least_rotation),
+        cmocka_unit_test(test_one_period_pulses_at_a_low_rate),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),
