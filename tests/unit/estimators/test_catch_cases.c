@@ -569,6 +569,57 @@ static void test_one_period_pulses_at_a_low_rate(void **st)
     }
 }
 
+/* The wait before pulse 1 (outputs off, V(000) duties): a small current left by a recovery
+ * decays (in steps below the diodes' threshold i_pulse / 4 = 0.825 A); pulse 1 starts at the
+ * first sample at or below i_rest (0.3 A), from that sample; a current that does not decay
+ * (0.5 A held) makes it wait n_wait_max periods at most, then start anyway. A fall by 2 A in a
+ * period is the diodes conducting: then the wait needs (C.5)'s sign, which a plain decay never
+ * gives, so it lasts n_wait_max too. first_on returns the call at which the outputs come on. */
+static int first_on(const double *amps, int n_amps, double dir, mc_catch_t *c)
+{
+    const mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+    assert_true(mc_catch_start(c, &cfg));
+    for (int k = 0; k < 100; ++k) {
+        const double a = amps[k < n_amps ? k : n_amps - 1];
+        mc_abc_t duty;
+        bool off;
+        const mc_ip_status_t st =
+            mc_catch_step(c, (mc_ab_t){(float)(a * cos(dir)), (float)(a * sin(dir))}, (float)VDC, &duty, &off);
+        assert_int_equal(st, MC_IP_RUNNING);
+        assert_true(duty.a == 0.0f && duty.b == 0.0f && duty.c == 0.0f);
+        if (!off) {
+            return k;
+        }
+    }
+    fail_msg("pulse 1 never started");
+    return -1;
+}
+
+static void test_wait_for_rest(void **st)
+{
+    (void)st;
+    static mc_catch_t c;
+    const double decay[] = {0.8, 0.6, 0.45, 0.3, 0.15, 0.0};
+    assert_int_equal(first_on(decay, 6, 0.4, &c), 3);   /* 0.3 A: at rest (<=) */
+    assert_near(c.i0.alpha, 0.3 * cos(0.4), 1e-6);       /* pulse 1 measured from that sample */
+    assert_near(c.i0.beta, 0.3 * sin(0.4), 1e-6);
+    assert_false(c.diodes);
+    const double slower[] = {0.8, 0.6, 0.45, 0.31, 0.29};
+    assert_int_equal(first_on(slower, 5, -2.0, &c), 4);
+    assert_false(c.diodes);
+    const double held[] = {0.5};
+    const mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+    assert_int_equal(first_on(held, 1, 1.0, &c), (int)cfg.n_wait_max);
+    assert_false(c.diodes);
+    assert_int_equal(c.passive, 0);
+    const double fall[] = {4.0, 2.0, 1.0, 0.5, 0.25, 0.1, 0.0};
+    assert_int_equal(first_on(fall, 7, 2.5, &c), (int)cfg.n_wait_max);
+    assert_true(c.diodes);
+    assert_int_equal(c.passive, 0);
+    const double none[] = {0.0};
+    assert_int_equal(first_on(none, 1, 0.0, &c), 0);    /* an enable at rest: at once */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -576,6 +627,7 @@ int main(void)
         cmocka_unit_test(test_model_far_off_refused),
         cmocka_unit_test(test_least_rotation),
         cmocka_unit_test(test_one_period_pulses_at_a_low_rate),
+        cmocka_unit_test(test_wait_for_rest),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),
