@@ -17,6 +17,7 @@
 #define VDC 300.0
 #define LD 10.5e-3
 #define LQ 12.9e-3
+#define DEG_ (PI_D / 180.0)
 #define RPM(n) ((n) * 2.0 * PI_D / 60.0 * 5.0)
 
 static mc_catch_cfg_t cfg_for(double ld, double lq)
@@ -661,6 +662,52 @@ static void test_device_drop_above_generation_speed(void **st)
     }
 }
 
+/* (C.5) on its own: one diode pulse rising from a low (0.5 A, not at rest; then 0.9 A more each
+ * period, measured from the low) whose
+ * direction turns by the given steps [deg]; returns the sign the wait took (0: none). At least
+ * four steps counted, summing to 10 deg or more, 80 % of their magnitudes one way. */
+static int passive_of(const double *steps_deg, int n, double phi0)
+{
+    static mc_catch_t c;
+    mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+    cfg.n_wait_max = 40u;
+    assert_true(mc_catch_start(&c, &cfg));
+    double phi = phi0;
+    for (int k = 0; k <= n + 1; ++k) {
+        if (k >= 2) {
+            phi += steps_deg[k - 2] * DEG_;
+        }
+        const double a = 0.9 * k;
+        const mc_ab_t i = {(float)(0.5 * cos(phi0 + 1.0) + a * cos(phi)), (float)(0.5 * sin(phi0 + 1.0) + a * sin(phi))};
+        mc_abc_t duty;
+        bool off;
+        assert_int_equal(mc_catch_step(&c, i, (float)VDC, &duty, &off), MC_IP_RUNNING);
+        assert_true(off);   /* rising, not at a low: still waiting */
+    }
+    assert_true(c.diodes);
+    return c.passive;
+}
+
+static void test_passive_sign_thresholds(void **st)
+{
+    (void)st;
+    const double four_up[] = {3.0, 3.0, 3.0, 3.0};        /* 12 deg in 4 steps */
+    const double three_up[] = {4.0, 4.0, 4.0};            /* 12 deg, 3 steps: too few */
+    const double small[] = {1.9, 1.9, 1.9, 1.9, 1.9};    /* 9.5 deg: too little */
+    const double mixed[] = {5.0, 5.0, 5.0, -3.5};         /* 11.5 of 18.5 deg: 62 % */
+    const double mostly[] = {5.0, 5.0, 5.0, -1.5, 2.0};   /* 15.5 of 18.5 deg: 84 % */
+    const double four_down[] = {-2.6, -2.6, -2.6, -2.6};  /* -10.4 deg */
+    for (int a = 0; a < 4; ++a) {
+        const double phi0 = -3.0 + 1.7 * a;
+        assert_int_equal(passive_of(four_up, 4, phi0), 1);
+        assert_int_equal(passive_of(three_up, 3, phi0), 0);
+        assert_int_equal(passive_of(small, 5, phi0), 0);
+        assert_int_equal(passive_of(mixed, 4, phi0), 0);
+        assert_int_equal(passive_of(mostly, 5, phi0), 1);
+        assert_int_equal(passive_of(four_down, 4, phi0), -1);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -670,6 +717,7 @@ int main(void)
         cmocka_unit_test(test_one_period_pulses_at_a_low_rate),
         cmocka_unit_test(test_wait_for_rest),
         cmocka_unit_test(test_device_drop_above_generation_speed),
+        cmocka_unit_test(test_passive_sign_thresholds),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),
