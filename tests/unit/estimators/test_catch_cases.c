@@ -10,6 +10,7 @@
 
 #include "mc/angle.h"
 #include "mc/catch.h"
+#include "mc/svpwm.h"
 #include "mc/transforms.h"
 
 #define TS 1e-4
@@ -426,6 +427,21 @@ static void test_known_vector_salient(void **st)
                 assert_int_equal(o.st, MC_IP_DONE);
                 assert_true(o.c.kv && o.c.moving && o.c.single);
                 assert_int_equal(o.c.n1, 1u);
+                /* the corner: the hexagon's nearest to the diodes' current direction - sigma 130 deg
+                 * (where the field-weakening entry's first vector will point) */
+                const double want = atan2(o.c.i_dir.beta, o.c.i_dir.alpha) - sg * 130.0 * DEG_;
+                int best = -1;
+                double best_err = 10.0;
+                for (int k = 0; k < 6; ++k) {
+                    mc_ab_t e;
+                    (void)mc_svpwm_corner(k, &e);
+                    const double err = fabs(remainder(atan2(e.beta, e.alpha) - want, 2.0 * PI_D));
+                    if (err < best_err) {
+                        best_err = err;
+                        best = k;
+                    }
+                }
+                assert_int_equal(o.c.corner_w, best);
                 if (ang_err_deg(o.c.theta, o.th_true) > 0.3 || fabs(o.c.omega / w - 1.0) > 7e-3) {
                     fail_msg("floor %g A, w %g, th0 %g: angle error %.3f deg, speed error %.3f %%", floors[f], w, th0,
                              ang_err_deg(o.c.theta, o.th_true), 100.0 * (o.c.omega / w - 1.0));
