@@ -644,6 +644,7 @@ static void test_wait_for_rest(void **st)
     assert_int_equal(first_on(fall, 7, 2.5, &c), (int)cfg.n_wait_max);
     assert_true(c.diodes);
     assert_int_equal(c.passive, 0);
+    assert_near(c.i_peak, 4.0, 1e-6);   /* the peak it saw, not the last sample (0 A) */
     const double none[] = {0.0};
     assert_int_equal(first_on(none, 1, 0.0, &c), 0);    /* an enable at rest: at once */
 }
