@@ -137,6 +137,37 @@ static void test_defaults(void **st)
     assert_true(c.i_trip == 0.0f);
 }
 
+/* Where (3.21)'s denominator is exactly zero (the peaks of b and c equally above and below the
+ * mean, a exactly at it: 45 and 135 deg) the arctan of the ratio is +-45 deg by the sign of the
+ * numerator; where the numerator is zero (b and c equal: 0 and 90 deg) it is 0. Table 3.1 then
+ * picks the right one of the two candidates: all four exact, and (3.21)'s own value reported. */
+static void test_angle_on_the_axes(void **st)
+{
+    (void)st;
+    const float m = 5.0f, x = 0.4f;
+    const struct {
+        float ipk[3];
+        double deg;
+    } cases[] = {
+        {{m + 2.0f * x, m - x, m - x}, 0.0},    /* cos 2t = 1 */
+        {{m, m - x, m + x}, 45.0},              /* cos 2t = 0, b below, c above */
+        {{m - 2.0f * x, m + x, m + x}, 90.0},   /* cos 2t = -1 */
+        {{m, m + x, m - x}, 135.0},
+    };
+    for (int k = 0; k < 4; ++k) {
+        float th, ta;
+        int sec;
+        assert_true(mc_pulse3_angle(cases[k].ipk, &th, &ta, &sec));
+        if (err_mod_pi_deg(th, cases[k].deg * DEG) > 0.01) {
+            fail_msg("%g deg: theta %g deg (atan part %g deg, row %d)", cases[k].deg, th / DEG, ta / DEG, sec);
+        }
+        assert_true(fabs(ta) <= PI_D / 4 + 1e-6);
+        /* (3.21)'s own value, reported as theta_atan: 0 on the axes, +-45 deg between */
+        const double want_ta = (k == 1) ? PI_D / 4 : ((k == 3) ? -PI_D / 4 : 0.0);
+        assert_near(ta, want_ta, 1e-6);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -145,6 +176,7 @@ int main(void)
         cmocka_unit_test(test_plant),
         cmocka_unit_test(test_sector_reported),
         cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_angle_on_the_axes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
