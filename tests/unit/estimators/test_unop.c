@@ -705,6 +705,26 @@ static void test_reset_clears_diagnostics(void **st)
     assert_true(s.cost == 0.0f && s.cond == 1.0f && !s.modified);
 }
 
+/* The documented defaults (docs/unop.md, mc/unop.h; on a struct full of garbage): u_norm 100 V,
+ * omega_base 200 rad/s, step_max 1.0 (scaled), the mid-sample form with the held-voltage gain,
+ * K1 toward the predicted angle; 4 iterations, step_tol 1e-6; ts, rs, k1, k2, omega_n1 zero for
+ * the caller; no inductance adaptation (rate 0, power floor 1 V^2) and no band-pass. */
+static void test_defaults(void **st)
+{
+    (void)st;
+    mc_unop_cfg_t c;
+    memset(&c, 0xA5, sizeof c);
+    mc_unop_cfg_default(&c);
+    assert_true(c.ts == 0.0f && c.rs == 0.0f && c.k1 == 0.0f && c.k2 == 0.0f && c.omega_n1 == 0.0f);
+    assert_int_equal(c.model.kind, MC_FLUX_CONST);
+    assert_null(c.model.map);
+    assert_int_equal(c.iter_max, 4);
+    assert_true(c.step_tol == 1e-6f);
+    assert_true(c.omega_base == 200.0f && c.u_norm == 100.0f && c.step_max == 1.0f);
+    assert_true(c.mid_sample && c.reg_predicted && c.zoh_gain);
+    assert_true(c.l_adapt == 0.0f && c.l_adapt_p == 1.0f && c.bp_a1 == 0.0f && c.bp_a2 == 0.0f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -722,6 +742,7 @@ int main(void)
         cmocka_unit_test(test_l_scale_adapts),
         cmocka_unit_test(test_step_bounded),
         cmocka_unit_test(test_reset_clears_diagnostics),
+        cmocka_unit_test(test_defaults),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
