@@ -10,6 +10,7 @@
 
 #include "mc/angle.h"
 #include "mc/catch.h"
+#include "mc/phase_program.h"
 #include "mc/svpwm.h"
 #include "mc/transforms.h"
 
@@ -757,6 +758,63 @@ static void test_pulse_bounded(void **st)
     }
 }
 
+/* The catch through the phase-program interface (mc/phase_program.h, what startup.c drives): the
+ * same duties, outputs-off flags and status every period as the engine driven directly on an
+ * identical plant, and the result as the table says: theta, phi2 - phi1 as theta_aux, the fit as
+ * c1, omega, moving, the peak and the periods taken; flip, c2, conf, verdict zero. */
+static void test_through_the_phase_interface(void **st)
+{
+    (void)st;
+    static mc_phase_t ph;
+    static mc_catch_t eng;
+    const double speeds[] = {-RPM(200.0), RPM(1500.0), 0.0};
+    for (int k = 0; k < 3; ++k) {
+        const mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+        plant_t pa = {.ld = LD, .lq = LQ, .w = speeds[k], .th = 0.7, .pa = PSI * cos(0.7), .pb = PSI * sin(0.7)};
+        plant_t pb = pa;
+        assert_true(mc_catch_start(&eng, &cfg));
+        assert_true(mc_phase_begin(&ph, &mc_phase_catch, &cfg, 1.0f));
+        mc_ip_status_t sa = MC_IP_RUNNING, sb = MC_IP_RUNNING;
+        int n = 0;
+        double peak = 0.0;
+        for (; n < 5000 && sa == MC_IP_RUNNING; ++n) {
+            double ia, ib;
+            currents_at(&pa, pa.th, pa.pa, pa.pb, &ia, &ib);
+            peak = fmax(peak, hypot(ia, ib));
+            const mc_ab_t i = {(float)ia, (float)ib};
+            mc_abc_t da;
+            bool off_a;
+            sa = mc_catch_step(&eng, i, (float)VDC, &da, &off_a);
+            const mc_phase_in_t in = {i, (float)VDC};
+            mc_phase_out_t out;
+            sb = mc_phase_step(&ph, &in, &out);
+            assert_int_equal(sa, sb);
+            assert_true(off_a == out.off);
+            assert_true(da.a == out.duty.a && da.b == out.duty.b && da.c == out.duty.c);
+            pa.on = !off_a;
+            pb.on = !out.off;
+            plant_period(&pa);
+            plant_period(&pb);
+        }
+        assert_int_equal(sa, MC_IP_DONE);
+        mc_phase_result_t r;
+        mc_phase_result(&ph, &r);
+        assert_true(r.theta == eng.theta && r.theta_aux == eng.rotation && r.c1 == eng.fit);
+        assert_true(r.omega == eng.omega && r.moving == eng.moving && r.i_peak == eng.i_peak);
+        assert_int_equal(r.moving, speeds[k] != 0.0);
+        assert_int_equal(r.calls, n);
+        assert_near(r.i_peak, peak, 1e-5 * peak);
+        assert_false(r.flip);
+        assert_true(r.c2 == 0.0f && r.conf == 0.0f);
+        assert_int_equal(r.verdict, 0);
+        if (speeds[k] != 0.0) {
+            assert_true(fabs(r.omega / speeds[k] - 1.0) < 5e-3);
+        } else {
+            assert_true(r.omega == 0.0f);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -768,6 +826,7 @@ int main(void)
         cmocka_unit_test(test_device_drop_above_generation_speed),
         cmocka_unit_test(test_passive_sign_thresholds),
         cmocka_unit_test(test_pulse_bounded),
+        cmocka_unit_test(test_through_the_phase_interface),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),

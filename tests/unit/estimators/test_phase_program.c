@@ -98,6 +98,9 @@ static void check_common(const mc_phase_result_t *r, float i_peak, int calls)
     assert_int_equal(r->calls, calls);
     /* ... and that is the periods the program took: every step call until it ended */
     assert_int_equal(r->calls, g_steps);
+    /* the catch's fields stay zero for the standstill programs */
+    assert_true(r->omega == 0.0f);
+    assert_false(r->moving);
 }
 
 static void test_step1_pulses(void **st)
