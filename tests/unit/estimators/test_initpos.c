@@ -388,10 +388,69 @@ static void test_defaults(void **st)
     assert_true(c.i_rest == 0.3f && c.i_trip == 0.0f);
 }
 
+/* The search's work per period is bounded (the ISR budget): no call spends more than
+ * evals_per_call cost evaluations, the search uses that budget (some call spends all of it), the
+ * result comes with the call of the last evaluation, and a smaller budget spreads the same
+ * search, to the same angle bit for bit, over more calls. */
+typedef struct {
+    mc_initpos_t s;
+    int max_evals, calls_searching, n, last_eval_call, done_call;
+} ip_budget_t;
+
+static mc_ip_status_t step_budget(void *e, mc_ab_t i, float vdc, mc_abc_t *d)
+{
+    ip_budget_t *b = (ip_budget_t *)e;
+    const int e0 = b->s.evals;
+    const mc_ip_status_t st = mc_initpos_step(&b->s, i, vdc, d);
+    const int spent = b->s.evals - e0;
+    b->max_evals = spent > b->max_evals ? spent : b->max_evals;
+    b->calls_searching += spent > 0;
+    b->n++;
+    b->last_eval_call = spent > 0 ? b->n : b->last_eval_call;
+    b->done_call = (st == MC_IP_DONE && b->done_call == 0) ? b->n : b->done_call;
+    return st;
+}
+
+static void test_search_budget(void **st)
+{
+    (void)st;
+    for (int cost = 0; cost < 3; ++cost) {
+        float theta[4];
+        int evals[4], calls[4];
+        const int budget[4] = {12, 5, 3, 1};
+        for (int k = 0; k < 4; ++k) {
+            mc_initpos_cfg_t c = ip_cfg((mc_ip_cost_t)cost, 5);
+            c.evals_per_call = budget[k];
+            ip_budget_t b;
+            memset(&b, 0, sizeof b);
+            plant_t p;
+            plant_init(&p, cost != MC_IP_COST_LINEAR, 73.0);
+            assert_true(mc_initpos_start(&b.s, &c));
+            mc_ip_status_t stt;
+            plant_run(&p, step_budget, &b, 1000, &stt);
+            assert_int_equal(stt, MC_IP_DONE);
+            assert_int_equal(b.max_evals, budget[k]);
+            theta[k] = b.s.theta1;
+            evals[k] = b.s.evals;
+            calls[k] = b.calls_searching;
+            /* every call but the last spends the whole budget; the result comes with the last
+             * evaluation (no call spent on bookkeeping) */
+            assert_int_equal(calls[k], (evals[k] + budget[k] - 1) / budget[k]);
+            assert_int_equal(b.done_call, b.last_eval_call);
+        }
+        for (int k = 1; k < 4; ++k) {
+            assert_true(theta[k] == theta[0]);
+            assert_int_equal(evals[k], evals[0]);
+            assert_true(calls[k] > calls[k - 1]);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_search_budget),
         cmocka_unit_test(test_vectors),
         cmocka_unit_test(test_short_pulse_vectors),
         cmocka_unit_test(test_timing_record),
