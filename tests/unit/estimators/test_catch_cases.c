@@ -815,6 +815,34 @@ static void test_through_the_phase_interface(void **st)
     }
 }
 
+/* (C.4) on a machine with Ld > Lq (Ld = 2 Lq = 12.9 mH; inverse saliency): the wrong sign misses
+ * by |Delta| (1 - n_mid / n1) |2 - Lq/Ld| = 1.5 of the end-to-middle rotation, the clearest case;
+ * pulse 1 alone decides at both signs, on the 300 V link at 900 rpm (3 periods) and on a 100 V
+ * link at 500 rpm (5 periods), angle within 0.1 deg and speed within 0.5 % (exact here). */
+static void test_single_pulse_inverse_saliency(void **st)
+{
+    (void)st;
+    const double ld = 12.9e-3, lq = 6.45e-3;
+    const double vdc[] = {VDC, 100.0}, rpm[] = {900.0, 500.0};
+    for (int v = 0; v < 2; ++v) {
+        for (int sg = -1; sg <= 1; sg += 2) {
+            for (int a = 0; a < 8; ++a) {
+                const double w = sg * RPM(rpm[v]), th0 = -3.0 + 0.77 * a;
+                plant_t p = {.ld = ld, .lq = lq, .w = w, .th = th0};
+                const mc_catch_cfg_t cfg = cfg_for(ld, lq);
+                const outcome_t o = run_plant_vdc(p, &cfg, vdc[v]);
+                assert_int_equal(o.st, MC_IP_DONE);
+                assert_true(o.c.moving && o.c.single);
+                if (ang_err_deg(o.c.theta, o.th_true) > 0.1 || fabs(o.c.omega / w - 1.0) > 5e-3) {
+                    fail_msg("%g V, %g rpm, th0 %g: n1 %u, angle error %.3f deg, speed error %.3f %%", vdc[v],
+                             sg * rpm[v], th0, o.c.n1, ang_err_deg(o.c.theta, o.th_true),
+                             100.0 * (o.c.omega / w - 1.0));
+                }
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -827,6 +855,7 @@ int main(void)
         cmocka_unit_test(test_passive_sign_thresholds),
         cmocka_unit_test(test_pulse_bounded),
         cmocka_unit_test(test_through_the_phase_interface),
+        cmocka_unit_test(test_single_pulse_inverse_saliency),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),
