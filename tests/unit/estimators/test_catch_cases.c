@@ -396,6 +396,7 @@ static void test_single_pulse_long_history(void **st)
                 assert_int_equal(o.st, MC_IP_DONE);
                 assert_true(o.c.moving && o.c.single);
                 assert_int_equal(o.c.n1, n1[k]);
+                assert_true(o.c.fit == 1.0f);   /* one pulse: nothing to fit, reported 1 */
                 if (ang_err_deg(o.c.theta, o.th_true) > 0.1 || fabs(o.c.omega / w - 1.0) > 5e-3) {
                     fail_msg("%g rpm th0 %g: angle error %.3f deg, speed error %.3f %%", sg * rpm[k], th0,
                              ang_err_deg(o.c.theta, o.th_true), 100.0 * (o.c.omega / w - 1.0));
@@ -443,6 +444,8 @@ static void test_known_vector_salient(void **st)
                     }
                 }
                 assert_int_equal(o.c.corner_w, best);
+                /* no second pulse to fit (C.1) to: the reported fit (the telemetry's c1) is 1 */
+                assert_true(o.c.fit == 1.0f);
                 if (ang_err_deg(o.c.theta, o.th_true) > 0.3 || fabs(o.c.omega / w - 1.0) > 7e-3) {
                     fail_msg("floor %g A, w %g, th0 %g: angle error %.3f deg, speed error %.3f %%", floors[f], w, th0,
                              ang_err_deg(o.c.theta, o.th_true), 100.0 * (o.c.omega / w - 1.0));
@@ -470,6 +473,7 @@ static void test_passive_sign_without_link_voltage(void **st)
             assert_false(o.c.kv);
             assert_true(o.c.moving && o.c.single);
             assert_int_equal(o.c.passive, sg);
+            assert_true(o.c.fit == 1.0f);   /* one pulse: nothing to fit, reported 1 */
             /* the pulse lasted until i_pulse, not one period less */
             assert_int_equal(o.c.n1, 2u);
             assert_true(hypot(o.c.di1.alpha, o.c.di1.beta) >= cfg.i_pulse);
