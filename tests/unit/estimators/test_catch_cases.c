@@ -847,6 +847,31 @@ static void test_single_pulse_inverse_saliency(void **st)
     }
 }
 
+/* (C.4)'s own margin: the wrong sign must miss by at least 0.07 rad (4 deg) for pulse 1 alone to
+ * decide. At 1500 rpm pulse 1 turns the rotor by 0.314 rad in 4 periods, its middle at half: the
+ * miss is 0.157 |2 - Lq/Ld|, 0.075 rad at Lq/Ld = 1.52 (single pulse) and 0.064 rad at 1.59 (two
+ * pulses); both signs, four angles, both exact. */
+static void test_single_pulse_margin(void **st)
+{
+    (void)st;
+    const double rho[] = {1.52, 1.59};
+    for (int k = 0; k < 2; ++k) {
+        for (int sg = -1; sg <= 1; sg += 2) {
+            for (int a = 0; a < 4; ++a) {
+                const double lq = LQ, ld = LQ / rho[k], w = sg * RPM(1500.0);
+                plant_t p = {.ld = ld, .lq = lq, .w = w, .th = -2.5 + 1.4 * a};
+                const mc_catch_cfg_t cfg = cfg_for(ld, lq);
+                const outcome_t o = run_plant_vdc(p, &cfg, VDC);
+                assert_int_equal(o.st, MC_IP_DONE);
+                assert_true(o.c.moving);
+                assert_int_equal(o.c.single, k == 0);
+                assert_true(ang_err_deg(o.c.theta, o.th_true) < 0.01);
+                assert_true(fabs(o.c.omega / w - 1.0) < 5e-4);
+            }
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -860,6 +885,7 @@ int main(void)
         cmocka_unit_test(test_pulse_bounded),
         cmocka_unit_test(test_through_the_phase_interface),
         cmocka_unit_test(test_single_pulse_inverse_saliency),
+        cmocka_unit_test(test_single_pulse_margin),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),
