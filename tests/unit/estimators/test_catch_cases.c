@@ -872,6 +872,30 @@ static void test_single_pulse_margin(void **st)
     }
 }
 
+/* A current change of exactly i_pulse in pulse 1's first period reaches it (>=): the pulse ends
+ * there (a one-period pulse, then the gap: outputs off), rather than going on towards the single
+ * pulse's 2 i_pulse; just below it, above base speed, the pulse goes on (outputs on). */
+static void test_first_period_reaching_i_pulse(void **st)
+{
+    (void)st;
+    static mc_catch_t c;
+    const mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+    for (int k = 0; k < 2; ++k) {
+        const float di = k ? nextafterf(cfg.i_pulse, 0.0f) : cfg.i_pulse;
+        assert_true(mc_catch_start(&c, &cfg));
+        mc_abc_t duty;
+        bool off;
+        assert_int_equal(mc_catch_step(&c, (mc_ab_t){0.0f, 0.0f}, (float)VDC, &duty, &off), MC_IP_RUNNING);
+        assert_false(off);   /* at rest: pulse 1 from this sample */
+        assert_int_equal(mc_catch_step(&c, (mc_ab_t){0.0f, -di}, (float)VDC, &duty, &off), MC_IP_RUNNING);
+        assert_int_equal(off, k == 0);
+        if (k == 0) {
+            assert_int_equal(c.n1, 1u);
+            assert_true(c.di1.beta == -di);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -886,6 +910,7 @@ int main(void)
         cmocka_unit_test(test_through_the_phase_interface),
         cmocka_unit_test(test_single_pulse_inverse_saliency),
         cmocka_unit_test(test_single_pulse_margin),
+        cmocka_unit_test(test_first_period_reaching_i_pulse),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),
