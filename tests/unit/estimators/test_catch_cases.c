@@ -896,6 +896,41 @@ static void test_first_period_reaching_i_pulse(void **st)
     }
 }
 
+/* The same boundary for the pulse with the wait's sign (C.5) (no link voltage reading: a V(000)
+ * pulse): a diode pulse gives the sign, the current falls to a low (0 A) where pulse 1 starts,
+ * and a change of exactly i_pulse in its first period ends it with the angle (DONE); just below,
+ * it goes on. */
+static void test_passive_pulse_reaching_i_pulse(void **st)
+{
+    (void)st;
+    static mc_catch_t c;
+    mc_catch_cfg_t cfg = cfg_for(LD, LQ);
+    cfg.n_wait_max = 40u;
+    for (int k = 0; k < 2; ++k) {
+        const float di = k ? nextafterf(cfg.i_pulse, 0.0f) : cfg.i_pulse;
+        assert_true(mc_catch_start(&c, &cfg));
+        mc_abc_t duty;
+        bool off;
+        double phi = 0.3;
+        for (int j = 0; j <= 6; ++j) {   /* one diode pulse turning by +3 deg a period */
+            phi += j >= 2 ? 3.0 * DEG_ : 0.0;
+            const mc_ab_t i = {(float)(0.5 * cos(1.3) + 0.9 * j * cos(phi)), (float)(0.5 * sin(1.3) + 0.9 * j * sin(phi))};
+            assert_int_equal(mc_catch_step(&c, i, 0.0f, &duty, &off), MC_IP_RUNNING);
+            assert_true(off);
+        }
+        assert_int_equal(c.passive, 1);
+        assert_int_equal(mc_catch_step(&c, (mc_ab_t){0.0f, 0.0f}, 0.0f, &duty, &off), MC_IP_RUNNING);
+        assert_false(off);   /* the low: pulse 1 */
+        assert_false(c.kv);
+        const mc_ip_status_t st2 = mc_catch_step(&c, (mc_ab_t){0.0f, -di}, 0.0f, &duty, &off);
+        assert_int_equal(st2, k ? MC_IP_RUNNING : MC_IP_DONE);
+        if (k == 0) {
+            assert_int_equal(c.n1, 1u);
+            assert_true(c.moving && c.single);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -911,6 +946,7 @@ int main(void)
         cmocka_unit_test(test_single_pulse_inverse_saliency),
         cmocka_unit_test(test_single_pulse_margin),
         cmocka_unit_test(test_first_period_reaching_i_pulse),
+        cmocka_unit_test(test_passive_pulse_reaching_i_pulse),
         cmocka_unit_test(test_positive_fields_refused_at_their_bounds),
         cmocka_unit_test(test_relations_at_their_boundaries),
         cmocka_unit_test(test_device_drop_taken_out),
