@@ -397,6 +397,8 @@ static void test_single_pulse_long_history(void **st)
                 assert_true(o.c.moving && o.c.single);
                 assert_int_equal(o.c.n1, n1[k]);
                 assert_true(o.c.fit == 1.0f);   /* one pulse: nothing to fit, reported 1 */
+                /* the rotation reported (theta_aux): pulse 1's own, omega n1 Ts */
+                assert_near(o.c.rotation, w * o.c.n1 * TS, 1e-3 * fabs(w * o.c.n1 * TS));
                 if (ang_err_deg(o.c.theta, o.th_true) > 0.1 || fabs(o.c.omega / w - 1.0) > 5e-3) {
                     fail_msg("%g rpm th0 %g: angle error %.3f deg, speed error %.3f %%", sg * rpm[k], th0,
                              ang_err_deg(o.c.theta, o.th_true), 100.0 * (o.c.omega / w - 1.0));
