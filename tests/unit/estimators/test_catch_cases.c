@@ -446,8 +446,10 @@ static void test_known_vector_salient(void **st)
                     }
                 }
                 assert_int_equal(o.c.corner_w, best);
-                /* no second pulse to fit (C.1) to: the reported fit (the telemetry's c1) is 1 */
+                /* no second pulse to fit (C.1) to: the reported fit (the telemetry's c1) is 1; the
+                 * rotation reported (theta_aux) is the period's own, omega Ts */
                 assert_true(o.c.fit == 1.0f);
+                assert_near(o.c.rotation, w * TS, 0.01 * fabs(w * TS));
                 if (ang_err_deg(o.c.theta, o.th_true) > 0.3 || fabs(o.c.omega / w - 1.0) > 7e-3) {
                     fail_msg("floor %g A, w %g, th0 %g: angle error %.3f deg, speed error %.3f %%", floors[f], w, th0,
                              ang_err_deg(o.c.theta, o.th_true), 100.0 * (o.c.omega / w - 1.0));
