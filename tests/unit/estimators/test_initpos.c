@@ -100,6 +100,21 @@ static void test_vectors(void **st)
     double mag = hypot(d.u_real.alpha, d.u_real.beta);
     assert_near(mag, 173.205 / cos(11.5 * DEG), 0.05);
     assert_true(d.saturated);
+    /* every direct pattern, written over that saturated result: the switches' states as duties,
+     * the corner 2/3 vdc at 60 k deg (V(000), V(111): zero), never a scaled-back request */
+    for (unsigned pat = 0u; pat < 8u; ++pat) {
+        mc_ip_direct(pat, 300.0f, &d);
+        assert_false(d.saturated);
+        assert_true(d.a == ((pat & MC_IP_V100) ? 1.0f : 0.0f));
+        assert_true(d.b == ((pat & MC_IP_V010) ? 1.0f : 0.0f));
+        assert_true(d.c == ((pat & MC_IP_V001) ? 1.0f : 0.0f));
+        const double va = d.a - 0.5, vb = d.b - 0.5, vc = d.c - 0.5;
+        assert_near(d.u_real.alpha, 300.0 * (2.0 * va - vb - vc) / 3.0, 1e-3);
+        assert_near(d.u_real.beta, 300.0 * (vb - vc) / sqrt(3.0), 1e-3);
+        const double m = hypot(d.u_real.alpha, d.u_real.beta);
+        assert_near(m, (pat == 0u || pat == 7u) ? 0.0 : 200.0, 1e-3);
+        mc_svpwm(u, 300.0f, &d);
+    }
 }
 
 /* The record must hold the vector that really acted between the two samples: with the plant's
@@ -349,9 +364,93 @@ static void test_gap_waits_for_decay(void **st)
     assert_true(timeout);
 }
 
+/* The thesis defaults (initpos.h; on a struct full of garbage): m = 5, one direction, the linear
+ * cost, a 36-point grid, a 0.05 deg bracket, 12 evaluations a call, gaps of 2..50 periods ending
+ * at 0.3 A, no trip; ts, rs, ld, lq, the pulse voltage zero (the caller's) and no map. */
+static void test_defaults(void **st)
+{
+    (void)st;
+    mc_initpos_cfg_t c;
+    memset(&c, 0xA5, sizeof c);
+    mc_initpos_cfg_default(&c);
+    assert_true(c.ts == 0.0f && c.rs == 0.0f && c.ld == 0.0f && c.lq == 0.0f && c.v_pulse == 0.0f);
+    assert_int_equal(c.model.kind, MC_FLUX_CONST);
+    assert_null(c.model.map);
+    assert_int_equal(c.cost, MC_IP_COST_LINEAR);
+    assert_int_equal(c.m, 5);
+    assert_int_equal(c.n_dir, 1);
+    assert_false(c.all_pulses);
+    assert_int_equal(c.grid, 36);
+    assert_near(c.tol, 0.05 * DEG, 1e-9);
+    assert_int_equal(c.evals_per_call, 12);
+    assert_int_equal(c.gap_min, 2);
+    assert_int_equal(c.gap_max, 50);
+    assert_true(c.i_rest == 0.3f && c.i_trip == 0.0f);
+}
+
+/* The search's work per period is bounded (the ISR budget): no call spends more than
+ * evals_per_call cost evaluations, the search uses that budget (some call spends all of it), the
+ * result comes with the call of the last evaluation, and a smaller budget spreads the same
+ * search, to the same angle bit for bit, over more calls. */
+typedef struct {
+    mc_initpos_t s;
+    int max_evals, calls_searching, n, last_eval_call, done_call;
+} ip_budget_t;
+
+static mc_ip_status_t step_budget(void *e, mc_ab_t i, float vdc, mc_abc_t *d)
+{
+    ip_budget_t *b = (ip_budget_t *)e;
+    const int e0 = b->s.evals;
+    const mc_ip_status_t st = mc_initpos_step(&b->s, i, vdc, d);
+    const int spent = b->s.evals - e0;
+    b->max_evals = spent > b->max_evals ? spent : b->max_evals;
+    b->calls_searching += spent > 0;
+    b->n++;
+    b->last_eval_call = spent > 0 ? b->n : b->last_eval_call;
+    b->done_call = (st == MC_IP_DONE && b->done_call == 0) ? b->n : b->done_call;
+    return st;
+}
+
+static void test_search_budget(void **st)
+{
+    (void)st;
+    for (int cost = 0; cost < 3; ++cost) {
+        float theta[4];
+        int evals[4], calls[4];
+        const int budget[4] = {12, 5, 3, 1};
+        for (int k = 0; k < 4; ++k) {
+            mc_initpos_cfg_t c = ip_cfg((mc_ip_cost_t)cost, 5);
+            c.evals_per_call = budget[k];
+            ip_budget_t b;
+            memset(&b, 0, sizeof b);
+            plant_t p;
+            plant_init(&p, cost != MC_IP_COST_LINEAR, 73.0);
+            assert_true(mc_initpos_start(&b.s, &c));
+            mc_ip_status_t stt;
+            plant_run(&p, step_budget, &b, 1000, &stt);
+            assert_int_equal(stt, MC_IP_DONE);
+            assert_int_equal(b.max_evals, budget[k]);
+            theta[k] = b.s.theta1;
+            evals[k] = b.s.evals;
+            calls[k] = b.calls_searching;
+            /* every call but the last spends the whole budget; the result comes with the last
+             * evaluation (no call spent on bookkeeping) */
+            assert_int_equal(calls[k], (evals[k] + budget[k] - 1) / budget[k]);
+            assert_int_equal(b.done_call, b.last_eval_call);
+        }
+        for (int k = 1; k < 4; ++k) {
+            assert_true(theta[k] == theta[0]);
+            assert_int_equal(evals[k], evals[0]);
+            assert_true(calls[k] > calls[k - 1]);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_search_budget),
         cmocka_unit_test(test_vectors),
         cmocka_unit_test(test_short_pulse_vectors),
         cmocka_unit_test(test_timing_record),

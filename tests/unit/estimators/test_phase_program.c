@@ -42,12 +42,16 @@ static mc_ip_status_t d_dvi(void *e, mc_ab_t i, float v, mc_abc_t *d)
     return mc_dvi_step((mc_dvi_t *)e, i, v, d);
 }
 
+static int g_steps;   /* step calls the last lockstep made (PWM periods), the final one included */
+
 /* Run the direct engine on plant pa and the program on plant pb (identical copies) in lockstep;
  * every period the duties and the status must agree exactly. Returns the final status. */
 static mc_ip_status_t lockstep(plant_t *pa, plant_t *pb, ip_step_fn f, void *eng, int max_calls)
 {
     mc_ip_status_t sa = MC_IP_RUNNING, sb = MC_IP_RUNNING;
+    g_steps = 0;
     for (int n = 0; n < max_calls && sa == MC_IP_RUNNING; ++n) {
+        ++g_steps;
         mc_ab_t ia = plant_sample(pa), ib = plant_sample(pb);
         assert_true(same_f(ia.alpha, ib.alpha) && same_f(ia.beta, ib.beta));
         mc_abc_t da;
@@ -92,6 +96,11 @@ static void check_common(const mc_phase_result_t *r, float i_peak, int calls)
     assert_true(same_f(r->i_peak, i_peak));
     assert_true(r->i_peak > 0.0f);
     assert_int_equal(r->calls, calls);
+    /* ... and that is the periods the program took: every step call until it ended */
+    assert_int_equal(r->calls, g_steps);
+    /* the catch's fields stay zero for the standstill programs */
+    assert_true(r->omega == 0.0f);
+    assert_false(r->moving);
 }
 
 static void test_step1_pulses(void **st)
@@ -316,6 +325,11 @@ static void test_bad_cfg(void **st)
     for (int k = 0; k < 4; ++k) {
         assert_false(mc_phase_begin(&g_ph, all[k], NULL, 0.0f));
         expect_dead();
+        /* a refused program took no period and reports none */
+        mc_phase_result_t r;
+        mc_phase_result(&g_ph, &r);
+        assert_int_equal(r.calls, 0);
+        assert_false(r.flip);
     }
     mc_initpos_cfg_t c1 = ip1_cfg(MC_IP_COST_LINEAR);
     c1.m = MC_IP_M_MAX + 1;

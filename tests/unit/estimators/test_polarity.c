@@ -239,6 +239,50 @@ static void test_polarity_noise_never_wrong(void **st)
     assert_true(wrong_blind > 0);   /* the noise is heavy enough to matter */
 }
 
+/* A current sample held for one period (a stuck conversion) inside the train: the interval it
+ * closes shows no current change, so (5.6) has no slope there; it is left out of (5.7) (15 of the
+ * 16 intervals used) and c1, c2 stay finite: a decision is taken. (The next interval then carries
+ * two periods' change, half the slope, which may tip a blind (5.7) decision: its rightness is
+ * the sweeps' business, not asserted here.) */
+static void test_polarity_skips_a_flat_interval(void **st)
+{
+    (void)st;
+    mc_polarity_cfg_t c;
+    mc_polarity_cfg_default(&c);
+    c.ts = (float)SUN_TS;
+    c.rs = (float)SUN_RS;
+    c.model = map_model();
+    for (int a = 0; a < 360; a += 30) {
+        for (int hold = 4; hold <= 12; hold += 4) {
+            plant_t p;
+            plant_init(&p, 1, a);
+            int calls = 0;
+            const float th1 = step1(&p, &calls);
+            mc_polarity_t s;
+            assert_true(mc_polarity_start(&s, &c, th1));
+            mc_ip_status_t stt = MC_IP_RUNNING;
+            mc_ab_t last = {0.0f, 0.0f};
+            for (int k = 0; k < 400 && stt == MC_IP_RUNNING; ++k) {
+                mc_ab_t i = plant_sample(&p);
+                if (k == hold) {
+                    i = last;   /* the previous conversion once more */
+                }
+                last = i;
+                mc_abc_t d;
+                stt = mc_polarity_step(&s, i, (float)VDC, &d);
+                plant_advance(&p, p.pending, VDC);
+                p.pending = d;
+            }
+            assert_int_equal(stt, MC_IP_DONE);
+            assert_int_equal(s.verdict, MC_POL_DECIDED);
+            assert_int_equal(s.n_valid, 4 * c.n - 1);
+            if (!isfinite(s.c1) || !isfinite(s.c2)) {
+                fail_msg("%d deg, sample %d held: c1 %g, c2 %g", a, hold, (double)s.c1, (double)s.c2);
+            }
+        }
+    }
+}
+
 static void test_hexagon_and_record(void **st)
 {
     (void)st;
@@ -366,9 +410,40 @@ static void test_dvi_confidence(void **st)
     assert_true(wrong_blind >= 6);   /* the larger peak alone guesses on the linear plant */
 }
 
+/* The thesis defaults (polarity.h; on structs full of garbage): Step II v_pol 200 V, half pulses
+ * of 4 periods, l at the mean current, i_rest 0.3 A, no trip, no confidence check and no retry
+ * (z_min 0, i_max 0), ts, rs unset and a constant model without a map; DVI 200 V pulses of 6
+ * periods (7.2.2), gaps of 2..50 periods ending at 0.3 A, no check, one repetition. */
+static void test_defaults(void **st)
+{
+    (void)st;
+    mc_polarity_cfg_t c;
+    memset(&c, 0xA5, sizeof c);
+    mc_polarity_cfg_default(&c);
+    assert_true(c.ts == 0.0f && c.rs == 0.0f);
+    assert_int_equal(c.model.kind, MC_FLUX_CONST);
+    assert_null(c.model.map);
+    assert_true(c.v_pol == 200.0f);
+    assert_int_equal(c.n, 4);
+    assert_false(c.l_at_end);
+    assert_true(c.i_rest == 0.3f && c.i_trip == 0.0f);
+    assert_true(c.z_min == 0.0f && c.i_max == 0.0f);
+    mc_dvi_cfg_t d;
+    memset(&d, 0xA5, sizeof d);
+    mc_dvi_cfg_default(&d);
+    assert_true(d.rs == 0.0f && d.v == 200.0f);
+    assert_int_equal(d.n, 6);
+    assert_int_equal(d.gap_min, 2);
+    assert_int_equal(d.gap_max, 50);
+    assert_true(d.i_rest == 0.3f && d.i_trip == 0.0f && d.z_min == 0.0f);
+    assert_int_equal(d.reps_max, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_polarity_skips_a_flat_interval),
         cmocka_unit_test(test_hexagon_and_record),
         cmocka_unit_test(test_polarity_sweep),
         cmocka_unit_test(test_polarity_needs_asymmetry),

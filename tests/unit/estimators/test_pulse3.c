@@ -92,12 +92,91 @@ static void test_plant(void **st)
     }
 }
 
+/* The Table 3.1 row reported with the angle: on exact peak-law data 2 deg or more inside a
+ * sector, the row of that sector (centre 30 k deg, modulo 180), whatever the mean peak and the
+ * fluctuation's size (the row comes from the peaks' deviations from their mean, (3.20)). */
+static void test_sector_reported(void **st)
+{
+    (void)st;
+    const double mean[] = {5.0, 2.0, 12.0}, amp[] = {0.4, 1.5, 0.05};
+    for (int m = 0; m < 3; ++m) {
+        for (int a = 0; a < 360; ++a) {
+            const double deg = a + 0.5, in_sec = fmod(deg + 15.0, 30.0);
+            if (in_sec < 2.0 || in_sec > 28.0) {
+                continue;
+            }
+            const double t = deg * DEG;
+            float ipk[3] = {(float)(mean[m] + amp[m] * cos(2 * t)),
+                            (float)(mean[m] + amp[m] * cos(2 * t + 2 * PI_D / 3)),
+                            (float)(mean[m] + amp[m] * cos(2 * t - 2 * PI_D / 3))};
+            float th, ta;
+            int sec = -2;
+            assert_true(mc_pulse3_angle(ipk, &th, &ta, &sec));
+            const int want = (int)floor(fmod(deg + 15.0, 180.0) / 30.0);
+            if (sec != want) {
+                fail_msg("%.1f deg (mean %g, amp %g): row %d, want %d", deg, mean[m], amp[m], sec, want);
+            }
+            assert_true(err_mod_pi_deg(th, t) < 0.05);
+        }
+    }
+}
+
+/* The default configuration (on a struct full of garbage): 5-period pulses, R = 0, gaps of 2 to
+ * 50 periods that end once |i| <= 0.3 A, no trip level. */
+static void test_defaults(void **st)
+{
+    (void)st;
+    mc_pulse3_cfg_t c;
+    memset(&c, 0xA5, sizeof c);
+    mc_pulse3_cfg_default(&c);
+    assert_true(c.rs == 0.0f);
+    assert_int_equal(c.n, 5);
+    assert_int_equal(c.gap_min, 2);
+    assert_int_equal(c.gap_max, 50);
+    assert_true(c.i_rest == 0.3f);
+    assert_true(c.i_trip == 0.0f);
+}
+
+/* Where (3.21)'s denominator is exactly zero (the peaks of b and c equally above and below the
+ * mean, a exactly at it: 45 and 135 deg) the arctan of the ratio is +-45 deg by the sign of the
+ * numerator; where the numerator is zero (b and c equal: 0 and 90 deg) it is 0. Table 3.1 then
+ * picks the right one of the two candidates: all four exact, and (3.21)'s own value reported. */
+static void test_angle_on_the_axes(void **st)
+{
+    (void)st;
+    const float m = 5.0f, x = 0.4f;
+    const struct {
+        float ipk[3];
+        double deg;
+    } cases[] = {
+        {{m + 2.0f * x, m - x, m - x}, 0.0},    /* cos 2t = 1 */
+        {{m, m - x, m + x}, 45.0},              /* cos 2t = 0, b below, c above */
+        {{m - 2.0f * x, m + x, m + x}, 90.0},   /* cos 2t = -1 */
+        {{m, m + x, m - x}, 135.0},
+    };
+    for (int k = 0; k < 4; ++k) {
+        float th, ta;
+        int sec;
+        assert_true(mc_pulse3_angle(cases[k].ipk, &th, &ta, &sec));
+        if (err_mod_pi_deg(th, cases[k].deg * DEG) > 0.01) {
+            fail_msg("%g deg: theta %g deg (atan part %g deg, row %d)", cases[k].deg, th / DEG, ta / DEG, sec);
+        }
+        assert_true(fabs(ta) <= PI_D / 4 + 1e-6);
+        /* (3.21)'s own value, reported as theta_atan: 0 on the axes, +-45 deg between */
+        const double want_ta = (k == 1) ? PI_D / 4 : ((k == 3) ? -PI_D / 4 : 0.0);
+        assert_near(ta, want_ta, 1e-6);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_table),
         cmocka_unit_test(test_angle_exact),
         cmocka_unit_test(test_plant),
+        cmocka_unit_test(test_sector_reported),
+        cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_angle_on_the_axes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -643,6 +643,88 @@ static void test_l_scale_adapts(void **st)
     assert_true(fabsf(b.b0 - 0.5f * (1.0f - cfg.bp_a2)) < 1e-7f && cfg.bp_a1 == b.a1);
 }
 
+/* step_max bounds one Newton step in the scaled variables (theta [rad], omega / omega_base):
+ * from 25 deg and 40 rad/s off, one iteration moves the estimate by at most step_max (and by
+ * more than half of it: the full step is far longer), at both signs of speed; with step_max 0
+ * (no bound) the same step is longer than the bound. */
+static void test_step_bounded(void **st)
+{
+    (void)st;
+    for (int sg = -1; sg <= 1; sg += 2) {
+        const double om = sg * RPM_TO_WE(400.0);
+        for (int lim = 0; lim < 2; ++lim) {
+            mc_unop_cfg_t cfg = sun_cfg(NULL, 1);
+            cfg.iter_max = 1;
+            cfg.step_max = lim ? 0.02f : 0.0f;
+            mc_unop_t s;
+            mc_unop_init(&s, &cfg);
+            dsample_t d;
+            double thk;
+            dgen_sample(&cfg, &TRAJ_RUN, 1.0, om, 1, &d, &thk);
+            const mc_angle_in_t in = to_in(&d);
+            const float th0 = (float)(thk + 25.0 * DEG), om0 = (float)(om + 40.0);
+            mc_unop_reset(&s, th0, om0);
+            const double th_pred = (double)s.theta + (double)s.omega * SUN_TS;
+            mc_angle_out_t out;
+            mc_unop_step(&s, &in, &out);
+            const double dx = wrapd((double)s.theta - th_pred), dw = ((double)s.omega - om0) / cfg.omega_base;
+            const double step = hypot(dx, dw);
+            if (lim) {
+                assert_true(step <= 0.02 * (1.0 + 1e-4) + 1e-6);
+                assert_true(step >= 0.01);
+                assert_true(dx < 0.0);   /* toward the true angle */
+            } else {
+                assert_true(step > 0.05);
+            }
+        }
+    }
+}
+
+/* A reset clears the search's diagnostics (the telemetry's est_iters, est_cost, est_cond) left
+ * by the last step: no iterations, zero cost, a well-conditioned Hessian, not modified. */
+static void test_reset_clears_diagnostics(void **st)
+{
+    (void)st;
+    const double om = RPM_TO_WE(400.0);
+    mc_unop_cfg_t cfg = sun_cfg(NULL, 1);
+    mc_unop_t s;
+    mc_unop_init(&s, &cfg);
+    assert_int_equal(s.iters, 0);
+    assert_true(s.cost == 0.0f && s.cond == 1.0f && !s.modified);
+    dsample_t d;
+    double thk;
+    dgen_sample(&cfg, &TRAJ_RUN, 1.0, om, 1, &d, &thk);
+    const mc_angle_in_t in = to_in(&d);
+    /* far off (170 deg): the Hessian is modified, the cost large */
+    mc_unop_reset(&s, (float)(thk + 170.0 * DEG), (float)om);
+    mc_angle_out_t out;
+    mc_unop_step(&s, &in, &out);
+    assert_true(s.iters >= 1 && s.cost > 0.0f && s.cond < 1.0f);
+    mc_unop_reset(&s, 0.5f, (float)om);
+    assert_int_equal(s.iters, 0);
+    assert_true(s.cost == 0.0f && s.cond == 1.0f && !s.modified);
+}
+
+/* The documented defaults (docs/unop.md, mc/unop.h; on a struct full of garbage): u_norm 100 V,
+ * omega_base 200 rad/s, step_max 1.0 (scaled), the mid-sample form with the held-voltage gain,
+ * K1 toward the predicted angle; 4 iterations, step_tol 1e-6; ts, rs, k1, k2, omega_n1 zero for
+ * the caller; no inductance adaptation (rate 0, power floor 1 V^2) and no band-pass. */
+static void test_defaults(void **st)
+{
+    (void)st;
+    mc_unop_cfg_t c;
+    memset(&c, 0xA5, sizeof c);
+    mc_unop_cfg_default(&c);
+    assert_true(c.ts == 0.0f && c.rs == 0.0f && c.k1 == 0.0f && c.k2 == 0.0f && c.omega_n1 == 0.0f);
+    assert_int_equal(c.model.kind, MC_FLUX_CONST);
+    assert_null(c.model.map);
+    assert_int_equal(c.iter_max, 4);
+    assert_true(c.step_tol == 1e-6f);
+    assert_true(c.omega_base == 200.0f && c.u_norm == 100.0f && c.step_max == 1.0f);
+    assert_true(c.mid_sample && c.reg_predicted && c.zoh_gain);
+    assert_true(c.l_adapt == 0.0f && c.l_adapt_p == 1.0f && c.bp_a1 == 0.0f && c.bp_a2 == 0.0f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -658,6 +740,9 @@ int main(void)
         cmocka_unit_test(test_cost_derivatives_alone),
         cmocka_unit_test(test_reported_cost_is_at_the_estimate),
         cmocka_unit_test(test_l_scale_adapts),
+        cmocka_unit_test(test_step_bounded),
+        cmocka_unit_test(test_reset_clears_diagnostics),
+        cmocka_unit_test(test_defaults),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
