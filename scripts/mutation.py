@@ -61,8 +61,18 @@ def expand(globs: str) -> list[str]:
 def generate(rel: str, lang: str) -> list[dict]:
     """Every universalmutator mutant of one file, as (line, original, mutated) in file order."""
     src = (ROOT / rel).read_text().splitlines(keepends=True)
+    # universalmutator leaves every line with a comment alone, so a code line ending in
+    # "/* why */" (the project's style for the thesis' equation numbers) would never be mutated:
+    # it gets a copy with those trailing comments cut, and each mutant its line's comment back
+    bare, tails = src, [""] * len(src)
+    if lang == "c":
+        bare, tails = zip(*(cut_trailing_comment(ln) for ln in src)) if src else ((), ())
+        bare, tails = list(bare), list(tails)
     with tempfile.TemporaryDirectory() as d:
-        subprocess.run([str(ROOT / ".venv/bin/mutate"), str(ROOT / rel), lang, "--noCheck",
+        target = Path(d) / "in" / Path(rel).name
+        target.parent.mkdir()
+        target.write_text("".join(bare))
+        subprocess.run([str(ROOT / ".venv/bin/mutate"), str(target), lang, "--noCheck",
                         "--mutantDir", d], check=True, stdout=subprocess.DEVNULL,
                        stderr=subprocess.DEVNULL, cwd=d)
         stem = Path(rel).stem
@@ -71,18 +81,19 @@ def generate(rel: str, lang: str) -> list[dict]:
         seen = set()
         for f in files:
             mut = f.read_text().splitlines(keepends=True)
-            if len(mut) != len(src):
+            if len(mut) != len(bare):
                 continue   # a mutant that adds or removes lines: not a one-line change
-            diff = [i for i, (a, b) in enumerate(zip(src, mut)) if a != b]
+            diff = [i for i, (a, b) in enumerate(zip(bare, mut)) if a != b]
             if len(diff) != 1:
                 continue
             i = diff[0]
-            key = (i, mut[i])
-            if key in seen:
+            line = mut[i].rstrip("\n") + tails[i] if tails[i] else mut[i].rstrip("\n")
+            key = (i, line)
+            if key in seen or line == src[i].rstrip("\n"):
                 continue
             seen.add(key)
             mutants.append({"file": rel, "line": i + 1, "original": src[i].rstrip("\n"),
-                            "mutated": mut[i].rstrip("\n")})
+                            "mutated": line})
         if lang == "python":
             # lines inside a multi-line string (docstrings): universalmutator mutates their text
             import io
@@ -93,6 +104,17 @@ def generate(rel: str, lang: str) -> list[dict]:
                     inside |= set(range(tok.start[0], tok.end[0] + 1))
             mutants = [m for m in mutants if m["line"] not in inside]
         return mutants
+
+
+def cut_trailing_comment(line: str) -> tuple[str, str]:
+    """A C line as code and its trailing one-line comment ("x = 1;   /* (6.4) */" ->
+    ("x = 1;\\n", "   /* (6.4) */")); lines that are only a comment, hold a string or a comment
+    that goes on to the next line are left whole."""
+    body = line.rstrip("\n")
+    m = re.match(r"^(?P<code>.*?\S)(?P<tail>\s*(/\*(?:(?!\*/).)*\*/|//.*))\s*$", body)
+    if not m or '"' in m["code"] or "'" in m["code"] or "/*" in m["code"] or m["code"].lstrip().startswith(("*", "//")):
+        return line, ""
+    return m["code"] + line[len(body):], m["tail"]
 
 
 def skip_line(text: str, lang: str) -> bool:
@@ -443,7 +465,7 @@ def main() -> int:
     fhash = {f: hashlib.sha256((ROOT / f).read_bytes()).hexdigest()[:16] for f in files}
 
     def gen(f):
-        key = hashlib.sha256((ROOT / f).read_bytes() + lang.encode() + b"v2").hexdigest()[:20]   # v2: filters
+        key = hashlib.sha256((ROOT / f).read_bytes() + lang.encode() + b"v3").hexdigest()[:20]   # v3: trailing comments
         c = cache / f"{Path(f).name}.{key}.json"
         if c.exists():
             return json.loads(c.read_text())
