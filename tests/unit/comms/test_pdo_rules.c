@@ -543,6 +543,62 @@ static void test_rpdo_synchronous(void **state)
     assert_true(mc_co_pdo_rx(&rig.co, &sync2));
 }
 
+/* The RPDO's transmission type decides when a frame is applied: 0..240 at the next SYNC (240
+ * and 0 alike), 254 and 255 at once. */
+static void test_rpdo_type_edges(void **state)
+{
+    (void)state;
+    static const struct {
+        uint32_t type;
+        bool held;
+    } c[] = {{0u, true}, {1u, true}, {240u, true}, {254u, false}, {255u, false}};
+    for (size_t k = 0; k < sizeof c / sizeof c[0]; ++k) {
+        operational();
+        assert_int_equal(pw(0x1401u, 2u, c[k].type), 0u);
+        const hal_can_frame_t a = {.id = 0x305u, .dlc = 6u, .data = {0xE8, 0x03, 0x00, 0x00, 0x05, 0x00}};
+        assert_true(mc_co_pdo_rx(&rig.co, &a));
+        if (rig.co.ds.od.target_velocity != (c[k].held ? 0 : 1000)) {
+            fail_msg("type %u: applied %s", c[k].type, c[k].held ? "before the SYNC" : "only at the SYNC");
+        }
+        mc_co_pdo_sync(&rig.co);
+        assert_int_equal(rig.co.ds.od.target_velocity, 1000);
+    }
+}
+
+/* An invalid TPDO sends nothing: not on its timer, not on a change, not at a SYNC; nor does any
+ * TPDO outside OPERATIONAL. */
+static void test_invalid_tpdo_silent(void **state)
+{
+    (void)state;
+    operational();
+    for (uint16_t k = 0u; k < 4u; ++k) {
+        assert_int_equal(pw((uint16_t)(0x1800u + k), 1u, INVALID | (0x180u + 0x100u * k + NODE)), 0u);
+    }
+    rig.co.ds.od.statusword ^= 0x0200u;
+    for (uint32_t t = 1u; t < 300u; t += 7u) {
+        rig.co.ds.od.velocity_actual = (int32_t)t;
+        rig.co.now_ms = t;
+        mc_co_pdo_tx(&rig.co);
+    }
+    assert_int_equal(pw(0x1801u, 2u, 1u), 0u);
+    assert_int_equal(pw(0x1802u, 2u, 0u), 0u);
+    for (int k = 0; k < 3; ++k) {
+        mc_co_pdo_sync(&rig.co);
+    }
+    hal_can_frame_t f;
+    assert_false(take_any(&f));
+    /* valid again, but pre-operational */
+    operational();
+    rig.co.nmt = MC_NMT_PRE_OPERATIONAL;
+    assert_int_equal(pw(0x1801u, 2u, 1u), 0u);
+    for (uint32_t t = 1u; t < 300u; t += 7u) {
+        rig.co.now_ms = t;
+        mc_co_pdo_tx(&rig.co);
+        mc_co_pdo_sync(&rig.co);
+    }
+    assert_false(take_any(&f));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -559,6 +615,8 @@ int main(void)
         cmocka_unit_test(test_tpdo_dropped),
         cmocka_unit_test(test_rpdo_layout_and_length),
         cmocka_unit_test(test_rpdo_synchronous),
+        cmocka_unit_test(test_rpdo_type_edges),
+        cmocka_unit_test(test_invalid_tpdo_silent),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
