@@ -392,6 +392,26 @@ static void test_default_comm_parameters(void **state)
     assert_int_equal(pr(0x1601u, 2u), 0x60710010u);
 }
 
+/* The predefined connection set's COB-IDs for any node id (CiA 301 §7.3.5): base + node id,
+ * RPDO3/4 invalid, TPDOs without RTR; here for the even, the lowest and the highest ids too. */
+static void test_default_cob_ids_every_node(void **state)
+{
+    (void)state;
+    static const uint8_t nodes[] = {1u, 2u, 64u, 100u, 127u};
+    for (size_t n = 0; n < sizeof nodes / sizeof nodes[0]; ++n) {
+        rig_init();
+        const mc_co_cfg_t c = {.node_id = nodes[n], .step_s = 1e-3f};
+        assert_true(mc_co_init(&rig.co, &c, &rig.can, &rig.d, &rig.nvm, &rig.scope, MC_PSTORE_EMPTY));
+        for (uint16_t k = 0u; k < 4u; ++k) {
+            const uint32_t r = pr((uint16_t)(0x1400u + k), 1u), t = pr((uint16_t)(0x1800u + k), 1u);
+            if (r != ((0x200u + 0x100u * k + nodes[n]) | (k >= 2u ? INVALID : 0u)) ||
+                t != (NO_RTR | (0x180u + 0x100u * k + nodes[n]))) {
+                fail_msg("node %u PDO %u: RPDO 0x%08X TPDO 0x%08X", nodes[n], k + 1u, r, t);
+            }
+        }
+    }
+}
+
 /* A TPDO's frame: the mapped objects little-endian one after the other, its DLC their bytes. */
 static void test_tpdo_frame_layout(void **state)
 {
@@ -611,6 +631,7 @@ int main(void)
         cmocka_unit_test(test_inhibit_time),
         cmocka_unit_test(test_cob_id_and_sync_start),
         cmocka_unit_test(test_default_comm_parameters),
+        cmocka_unit_test(test_default_cob_ids_every_node),
         cmocka_unit_test(test_tpdo_frame_layout),
         cmocka_unit_test(test_tpdo_dropped),
         cmocka_unit_test(test_rpdo_layout_and_length),
