@@ -100,6 +100,12 @@ static void test_mapping_sizes_every_type(void **state)
     assert_int_equal(pw(0x1403u, 1u, INVALID | 0x505u), 0u);
     assert_int_equal(pw(0x1A03u, 0u, 0u), 0u);
     assert_int_equal(pw(0x1603u, 0u, 0u), 0u);
+    /* a sub-index the object does not have (every mappable object is sub 0): NO_SUB */
+    static const uint32_t subs[] = {0x01u, 0x02u, 0x40u, 0x80u, 0xFFu};
+    for (size_t k = 0; k < sizeof subs / sizeof subs[0]; ++k) {
+        assert_int_equal(pw(0x1A03u, 1u, 0x60410010u | subs[k] << 8), MC_SDO_ABORT_NO_SUB);
+        assert_int_equal(pw(0x1603u, 1u, 0x60FF0020u | subs[k] << 8), MC_SDO_ABORT_NO_SUB);
+    }
     static const uint32_t sizes[] = {8u, 16u, 32u, 24u, 64u, 0u};
     for (size_t k = 0; k < sizeof obj / sizeof obj[0]; ++k) {
         const uint16_t map = obj[k].tx ? 0x1A03u : 0x1603u;
@@ -339,6 +345,8 @@ static void test_cob_id_and_sync_start(void **state)
     assert_int_equal(pr(0x1403u, 1u), INVALID | 0x505u);
     assert_int_equal(pw(0x1803u, 1u, 0x485u), 0u);   /* the same id: taken */
     assert_int_equal(pw(0x1803u, 1u, 0x486u), MC_SDO_ABORT_VALUE);
+    assert_int_equal(pw(0x1803u, 1u, 0x484u), MC_SDO_ABORT_VALUE);   /* lower or higher alike */
+    assert_int_equal(pw(0x1803u, 1u, NO_RTR | 0x485u), 0u);          /* the same id with bit 30 */
     assert_int_equal(pw(0x1803u, 1u, INVALID | 0x486u), 0u);   /* invalid: any id */
     assert_int_equal(pr(0x1803u, 1u), INVALID | NO_RTR | 0x486u);
     assert_int_equal(pw(0x1803u, 1u, 0x487u), 0u);   /* from invalid to valid with a new id */
@@ -585,6 +593,23 @@ static void test_rpdo_type_edges(void **state)
     }
 }
 
+/* The SYNC serves every PDO, the first ones too: RPDO1 synchronous, TPDO1 every SYNC. */
+static void test_sync_serves_pdo1(void **state)
+{
+    (void)state;
+    operational();
+    assert_int_equal(pw(0x1400u, 2u, 0u), 0u);
+    assert_int_equal(pw(0x1800u, 2u, 1u), 0u);
+    const hal_can_frame_t f = {.id = 0x205u, .dlc = 3u, .data = {0x06, 0x00, 0x0A}};   /* shutdown, cst */
+    assert_true(mc_co_pdo_rx(&rig.co, &f));
+    assert_int_equal(rig.co.ds.od.mode, MC_402_MODE_PV);
+    for (int k = 0; k < 3; ++k) {
+        assert_int_equal(sync_count(TPDO1), 1u);
+    }
+    assert_int_equal(rig.co.ds.od.controlword, 0x06u);
+    assert_int_equal(rig.co.ds.od.mode, 10);
+}
+
 /* An invalid TPDO sends nothing: not on its timer, not on a change, not at a SYNC; nor does any
  * TPDO outside OPERATIONAL. */
 static void test_invalid_tpdo_silent(void **state)
@@ -638,6 +663,7 @@ int main(void)
         cmocka_unit_test(test_rpdo_synchronous),
         cmocka_unit_test(test_rpdo_type_edges),
         cmocka_unit_test(test_invalid_tpdo_silent),
+        cmocka_unit_test(test_sync_serves_pdo1),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
