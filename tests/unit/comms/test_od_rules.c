@@ -347,6 +347,58 @@ static void test_scope_control(void **state)
     assert_int_equal(od_write_u(0x2302u, 0u, 3u, 1u), MC_SDO_ABORT_VALUE_HIGH);
 }
 
+/* The constant hooks read their values (highest sub-indices, "on command" flags, the device
+ * type); a buffer too small for the value is a general error, not a cut value; a DOMAIN is not
+ * read in one piece. */
+static void test_hook_values_and_buffer(void **state)
+{
+    (void)state;
+    rig_init();
+    static const struct {
+        uint16_t index;
+        uint8_t sub;
+        uint32_t value, len;
+    } c[] = {{0x1010u, 0u, 1u, 1u}, {0x1011u, 0u, 1u, 1u}, {0x1010u, 1u, 1u, 4u}, {0x1011u, 1u, 1u, 4u},
+             {0x1018u, 0u, 4u, 1u}, {0x2300u, 0u, 8u, 1u}, {0x2301u, 0u, 6u, 1u}, {0x1000u, 0u, MC_CO_DEVICE_TYPE, 4u},
+             {0x1003u, 0u, 0u, 1u}, {0x1005u, 0u, 0x80u, 4u}};
+    for (size_t k = 0; k < sizeof c / sizeof c[0]; ++k) {
+        uint8_t b[8];
+        memset(b, 0xEE, sizeof b);
+        uint32_t len = 0u;
+        assert_int_equal(mc_co_od_read(&rig.co, c[k].index, c[k].sub, b, sizeof b, &len), 0u);
+        assert_int_equal(len, c[k].len);
+        uint32_t v = 0u;
+        for (uint32_t j = 0u; j < len; ++j) {
+            v |= (uint32_t)b[j] << (8u * j);
+        }
+        if (v != c[k].value) {
+            fail_msg("0x%04X sub %u reads 0x%X, want 0x%X", c[k].index, c[k].sub, v, c[k].value);
+        }
+        assert_int_equal(b[len], 0xEEu);   /* nothing written past it */
+        /* one byte too small */
+        uint8_t small[4];
+        uint32_t l2 = 77u;
+        assert_int_equal(mc_co_od_read(&rig.co, c[k].index, c[k].sub, small, c[k].len - 1u, &l2), MC_SDO_ABORT_GENERAL);
+        assert_int_equal(l2, 77u);
+    }
+    /* strings: their length exactly, one less is refused */
+    uint8_t name[MC_CO_SDO_BUF];
+    uint32_t len = 0u;
+    assert_int_equal(mc_co_od_read(&rig.co, 0x1008u, 0u, name, sizeof name, &len), 0u);
+    assert_int_equal(len, strlen("ipmsm-sensorless-drive"));
+    assert_memory_equal(name, "ipmsm-sensorless-drive", len);
+    uint32_t l2 = 0u;
+    assert_int_equal(mc_co_od_read(&rig.co, 0x1008u, 0u, name, len, &l2), 0u);
+    assert_int_equal(mc_co_od_read(&rig.co, 0x1008u, 0u, name, len - 1u, &l2), MC_SDO_ABORT_GENERAL);
+    assert_int_equal(mc_co_od_read(&rig.co, 0x100Au, 0u, name, sizeof name, &len), 0u);
+    assert_memory_equal(name, "0.2.0 (CiA 301, CiA 402)", len);
+    /* a parameter and a telemetry channel into 3 bytes */
+    assert_int_equal(mc_co_od_read(&rig.co, 0x2000u, 0u, name, 3u, &l2), MC_SDO_ABORT_GENERAL);
+    assert_int_equal(mc_co_od_read(&rig.co, 0x2201u, 0u, name, 3u, &l2), MC_SDO_ABORT_GENERAL);
+    /* the scope's record */
+    assert_int_equal(mc_co_od_read(&rig.co, 0x2307u, 0u, name, sizeof name, &l2), MC_SDO_ABORT_GENERAL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -358,6 +410,7 @@ int main(void)
         cmocka_unit_test(test_index_ranges),
         cmocka_unit_test(test_no_scope),
         cmocka_unit_test(test_scope_control),
+        cmocka_unit_test(test_hook_values_and_buffer),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
