@@ -375,7 +375,11 @@ static void test_hook_values_and_buffer(void **state)
             fail_msg("0x%04X sub %u reads 0x%X, want 0x%X", c[k].index, c[k].sub, v, c[k].value);
         }
         assert_int_equal(b[len], 0xEEu);   /* nothing written past it */
-        /* one byte too small */
+        /* a buffer of exactly the value's size, one byte too small */
+        uint8_t exact[4];
+        uint32_t l1 = 0u;
+        assert_int_equal(mc_co_od_read(&rig.co, c[k].index, c[k].sub, exact, c[k].len, &l1), 0u);
+        assert_int_equal(l1, c[k].len);
         uint8_t small[4];
         uint32_t l2 = 77u;
         assert_int_equal(mc_co_od_read(&rig.co, c[k].index, c[k].sub, small, c[k].len - 1u, &l2), MC_SDO_ABORT_GENERAL);
