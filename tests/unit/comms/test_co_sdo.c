@@ -358,6 +358,121 @@ static void test_ramp_floor(void **state)
     assert_int_equal(rig.co.ds.od.profile_accel, 978u);
 }
 
+/* The announced size of a segmented download is a 32-bit little-endian number: any byte of it
+ * beyond the buffer refuses the transfer at the initiate; a wrong toggle on a later segment
+ * aborts; a controlword written segmented counts as one and takes its transition. */
+static void test_segmented_download_size_bytes(void **state)
+{
+    (void)state;
+    rig_init();
+    rig.co.ds_on = false;
+    drain();
+    static const uint8_t sizes[][4] = {{0x04, 0x01, 0, 0}, {0x04, 0, 0x01, 0}, {0x04, 0, 0, 0x01}, {0x20, 0x80, 0, 0}};
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; ++k) {
+        expect_response((const uint8_t[8]){0x21, 0x05, 0x10, 0x00, sizes[k][0], sizes[k][1], sizes[k][2], sizes[k][3]},
+                        (const uint8_t[8]){0x80, 0x05, 0x10, 0x00, 0x12, 0x00, 0x07, 0x06});
+    }
+    /* the second segment with the first one's toggle */
+    expect_response((const uint8_t[8]){0x21, 0x05, 0x10, 0x00, 0x04, 0x00, 0x00, 0x00},
+                    (const uint8_t[8]){0x60, 0x05, 0x10, 0x00, 0x00, 0x00, 0x00, 0x00});
+    expect_response((const uint8_t[8]){(uint8_t)(5u << 1), 0x83, 0x00, 0, 0, 0, 0, 0},
+                    (const uint8_t[8]){0x20, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00});
+    expect_abort((uint8_t)((5u << 1) | 1u), 0x1005, 0x00, MC_SDO_ABORT_TOGGLE);
+    assert_int_equal(rig.co.cob_sync, 0x080u);
+    /* the controlword in one segment: one controlword, its transition (shutdown: ready to switch on) */
+    nmt(0x01);
+    drain();
+    const uint32_t cw0 = rig.co.cw_count;
+    expect_response((const uint8_t[8]){0x21, 0x40, 0x60, 0x00, 0x02, 0x00, 0x00, 0x00},
+                    (const uint8_t[8]){0x60, 0x40, 0x60, 0x00, 0x00, 0x00, 0x00, 0x00});
+    assert_int_equal(rig.co.cw_count, cw0);
+    expect_response((const uint8_t[8]){(uint8_t)((5u << 1) | 1u), 0x06, 0x00, 0, 0, 0, 0, 0},
+                    (const uint8_t[8]){0x20, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00});
+    assert_int_equal(rig.co.cw_count, cw0 + 1u);
+    assert_int_equal(rig.co.ds.od.statusword & 0x6Fu, 0x21u);   /* ready to switch on */
+}
+
+/* The step period the 402 ramps integrate must lie in (0, 1) s. */
+static void test_step_period_range(void **state)
+{
+    (void)state;
+    rig_init();
+    static const float bad[] = {0.0f, -1e-3f, 1.0f, 1.5f, NAN, INFINITY};
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+        const mc_co_cfg_t c = {.node_id = NODE, .step_s = bad[k]};
+        mc_co_t co;
+        assert_false(mc_co_init(&co, &c, &rig.can, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
+    }
+    const mc_co_cfg_t c = {.node_id = NODE, .step_s = 0.999f};
+    mc_co_t co;
+    assert_true(mc_co_init(&co, &c, &rig.can, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
+    assert_false(mc_co_init(&co, NULL, &rig.can, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
+    assert_false(mc_co_init(&co, &c, NULL, &rig.d, NULL, NULL, MC_PSTORE_EMPTY));
+    assert_false(mc_co_init(&co, &c, &rig.can, NULL, NULL, NULL, MC_PSTORE_EMPTY));
+}
+
+/* A reset in a batch of frames: the frames after it wait for the next step, so the boot-up goes
+ * out before their answers (CiA 301 §7.2.8.3.2: nothing before the boot-up). */
+static void test_reset_ends_the_batch(void **state)
+{
+    (void)state;
+    rig_init();
+    rig.co.ds_on = false;
+    mc_co_step(&rig.co, rig.now);
+    drain();
+    const uint8_t reset[2] = {0x82, NODE};
+    put(0x000u, reset, 2u);
+    const uint8_t r[8] = {0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0};
+    put(0x600u + NODE, r, 8u);
+    mc_co_step(&rig.co, rig.now);
+    hal_can_frame_t f;
+    assert_false(take_any(&f));   /* the reset's step ends there */
+    mc_co_step(&rig.co, rig.now);
+    assert_true(take_any(&f));
+    assert_int_equal(f.id, 0x700u + NODE);
+    assert_int_equal(f.data[0], 0x00u);
+    assert_true(take_any(&f));
+    assert_int_equal(f.id, 0x580u + NODE);
+    assert_int_equal(f.data[0], 0x4Bu);
+}
+
+/* The boot's EMCY "parameters lost": for a corrupt store or a failing NVM the status in the first
+ * manufacturer byte, the rest 0; for a partly kept set the count of values at their defaults,
+ * at most 255. */
+static void test_boot_emcy_info(void **state)
+{
+    (void)state;
+    static const mc_pstore_status_t src[] = {MC_PSTORE_CORRUPT, MC_PSTORE_NVM_ERROR};
+    for (size_t k = 0; k < 2; ++k) {
+        rig_init();
+        rig_start(src[k]);
+        mc_co_step(&rig.co, rig.now);
+        hal_can_frame_t f;
+        assert_true(take_id(0x080u + NODE, &f));
+        const uint8_t want[8] = {0x10, 0x63, 0x01, (uint8_t)src[k], 0, 0, 0, 0};
+        assert_memory_equal(f.data, want, 8);
+    }
+    rig_init();
+    rig_start(MC_PSTORE_PARTIAL);
+    const mc_store_report_t rep = {.kept = 3u, .dropped = 300u, .first = 0x123, .reason = MC_STORE_DROP_RANGE};
+    mc_co_set_boot_report(&rig.co, &rep);
+    mc_co_step(&rig.co, rig.now);
+    hal_can_frame_t f;
+    assert_true(take_id(0x080u + NODE, &f));
+    const uint8_t want[8] = {0x10, 0x63, 0x01, (uint8_t)MC_PSTORE_PARTIAL, 255u, 0x23, 0x01, MC_STORE_DROP_RANGE};
+    assert_memory_equal(f.data, want, 8);
+    /* no NVM at all: the base configuration, "empty" */
+    static mc_drive_cfg_t base, out;
+    static mc_flux_map_t map;
+    mc_drive_cfg_default(&base);
+    base.p.control_current_bw_hz = 321.0f;
+    memset(&out, 0xA5, sizeof out);
+    mc_store_report_t r2;
+    assert_int_equal(mc_co_boot_config(NULL, &base, &out, &map, &r2), MC_PSTORE_EMPTY);
+    assert_true(out.p.control_current_bw_hz == 321.0f);
+    assert_int_equal(r2.dropped, 0u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -369,6 +484,10 @@ int main(void)
         cmocka_unit_test(test_rx_budget),
         cmocka_unit_test(test_heartbeat_schedule),
         cmocka_unit_test(test_ramp_floor),
+        cmocka_unit_test(test_segmented_download_size_bytes),
+        cmocka_unit_test(test_step_period_range),
+        cmocka_unit_test(test_reset_ends_the_batch),
+        cmocka_unit_test(test_boot_emcy_info),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -403,6 +403,89 @@ static void test_hook_values_and_buffer(void **state)
     assert_int_equal(mc_co_od_read(&rig.co, 0x2307u, 0u, name, sizeof name, &l2), MC_SDO_ABORT_GENERAL);
 }
 
+/* What the dictionary says of its entries (co-gen writes it into the EDS): the PDO parameter
+ * objects are all enumerated (4 x (3 + 9 + 6 + 9)); their sub 0 is the highest sub-index,
+ * constant for the communication parameters, 0..8 for a mapping; a parameter object carries its
+ * table range as INTEGER32 (REAL32: the range is checked on write), INIT ones read-only. */
+static void test_entry_descriptions(void **state)
+{
+    (void)state;
+    const uint32_t n = mc_co_od_count();
+    uint32_t pdo = 0u;
+    for (uint32_t k = 0u; k < n; ++k) {
+        mc_co_entry_t e;
+        assert_true(mc_co_od_at(k, &e));
+        pdo += e.index >= 0x1400u && e.index < 0x1C00u;
+    }
+    assert_int_equal(pdo, MC_CO_PDO_N * (3u + 9u + 6u + 9u));
+    mc_co_entry_t e;
+    assert_true(mc_co_od_lookup(0x1603u, 0u, &e, NULL));
+    assert_int_equal(e.access, MC_CO_RW);
+    assert_true(e.min == 0 && e.max == 8);
+    assert_true(mc_co_od_lookup(0x1A00u, 8u, &e, NULL));
+    assert_int_equal(e.type, MC_CO_U32);
+    assert_true(mc_co_od_lookup(0x1402u, 0u, &e, NULL));
+    assert_int_equal(e.access, MC_CO_CONST);
+    assert_true(e.min == 2 && e.max == 2);
+    assert_true(mc_co_od_lookup(0x1801u, 0u, &e, NULL));
+    assert_true(e.min == 6 && e.max == 6);
+    assert_true(mc_co_od_lookup(0x1801u, 2u, &e, NULL));
+    assert_true(e.type == MC_CO_U8 && e.max == 255);
+    assert_true(mc_co_od_lookup(0x1801u, 6u, &e, NULL));
+    assert_true(e.type == MC_CO_U8 && e.max == 240);
+    assert_true(mc_co_od_lookup(0x1801u, 3u, &e, NULL));
+    assert_true(e.type == MC_CO_U16 && e.max == 65535);
+    assert_string_equal(e.unit, "100 us");
+    assert_true(mc_co_od_lookup(0x1801u, 5u, &e, NULL));
+    assert_string_equal(e.unit, "ms");
+    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
+        const mc_param_info_t *p = &mc_param_table[id];
+        assert_true(mc_co_od_lookup((uint16_t)(0x2000 + id), 0u, &e, NULL));
+        assert_int_equal(e.type, p->type == MC_PT_F32 ? MC_CO_REAL32 : MC_CO_I32);
+        assert_int_equal(e.access, p->access == MC_PA_INIT ? MC_CO_RO : MC_CO_RW);
+        if (p->type == MC_PT_F32) {
+            assert_true(e.min == 0 && e.max == 0);
+        } else if (e.min != (int64_t)p->min || e.max != (int64_t)p->max) {
+            fail_msg("%s: 0x%04X has %lld..%lld", p->name, 0x2000 + id, (long long)e.min, (long long)e.max);
+        }
+        assert_string_equal(e.oname, p->name);
+    }
+}
+
+/* A parameter write the drive refuses because a value derived from it leaves its own range: the
+ * abort says which way (a rated current of 10 mA puts the dead-time band below its 1 mA minimum;
+ * 10 kA puts the trip level above its 10 kA maximum); nothing changes. */
+static void test_parameter_derived_out_of_range(void **state)
+{
+    (void)state;
+    rig_init();
+    const uint16_t ir = (uint16_t)(0x2000u + MC_PARAM_motor_i_rated_a);
+    assert_int_equal(od_write_u(ir, 0u, mc_f32_bits(0.01f), 4u), MC_SDO_ABORT_VALUE_LOW);
+    assert_int_equal(od_write_u(ir, 0u, mc_f32_bits(10000.0f), 4u), MC_SDO_ABORT_VALUE_HIGH);
+    run_ms(1);
+    uint32_t v;
+    assert_int_equal(od_read_u(ir, 0u, &v), 0u);
+    assert_true(mc_bits_f32(v) == 13.29f);
+}
+
+/* Store and restore (0x1010 / 0x1011) while the drive is in FAULT: its outputs are off. */
+static void test_store_in_fault(void **state)
+{
+    (void)state;
+    rig_init();
+    rig.co.ds_on = false;
+    drive_inputs(300.0f);
+    const mc_drive_cmd_t on = {.enable = true, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&rig.d, &on);
+    run_ms(20);
+    drive_inputs(rig.d.cfg->p.control_vdc_max_v + 20.0f);
+    run_ms(2);
+    assert_int_equal(mc_drive_state(&rig.d), MC_STATE_FAULT);
+    assert_int_equal(od_write_u(0x1010u, 1u, MC_CO_SAVE_SIGNATURE, 4u), 0u);
+    assert_int_equal(rig.co.store_status, (uint32_t)MC_PSTORE_OK);
+    assert_int_equal(od_write_u(0x1011u, 1u, MC_CO_LOAD_SIGNATURE, 4u), 0u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -415,6 +498,9 @@ int main(void)
         cmocka_unit_test(test_no_scope),
         cmocka_unit_test(test_scope_control),
         cmocka_unit_test(test_hook_values_and_buffer),
+        cmocka_unit_test(test_entry_descriptions),
+        cmocka_unit_test(test_parameter_derived_out_of_range),
+        cmocka_unit_test(test_store_in_fault),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -496,6 +496,8 @@ static void test_rpdo_layout_and_length(void **state)
     assert_int_equal(e.data[3], 3u);   /* RPDO4 */
     assert_int_equal(e.data[4], 6u);   /* its DLC */
     assert_int_equal(e.data[5], 7u);   /* the mapping's bytes */
+    assert_int_equal(e.data[6], 0u);   /* the rest of the manufacturer field: 0 */
+    assert_int_equal(e.data[7], 0u);
     /* the exact length */
     const hal_can_frame_t x = {.id = 0x505u, .dlc = 7u, .data = {0x09, 0x05, 0x00, 0xE8, 0x03, 0x00, 0x00}};
     assert_true(mc_co_pdo_rx(&rig.co, &x));
