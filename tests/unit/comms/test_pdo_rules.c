@@ -595,6 +595,32 @@ static void test_rpdo_type_edges(void **state)
     }
 }
 
+/* STOPPED (CiA 301 §7.3.2): no PDO at all, neither on a timer, nor on a change, nor at a SYNC,
+ * and received RPDOs are not applied; OPERATIONAL again, the timers go on. */
+static void test_stopped_no_pdo(void **state)
+{
+    (void)state;
+    operational();
+    assert_int_equal(pw(0x1802u, 2u, 1u), 0u);
+    nmt(0x02);
+    assert_int_equal(rig.co.nmt, MC_NMT_STOPPED);
+    drain();
+    rig.co.ds.od.statusword ^= 0x0200u;
+    for (uint32_t t = 1u; t < 300u; t += 7u) {
+        rig.co.ds.od.velocity_actual = (int32_t)t;
+        rig.co.now_ms = t;
+        mc_co_pdo_tx(&rig.co);
+        mc_co_pdo_sync(&rig.co);
+    }
+    hal_can_frame_t f;
+    assert_false(take_any(&f));
+    const hal_can_frame_t a = {.id = 0x305u, .dlc = 6u, .data = {0xE8, 0x03, 0x00, 0x00, 0x05, 0x00}};
+    assert_true(mc_co_pdo_rx(&rig.co, &a));
+    assert_int_equal(rig.co.ds.od.target_velocity, 0);
+    rig.co.nmt = MC_NMT_OPERATIONAL;
+    assert_int_equal(tx_at(400u, TPDO2), 1u);
+}
+
 /* The SYNC serves every PDO, the first ones too: RPDO1 synchronous, TPDO1 every SYNC. */
 static void test_sync_serves_pdo1(void **state)
 {
@@ -666,6 +692,7 @@ int main(void)
         cmocka_unit_test(test_rpdo_type_edges),
         cmocka_unit_test(test_invalid_tpdo_silent),
         cmocka_unit_test(test_sync_serves_pdo1),
+        cmocka_unit_test(test_stopped_no_pdo),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
