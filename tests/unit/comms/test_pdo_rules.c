@@ -621,6 +621,42 @@ static void test_stopped_no_pdo(void **state)
     assert_int_equal(tx_at(400u, TPDO2), 1u);
 }
 
+/* Mapping edges the run found: a valid PDO without mapping still refuses entry writes (§7.5.2.36:
+ * the PDO must be invalid); a mapping cut to fewer entries counts only those (an RPDO of their
+ * length is taken); asynchronous TPDOs (254, 255) never go out on SYNCs. */
+static void test_mapping_cut_and_async_at_sync(void **state)
+{
+    (void)state;
+    operational();
+    assert_int_equal(pw(0x1403u, 1u, INVALID | 0x505u), 0u);
+    assert_int_equal(pw(0x1603u, 0u, 0u), 0u);
+    assert_int_equal(pw(0x1403u, 1u, 0x505u), 0u);   /* valid, no mapping */
+    assert_int_equal(pw(0x1603u, 1u, 0x60400010u), MC_SDO_ABORT_STATE);
+    assert_int_equal(pr(0x1603u, 1u), 0u);
+    /* three entries, then cut to two: a 3-byte frame (controlword + mode) is the whole RPDO */
+    remap(0x1403u, 0x1603u, 0x505u, (const uint32_t[]){0x60400010u, 0x60600008u, 0x60FF0020u}, 3u);
+    assert_int_equal(pw(0x1403u, 1u, INVALID | 0x505u), 0u);
+    assert_int_equal(pw(0x1603u, 0u, 2u), 0u);
+    assert_int_equal(pw(0x1403u, 1u, 0x505u), 0u);
+    const uint32_t bad0 = rig.co.rpdo_bad;
+    const hal_can_frame_t f = {.id = 0x505u, .dlc = 3u, .data = {0x06, 0x00, 0x09}};
+    assert_true(mc_co_pdo_rx(&rig.co, &f));
+    assert_int_equal(rig.co.rpdo_bad, bad0);
+    assert_int_equal(rig.co.ds.od.mode, 9);
+    /* TPDO1 (255) and TPDO2 (254) over 600 SYNCs: nothing */
+    drain();
+    for (int k = 0; k < 600; ++k) {
+        mc_co_pdo_sync(&rig.co);
+    }
+    hal_can_frame_t g;
+    assert_false(take_id(TPDO1, &g));
+    drain();
+    for (int k = 0; k < 600; ++k) {
+        mc_co_pdo_sync(&rig.co);
+    }
+    assert_false(take_id(TPDO2, &g));
+}
+
 /* The SYNC serves every PDO, the first ones too: RPDO1 synchronous, TPDO1 every SYNC. */
 static void test_sync_serves_pdo1(void **state)
 {
@@ -693,6 +729,7 @@ int main(void)
         cmocka_unit_test(test_invalid_tpdo_silent),
         cmocka_unit_test(test_sync_serves_pdo1),
         cmocka_unit_test(test_stopped_no_pdo),
+        cmocka_unit_test(test_mapping_cut_and_async_at_sync),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
