@@ -118,7 +118,6 @@ static void reload_step(mc_co_t *co)
     mc_param_err_t err;
     if (mc_drive_params_write(co->drive, &cfg.p, &err)) {
         co->reload_pending = false;
-        co->motor_changed = true;
     } else if (err.kind != MC_PERR_BUSY) {
         co->reload_pending = false;
         const uint8_t info[5] = {(uint8_t)err.kind, (uint8_t)err.param, (uint8_t)((uint32_t)err.param >> 8), 0u, 0u};
@@ -387,12 +386,12 @@ static void nmt_command(mc_co_t *co, const hal_can_frame_t *f)
  * transition), its command to the drive. */
 static void ds_step(mc_co_t *co, bool advance)
 {
-    if (co->motor_changed) {
-        mc_402_cfg_t c;
-        ds_cfg(co, &c);
-        mc_402_configure(&co->ds, &c);
-        co->motor_changed = false;
-    }
+    /* the 402 configuration from the parameters in force, every step: a write over SDO (or a
+     * reload) reaches them only when the control ISR takes the new set, and rules derive values
+     * from other parameters, so a flag set at the write would read the old set */
+    mc_402_cfg_t c;
+    ds_cfg(co, &c);
+    mc_402_configure(&co->ds, &c);
     mc_drive_cmd_t cmd;
     if (advance) {
         mc_402_step(&co->ds, &co->tm, &cmd);

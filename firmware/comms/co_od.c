@@ -375,9 +375,6 @@ static uint32_t param_write(mc_co_t *co, int id, uint32_t w)
     }
     mc_param_err_t err;
     if (mc_drive_param_write(co->drive, id, v, &err)) {
-        if (e->group == MC_PG_MOTOR) {
-            co->motor_changed = true;   /* the 402 layer's rated values follow at the next step */
-        }
         return 0u;
     }
     switch (err.kind) {

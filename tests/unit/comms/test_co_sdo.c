@@ -358,6 +358,39 @@ static void test_ramp_floor(void **state)
     assert_int_equal(rig.co.ds.od.profile_accel, 978u);
 }
 
+/* The 402 layer's configuration follows every parameter it reads, not only the motor's: the
+ * under-voltage level (statusword bit 4, voltage enabled) written over SDO takes effect at the
+ * next step. */
+static void test_402_follows_params(void **state)
+{
+    (void)state;
+    rig_init();
+    drain();
+    const float vmin = 180.0f;
+    uint32_t w;
+    memcpy(&w, &vmin, 4);
+    expect_response((const uint8_t[8]){0x23, 0x12, 0x20, 0x00, (uint8_t)w, (uint8_t)(w >> 8), (uint8_t)(w >> 16), (uint8_t)(w >> 24)},
+                    (const uint8_t[8]){0x60, 0x12, 0x20, 0x00, 0, 0, 0, 0});
+    run_ms(2);   /* the drive takes the new set, the 402 layer follows */
+    assert_float_equal(rig.co.ds.cfg.vdc_on, vmin, 1e-3f);
+    /* and the statusword's voltage-enabled bit with it (the contactor closed by transition 3:
+     * controlword 6, then 7): 170 V is below the new level, 190 V above */
+    uint32_t abort = 0u;
+    drive_inputs(190.0f);
+    assert_int_equal(sdo_write(0x6040u, 0u, 0x06u, 2u), 0u);
+    run_ms(2);
+    assert_int_equal(sdo_write(0x6040u, 0u, 0x07u, 2u), 0u);
+    run_ms(2);
+    drive_inputs(170.0f);
+    run_ms(2);
+    assert_int_equal(sdo_read(0x6041u, 0u, &abort) & 0x10u, 0u);
+    assert_int_equal(abort, 0u);
+    drive_inputs(190.0f);
+    run_ms(2);
+    assert_int_equal(sdo_read(0x6041u, 0u, &abort) & 0x10u, 0x10u);
+    assert_int_equal(abort, 0u);
+}
+
 /* The announced size of a segmented download is a 32-bit little-endian number: any byte of it
  * beyond the buffer refuses the transfer at the initiate; a wrong toggle on a later segment
  * aborts; a controlword written segmented counts as one and takes its transition. */
@@ -484,6 +517,7 @@ int main(void)
         cmocka_unit_test(test_rx_budget),
         cmocka_unit_test(test_heartbeat_schedule),
         cmocka_unit_test(test_ramp_floor),
+        cmocka_unit_test(test_402_follows_params),
         cmocka_unit_test(test_segmented_download_size_bytes),
         cmocka_unit_test(test_step_period_range),
         cmocka_unit_test(test_reset_ends_the_batch),

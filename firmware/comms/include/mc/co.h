@@ -179,7 +179,6 @@ typedef struct {
                                     once its outputs are off                                 */
     bool cw_written;             /* the controlword was written since the 402 step        */
     uint32_t cw_count;           /* controlwords received (SDO or RPDO)                   */
-    bool motor_changed;          /* a motor parameter was written: the 402 rated values follow */
 } mc_co_t;
 
 /* false: node id outside 1..127 or a NULL can/drive (nothing started). nvm and scope may be
