@@ -341,6 +341,22 @@ static void test_idle_and_fault_leave_the_pwm_alone(void **state)
     }
 }
 
+/* The synthetic saturating plant of the three-step tests: this period's sample is a resistive
+ * answer to the voltage acting (the latched duties at 300 V), 5/3 times larger along +alpha than
+ * along -alpha (magnet 0: the magnet at 0, its flux saturating the d axis) or the other way
+ * (magnet 1: at pi); no back-EMF: the rotor stands. */
+static void saturating_answer(rig_t *r, int magnet)
+{
+    const float k = r->d.cfg->blk.offs.amps_per_count, nominal = (float)r->d.cfg->blk.offs.nominal;
+    const mc_ab_t v = mc_clarke((mc_abc_t){(r->pwm.active[0] - 0.5f) * 300.0f, (r->pwm.active[1] - 0.5f) * 300.0f,
+                                            (r->pwm.active[2] - 0.5f) * 300.0f});
+    const float g = (v.alpha > 0.0f) == (magnet == 0) ? 0.05f : 0.03f;
+    const mc_abc_t i = mc_clarke_inv((mc_ab_t){g * v.alpha, g * v.beta});
+    r->adc.sample.i[0] = (uint16_t)lrintf(nominal + i.a / k);
+    r->adc.sample.i[1] = (uint16_t)lrintf(nominal + i.b / k);
+    r->adc.sample.i[2] = (uint16_t)lrintf(nominal + i.c / k);
+}
+
 /* Steps I-III on a synthetic plant whose current answers a voltage along +alpha 5/3 times more
  * than one along -alpha (a d axis saturating with the magnet's flux: the magnet at 0), or the
  * other way (the magnet at pi): Step I finds the axis (theta1 = 0), Step II (dual-voltage
@@ -354,18 +370,9 @@ static void test_step2_decision_in_telemetry(void **state)
     for (int magnet = 0; magnet < 2; ++magnet) {
         rig_init(&r, "unop", "three_step", "pulses");
         through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
-        const float k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
         int n = 0;
         for (; n < 3000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
-            /* the current of this period's sample: a resistive answer to the voltage acting */
-            const mc_ab_t v = mc_clarke((mc_abc_t){(r.pwm.active[0] - 0.5f) * 300.0f,
-                                                    (r.pwm.active[1] - 0.5f) * 300.0f,
-                                                    (r.pwm.active[2] - 0.5f) * 300.0f});
-            const float g = (v.alpha > 0.0f) == (magnet == 0) ? 0.05f : 0.03f;
-            const mc_abc_t i = mc_clarke_inv((mc_ab_t){g * v.alpha, g * v.beta});
-            r.adc.sample.i[0] = (uint16_t)lrintf(nominal + i.a / k);
-            r.adc.sample.i[1] = (uint16_t)lrintf(nominal + i.b / k);
-            r.adc.sample.i[2] = (uint16_t)lrintf(nominal + i.c / k);
+            saturating_answer(&r, magnet);
             run(&r, 1);
         }
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
@@ -378,6 +385,153 @@ static void test_step2_decision_in_telemetry(void **state)
     }
 }
 
+/* The derived set as the drive holds it: the tests below corrupt one block's configuration, which
+ * the build's validation never lets through, to reach the startup's defensive branches. */
+static mc_drive_blk_t *held_blocks(rig_t *r)
+{
+    return &((mc_drive_built_t *)r->d.cfg)->blk;
+}
+
+/* A Step I configuration its engine refuses (startup.step1_method "pulses" with m = 0, or
+ * "three_phase" with n = 0): the calibration's last period faults the drive with the configuration
+ * reason, the duties at 50 %, and the outputs never come on, not even for the rest of that
+ * interrupt (on hardware an enable undone later in the ISR fires the gates with the duties
+ * latched). (startup.c:201-203.) */
+static void test_step1_refused_never_enables(void **state)
+{
+    (void)state;
+    static rig_t r;
+    const char *const methods[] = {"pulses", "three_phase"};
+    for (int m = 0; m < 2; ++m) {
+        rig_init(&r, "unop", "three_step", methods[m]);
+        if (m == 0) {
+            held_blocks(&r)->step1.m = 0;
+        } else {
+            held_blocks(&r)->pulse3.n = 0;
+        }
+        const uint32_t edges = r.pwm.on_edges;
+        through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_CONFIG);
+        assert_false(hal_pwm_enabled(&r.pwm));
+        assert_int_equal(r.pwm.on_edges, edges);
+        for (int k = 0; k < 3; ++k) {
+            assert_true(r.pwm.shadow[k] == 0.5f);
+        }
+        run(&r, 20);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+        assert_int_equal(r.pwm.on_edges, edges);
+    }
+}
+
+/* A Step II configuration its engine refuses (DVI with a zero pulse voltage): Step I runs on the
+ * synthetic plant and, in the very period it ends, the drive faults with the initial-position
+ * reason and the outputs off; Step II never starts (no period of it, with the outputs on and
+ * whatever duties its refused program holds). Step I's angle is in the telemetry.
+ * (startup.c:343-344.) */
+static void test_step2_refused_faults_at_step1_end(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "three_step", "pulses");
+    held_blocks(&r)->dvi.v = 0.0f;
+    through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+    int n = 0;
+    for (; n < 3000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        assert_int_equal(r.d.seq.step, MC_INIT_STEP1);
+        saturating_answer(&r, 0);
+        run(&r, 1);
+    }
+    assert_true(n > 5 && n < 3000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_INIT_POS);
+    assert_false(hal_pwm_enabled(&r.pwm));
+    assert_near(mc_drive_telemetry(&r.d)->theta1, 0.0f, 1e-3);
+}
+
+/* A restart starts the blocks from rest: a speed loop wound up against a rotor that does not
+ * turn (150 rad/s asked, the encoder standing) until the stall detector faults the drive, then
+ * disable and enable with 0 rad/s asked: RUN's speed loop starts from zero, its torque reference
+ * exactly 0 (the encoder says 0) for the first 100 periods, not the torque the last run wound up
+ * to. (startup.c:54, the blocks initialised at every enable.) */
+static void test_restart_starts_the_speed_loop_from_rest(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "encoder", "given", "pulses");
+    mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_SPEED, .speed_ref = 150.0f};
+    mc_drive_command(&r.d, &c);
+    float wound = 0.0f;
+    for (int n = 0; n < 20000 && mc_drive_state(&r.d) != MC_STATE_FAULT; ++n) {
+        run(&r, 1);
+        if (mc_drive_state(&r.d) == MC_STATE_RUN) {
+            wound = mc_drive_telemetry(&r.d)->torque_ref;
+        }
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    print_message("faults 0x%x, the torque reference wound up to %.2f N m\n", mc_drive_faults(&r.d), (double)wound);
+    assert_true(wound > 1.0f);
+    c = (mc_drive_cmd_t){.enable = false, .mode = MC_MODE_SPEED};
+    mc_drive_command(&r.d, &c);
+    run(&r, 2);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+    c = (mc_drive_cmd_t){.enable = true, .mode = MC_MODE_SPEED, .speed_ref = 0.0f};
+    mc_drive_command(&r.d, &c);
+    for (int n = 0; n < 1000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+        run(&r, 1);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    for (int k = 0; k < 100; ++k) {
+        assert_true(mc_drive_telemetry(&r.d)->torque_ref == 0.0f);
+        assert_true(mc_drive_telemetry(&r.d)->i_ref.q == 0.0f);
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    }
+}
+
+/* The recovery budget (protection.retries) counts from zero again only after
+ * protection.retry_reset_s of RUN: a budget spent by a recovery whose catch found the rotor
+ * standing (then Steps I-III run, startup.init_pos three_step) is still spent when RUN begins, also
+ * with Step III (2 x 10 ms) longer than retry_reset_s (15 ms): a loss of lock in RUN's first
+ * periods faults instead of recovering again. After retry_reset_s of RUN it recovers.
+ * (startup.c:399: the time counted is RUN's.) */
+static void test_recovery_budget_refills_in_run_only(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "three_step", "pulses");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_protection_retries, 1.0f, NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_protection_retry_reset_s, 0.015f, NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_startup_step3_hold_s, 0.01f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    const uint32_t reset_n = r.d.cfg->blk.prot.retry_reset_n;
+    assert_int_equal(reset_n, 150u);
+    assert_true(r.d.cfg->blk.prot.recover);
+    through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+    r.d.prot.retries = 1u;   /* as the recovery before this start left it */
+    uint32_t step3 = 0u;
+    for (int n = 0; n < 5000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        saturating_answer(&r, 0);
+        run(&r, 1);
+        step3 += r.d.seq.step == MC_INIT_STEP3 ? 1u : 0u;
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_true(step3 > reset_n);
+    const float vdc = mc_drive_telemetry(&r.d)->vdc;
+    run(&r, 2);
+    assert_false(mc_drive_recover(&r.d, MC_FAULT_LOSS_OF_LOCK, vdc));
+    assert_int_equal(r.d.prot.retries, 1u);
+    /* RUN for retry_reset_s: the budget is back */
+    while (r.d.seq.ticks < reset_n) {
+        run(&r, 1);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    }
+    assert_true(mc_drive_recover(&r.d, MC_FAULT_LOSS_OF_LOCK, vdc));
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -388,6 +542,10 @@ int main(void)
         cmocka_unit_test(test_sensor_wait_is_bounded),
         cmocka_unit_test(test_sensor_entry_references_from_the_current),
         cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
+        cmocka_unit_test(test_step1_refused_never_enables),
+        cmocka_unit_test(test_step2_refused_faults_at_step1_end),
+        cmocka_unit_test(test_restart_starts_the_speed_loop_from_rest),
+        cmocka_unit_test(test_recovery_budget_refills_in_run_only),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
