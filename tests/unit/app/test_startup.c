@@ -672,12 +672,111 @@ static void test_catch_at_speed_against_a_spinning_machine(void **state)
     }
 }
 
+/* Step III's check as the ISR runs it from Step III's entry (the sequencer's tick, then from the
+ * second tick on the check): omega_hat 100 x the tolerance at tick 2, x from then on. Returns the
+ * tick it handed over to RUN at, 0 if not within max_ticks. */
+static uint32_t step3_handover(rig_t *r, float x, uint32_t max_ticks)
+{
+    mc_drive_startup_reset(&r->d);   /* Step III's convergence state at rest */
+    r->d.seq.state = MC_STATE_INIT_POS;   /* as Step II's end enters Step III */
+    r->d.seq.step = MC_INIT_STEP3;
+    r->d.seq.ticks = 0u;
+    r->d.seq.limit = 0u;   /* no timeout: the test alone decides */
+    for (uint32_t t = 0u; t < max_ticks; ++t) {
+        mc_seq_tick(&r->d.seq);
+        const uint32_t now = r->d.seq.ticks;
+        if (now > 1u) {
+            mc_drive_step3_check(&r->d, now == 2u ? 100.0f * r->d.cfg->blk.step3_speed_tol : x);
+        }
+        if (r->d.seq.state == MC_STATE_RUN) {
+            return now;
+        }
+    }
+    return 0u;
+}
+
+/* Where Step III's low-pass (as built, from rest) settles for the input sequence above, and
+ * whether it stayed at or above that value all the way down from the spike (*from_above). */
+static float lpf_settles_at(const mc_lpf1_t *built, float spike, float x, bool *from_above, uint32_t *settled_at)
+{
+    mc_lpf1_t f = *built;
+    float y = mc_lpf1_step(&f, spike), lowest = y;
+    *settled_at = 0u;
+    for (uint32_t k = 1u; k < 4000u; ++k) {
+        const float prev = y;
+        y = mc_lpf1_step(&f, x);
+        lowest = fminf(lowest, y);
+        if (y == prev && *settled_at == 0u) {
+            *settled_at = k;
+        } else if (y != prev) {
+            *settled_at = 0u;
+        }
+    }
+    *from_above = lowest >= y;
+    return y;
+}
+
+/* Step III's convergence is "the low-passed |omega_hat| below startup.step3_speed_tol", a strict
+ * bound: an estimate coming down from a spike whose low-passed magnitude settles exactly at the
+ * tolerance (the tolerance as the input) never converges (Step III would time out), one that
+ * settles just below it (the closest value the filter settles at: 32 float steps, 1.2e-5 of it)
+ * converges a hold after it has settled at the latest (and
+ * after 2 x hold). That input is searched below the tolerance with the drive's own filter (50 Hz
+ * Tustin, from rest).
+ * (startup.c:414, the comparison.) */
+static void test_step3_tolerance_is_strict(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "three_step", "pulses");
+    const float tol = r.d.cfg->blk.step3_speed_tol;
+    const uint32_t hold = r.d.cfg->blk.step3_hold;
+    const float spike = 100.0f * tol;
+    bool above;
+    uint32_t settle_at, settle_below;
+    /* the tolerance itself as the input settles there, from above */
+    const float x_at = tol;
+    assert_true(lpf_settles_at(&r.d.cfg->blk.step3_lpf, spike, x_at, &above, &settle_at) == tol);
+    assert_true(above && settle_at > 0u);
+    /* the largest input that settles below it (bisection: 1 % below settles below) */
+    float lo = 0.99f * tol, hi = tol;
+    assert_true(lpf_settles_at(&r.d.cfg->blk.step3_lpf, spike, lo, &above, &settle_below) < tol);
+    while (nextafterf(lo, INFINITY) < hi) {
+        const float mid = lo + 0.5f * (hi - lo);
+        if (mid <= lo || mid >= hi) {
+            break;
+        }
+        if (lpf_settles_at(&r.d.cfg->blk.step3_lpf, spike, mid, &above, &settle_below) < tol) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    const float x_below = lo;
+    const float y_below = lpf_settles_at(&r.d.cfg->blk.step3_lpf, spike, x_below, &above, &settle_below);
+    assert_true(y_below < tol && above && settle_below > 0u);
+    int ulps = 0;
+    for (float y = y_below; y < tol && ulps < 1000; y = nextafterf(y, INFINITY)) {
+        ++ulps;
+    }
+    print_message("tolerance %.9g rad/s: the filter settles at it (period %u) for x = tol, %d float steps below it "
+                  "(period %u) for x = %.9g\n", (double)tol, settle_at, ulps, settle_below, (double)x_below);
+    assert_true(tol - y_below < 2e-5f * tol);   /* the closest below that the filter settles at */
+    assert_int_equal(step3_handover(&r, x_at, 4000u), 0u);
+    const uint32_t done = step3_handover(&r, x_below, 4000u);
+    /* the check's call k (tick k + 2) gives the filter's k-th output; the first output below the
+     * tolerance is at or before the settled one */
+    assert_true(done > 0u && done <= settle_below + 2u + hold);
+    assert_true(done >= 2u * hold);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_step1_runs_the_selected_program),
         cmocka_unit_test(test_references_start_from_zero),
         cmocka_unit_test(test_step3_lasts_twice_the_hold),
+        cmocka_unit_test(test_step3_tolerance_is_strict),
         cmocka_unit_test(test_catch_at_speed_against_a_spinning_machine),
         cmocka_unit_test(test_step2_decision_in_telemetry),
         cmocka_unit_test(test_sensor_wait_is_bounded),
