@@ -544,7 +544,8 @@ static void test_recovery_budget_refills_in_run_only(void **state)
  * R = 0, the speed constant. With the outputs on the latched duties' line-to-neutral vector
  * moves the stator flux (V(000) keeps it); with them off the diodes rectify the back-EMF into the
  * link above the generation speed: a sawtooth current, six teeth to the electrical turn, rising
- * to 6.6 A along a direction fixed in the rotor frame (braking: against q for w > 0, and lean
+ * to a peak that grows with the back-EMF's excess over the link (6.6 A at 1500 rpm, 0.3 A at
+ * 1003 rpm) along a direction fixed in the rotor frame (braking: against q for w > 0, and lean
  * times that against d), a function of the rotor angle, so with half-wave symmetry (mc/offset_cal.h);
  * below the generation speed none. The current follows the flux: i_d = (psi_d - psi_pm) / Ld,
  * i_q = psi_q / Lq (rotor frame). */
