@@ -368,7 +368,8 @@ static void saturating_answer(rig_t *r, int magnet)
  * other way (the magnet at pi): Step I finds the axis (theta1 = 0), Step II (dual-voltage
  * injection) measures the peak currents of its +V and -V pulses, c1 and c2 in the telemetry, in
  * the ratio 5/3 or 3/5, and flips to pi in the second case only; Step III hands over to RUN.
- * (startup.c:344-346: the decision's quantities, as Step II measured them, in the telemetry.) */
+ * Step III's estimate starts at rest (the rotor stands). (startup.c:349-358: the decision's
+ * quantities, as Step II measured them, in the telemetry; Step III from theta2 at rest.) */
 static void test_step2_decision_in_telemetry(void **state)
 {
     (void)state;
@@ -377,9 +378,13 @@ static void test_step2_decision_in_telemetry(void **state)
         rig_init(&r, "unop", "three_step", "pulses");
         through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
         int n = 0;
+        float w_start = 0.0f;   /* |omega_hat| over Step III's first 20 periods */
         for (; n < 3000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
             saturating_answer(&r, magnet);
             run(&r, 1);
+            if (r.d.seq.step == MC_INIT_STEP3 && r.d.seq.ticks <= 20u) {
+                w_start = fmaxf(w_start, fabsf(mc_drive_telemetry(&r.d)->omega));
+            }
         }
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
         const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
@@ -388,6 +393,10 @@ static void test_step2_decision_in_telemetry(void **state)
         assert_near(tm->c1 / tm->c2, magnet == 0 ? 5.0f / 3.0f : 3.0f / 5.0f, 0.02);
         assert_int_equal(tm->pol_flip, magnet == 1);
         assert_near(fabsf(tm->theta2), magnet == 0 ? 0.0f : 3.14159265f, 1e-3);
+        /* Step III's estimate starts at rest on the standing rotor: none of the speed it would
+         * have made up from a start off zero (0.1 rad/s: 0.07-0.3 rad/s in these periods) */
+        print_message("Step III's first 20 periods: |omega_hat| <= %.3g rad/s\n", (double)w_start);
+        assert_true(w_start < 1e-3f);
     }
 }
 
@@ -833,6 +842,50 @@ static void test_catch_entry_references_from_the_current(void **state)
     }
 }
 
+/* A catch that finds the rotor turning hands over an angle it measured: RUN after it is not
+ * "unsure" of its polarity, also where an earlier RUN entry of the same enable was (a standing
+ * verdict with a device drop configured, hw.device_drop_v: then the re-check runs as with
+ * protection.polarity_check = at_start). Here: enabled at standstill (1 V drop): the probe says
+ * standing, RUN from the given angle, unsure; the rotor is then driven to 100 rpm and the drive
+ * recovers (a new catch), which catches it turning: RUN again, no longer unsure, and no
+ * polarity re-check starts at the at_start time into this RUN. (startup.c:298.) */
+static void test_turning_catch_clears_the_unsure_polarity(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "given", "pulses");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_catch, "on", NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_hw_device_drop_v, 1.0f, NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    spin_t p = {.w = 0.0, .th = 0.7, .lean = 0.25};
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT, .theta_init = 0.7f};
+    mc_drive_command(&r.d, &c);
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+        (void)spin_period(&r, &p);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_true(r.d.pol.unsure);
+    (void)spin_period(&r, &p);
+    p.w = 100.0 / 60.0 * 2.0 * 3.14159265358979 * 5.0;
+    assert_true(mc_drive_recover(&r.d, MC_FAULT_LOSS_OF_LOCK, mc_drive_telemetry(&r.d)->vdc));
+    assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        (void)spin_period(&r, &p);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+    print_message("caught at %.1f rad/s (%.1f), unsure %d, start_n %u\n", (double)tm->c2, p.w, (int)r.d.pol.unsure, r.d.cfg->blk.pol.start_n);
+    assert_true(fabsf(tm->c2 - (float)p.w) < 0.05f * (float)p.w);
+    assert_false(r.d.pol.unsure);
+    const uint32_t checks = tm->polarity_checks;
+    for (uint32_t n = 0; n < r.d.cfg->blk.pol.start_n + 20u; ++n) {
+        (void)spin_period(&r, &p);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    }
+    assert_int_equal(tm->polarity_checks, checks);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -842,6 +895,7 @@ int main(void)
         cmocka_unit_test(test_step3_tolerance_is_strict),
         cmocka_unit_test(test_catch_at_speed_against_a_spinning_machine),
         cmocka_unit_test(test_catch_entry_references_from_the_current),
+        cmocka_unit_test(test_turning_catch_clears_the_unsure_polarity),
         cmocka_unit_test(test_step2_decision_in_telemetry),
         cmocka_unit_test(test_sensor_wait_is_bounded),
         cmocka_unit_test(test_sensor_entry_references_from_the_current),
