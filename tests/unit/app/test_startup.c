@@ -886,6 +886,46 @@ static void test_turning_catch_clears_the_unsure_polarity(void **state)
     assert_int_equal(tm->polarity_checks, checks);
 }
 
+/* A recovery starts the speed loop again: after RUN at 290 rpm asked against a rotor held at 300
+ * rpm (a dyno: the speed loop's integrator winds up, 0.1 s), a recovery's catch finds it turning and
+ * RUN's first torque reference is what a speed loop fresh from its configuration gives for that
+ * period's speed error, not the wound-up torque. (startup.c:240-241.) */
+static void test_recovery_restarts_the_speed_loop(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "given", "pulses");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_catch, "on", NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    spin_t p = {.w = 300.0 / 60.0 * 2.0 * 3.14159265358979 * 5.0, .th = -0.9, .lean = 0.25};
+    const float ref = 290.0f / 60.0f * 6.2831853f;   /* [rad/s mechanical] */
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_SPEED, .speed_ref = ref};
+    mc_drive_command(&r.d, &c);
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+        (void)spin_period(&r, &p);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+    for (int n = 0; n < 1000; ++n) {
+        (void)spin_period(&r, &p);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    }
+    const float wound = tm->torque_ref, integ = r.d.sc.pi.integ;
+    assert_true(mc_drive_recover(&r.d, MC_FAULT_LOSS_OF_LOCK, tm->vdc));
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        (void)spin_period(&r, &p);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    static mc_sc_t fresh;
+    mc_sc_init(&fresh, &r.d.cfg->sc);
+    const float want = mc_sc_step(&fresh, ref, tm->omega / (float)r.d.cfg->blk.pole_pairs);
+    print_message("wound up to %.3f N m (integrator %.3f); after the recovery %.4f N m, a fresh loop %.4f N m\n",
+                  (double)wound, (double)integ, (double)tm->torque_ref, (double)want);
+    assert_true(fabsf(integ) > 0.5f);
+    assert_near(tm->torque_ref, want, 1e-4);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -896,6 +936,7 @@ int main(void)
         cmocka_unit_test(test_catch_at_speed_against_a_spinning_machine),
         cmocka_unit_test(test_catch_entry_references_from_the_current),
         cmocka_unit_test(test_turning_catch_clears_the_unsure_polarity),
+        cmocka_unit_test(test_recovery_restarts_the_speed_loop),
         cmocka_unit_test(test_step2_decision_in_telemetry),
         cmocka_unit_test(test_sensor_wait_is_bounded),
         cmocka_unit_test(test_sensor_entry_references_from_the_current),
