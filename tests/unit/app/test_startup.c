@@ -926,6 +926,36 @@ static void test_recovery_restarts_the_speed_loop(void **state)
     assert_near(tm->torque_ref, want, 1e-4);
 }
 
+/* An angle-sensor drive enabled at standstill enters RUN at the calibration's last period with
+ * the outputs still off; RUN's first duties (latched by the pipeline in that period) come on
+ * with the outputs at the next one, whatever the calibration's length, also a single sample,
+ * where no period of the calibration latches an entry corner before its end (a corner is only
+ * latched above the generation speed: none at rest). (startup.c:52, the entry's reset.) */
+static void test_sensor_entry_at_rest_gates_on_next_period(void **state)
+{
+    (void)state;
+    static rig_t r;
+    const float samples[] = {1.0f, 2.0f, 64.0f};
+    for (int k = 0; k < 3; ++k) {
+        rig_init(&r, "encoder", "given", "pulses");
+        assert_true(mc_param_set(&r.cfg.p, MC_PARAM_control_offset_cal_samples, samples[k], NULL));
+        assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        for (int cyc = 0; cyc < 2; ++cyc) {   /* the first enable and a later one */
+            through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 1.0f});
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+            assert_false(hal_pwm_enabled(&r.pwm));
+            const uint32_t edges = r.pwm.on_edges;
+            run(&r, 1);
+            assert_true(hal_pwm_enabled(&r.pwm));
+            assert_int_equal(r.pwm.on_edges, edges + 1u);
+            const mc_drive_cmd_t off = {.enable = false, .mode = MC_MODE_CURRENT};
+            mc_drive_command(&r.d, &off);
+            run(&r, 2);
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_IDLE);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -940,6 +970,7 @@ int main(void)
         cmocka_unit_test(test_step2_decision_in_telemetry),
         cmocka_unit_test(test_sensor_wait_is_bounded),
         cmocka_unit_test(test_sensor_entry_references_from_the_current),
+        cmocka_unit_test(test_sensor_entry_at_rest_gates_on_next_period),
         cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
         cmocka_unit_test(test_step1_refused_never_enables),
         cmocka_unit_test(test_step2_refused_faults_at_step1_end),
