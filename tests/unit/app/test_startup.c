@@ -369,7 +369,8 @@ static void saturating_answer(rig_t *r, int magnet)
  * other way (the magnet at pi): Step I finds the axis (theta1 = 0), Step II (dual-voltage
  * injection) measures the peak currents of its +V and -V pulses, c1 and c2 in the telemetry, in
  * the ratio 5/3 or 3/5, and flips to pi in the second case only; Step III hands over to RUN.
- * Step III's estimate starts at rest (the rotor stands). (startup.c:349-358: the decision's
+ * The verdict and its confidence show once Step II has decided, none while it runs. Step III's
+ * estimate starts at rest (the rotor stands). (startup.c:349-358: the decision's
  * quantities, as Step II measured them, in the telemetry; Step III from theta2 at rest.) */
 static void test_step2_decision_in_telemetry(void **state)
 {
@@ -380,16 +381,26 @@ static void test_step2_decision_in_telemetry(void **state)
         through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
         int n = 0;
         float w_start = 0.0f;   /* |omega_hat| over Step III's first 20 periods */
+        int step2 = 0;   /* periods that ended in Step II */
         for (; n < 3000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
             saturating_answer(&r, magnet);
             run(&r, 1);
+            if (r.d.seq.step == MC_INIT_STEP2) {
+                /* no verdict, no confidence before Step II has decided */
+                ++step2;
+                assert_int_equal(mc_drive_telemetry(&r.d)->pol_verdict, 0);
+                assert_true(mc_drive_telemetry(&r.d)->pol_z == 0.0f);
+            }
             if (r.d.seq.step == MC_INIT_STEP3 && r.d.seq.ticks <= 20u) {
                 w_start = fmaxf(w_start, fabsf(mc_drive_telemetry(&r.d)->omega));
             }
         }
         assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        assert_true(step2 > 5);
         const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
         assert_near(tm->theta1, 0.0f, 1e-3);
+        assert_int_equal(tm->pol_verdict, MC_POL_DECIDED);
+        assert_true(tm->pol_z > 0.0f);
         assert_true(tm->c1 > 1.0f && tm->c2 > 1.0f);
         assert_near(tm->c1 / tm->c2, magnet == 0 ? 5.0f / 3.0f : 3.0f / 5.0f, 0.02);
         assert_int_equal(tm->pol_flip, magnet == 1);
