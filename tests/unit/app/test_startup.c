@@ -903,6 +903,30 @@ static void test_sensor_entry_at_rest_gates_on_next_period(void **state)
     }
 }
 
+/* A standing catch with the given angle (startup.init_pos given) goes to RUN: Step I is not
+ * begun, so its configuration does not matter, even one its engine refuses (here m = 0): RUN,
+ * the outputs on, no fault. (startup.c:309: Step I begun only where the sequencer went to it.) */
+static void test_standing_catch_with_given_angle_skips_step1(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "given", "pulses");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_catch, "on", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    held_blocks(&r)->step1.m = 0;
+    through_calibration(&r, 0.5f, (mc_dq_t){0.0f, 0.0f});
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        run(&r, 1);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_int_equal(mc_drive_faults(&r.d), 0u);
+    assert_true(hal_pwm_enabled(&r.pwm));
+    run(&r, 10);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -921,6 +945,7 @@ int main(void)
         cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
         cmocka_unit_test(test_step1_refused_never_enables),
         cmocka_unit_test(test_step2_refused_faults_at_step1_end),
+        cmocka_unit_test(test_standing_catch_with_given_angle_skips_step1),
         cmocka_unit_test(test_restart_starts_the_speed_loop_from_rest),
         cmocka_unit_test(test_recovery_budget_refills_in_run_only),
     };
