@@ -927,6 +927,74 @@ static void test_standing_catch_with_given_angle_skips_step1(void **state)
     assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
 }
 
+/* A recovery (protection.lock_action recover) is for a running drive: in Step III (the three-step
+ * start's convergence, startup.init_pos three_step) a recoverable reason is not recovered from
+ * (the drive's caller then trips), the state and the budget stay; in RUN it is. (startup.c:227:
+ * running = RUN.) */
+static void test_no_recovery_in_step3(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "three_step", "pulses");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_param_set(&r.cfg.p, MC_PARAM_protection_retries, 3.0f, NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+    bool tried = false;
+    for (int n = 0; n < 5000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        saturating_answer(&r, 0);
+        run(&r, 1);
+        if (!tried && r.d.seq.step == MC_INIT_STEP3 && r.d.seq.ticks == 10u) {
+            tried = true;
+            assert_false(mc_drive_recover(&r.d, MC_FAULT_LOSS_OF_LOCK, mc_drive_telemetry(&r.d)->vdc));
+            assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+            assert_int_equal(r.d.seq.step, MC_INIT_STEP3);
+            assert_int_equal(r.d.prot.retries, 0u);
+            assert_int_equal(r.d.tm.recoveries, 0u);
+        }
+    }
+    assert_true(tried);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_true(mc_drive_recover(&r.d, MC_FAULT_LOSS_OF_LOCK, mc_drive_telemetry(&r.d)->vdc));
+    assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+    assert_int_equal(r.d.tm.recoveries, 1u);
+}
+
+/* A polarity re-check running when the drive recovers (the lock checks in doubt, then a fault)
+ * ends with that RUN: the caught RUN starts with none running (no d-current bias, the lock
+ * checks not paused by it). At 100 rpm on the spinning plant, the check begun as the drive
+ * begins it in doubt (mc_polcheck_start). (startup.c:42, the re-check's reset with the
+ * estimate's.) */
+static void test_recovery_ends_a_running_polarity_check(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "given", "pulses");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_catch, "on", NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    spin_t p = {.w = 100.0 / 60.0 * 2.0 * 3.14159265358979 * 5.0, .th = 2.2, .lean = 0.25};
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&r.d, &c);
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+        (void)spin_period(&r, &p);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    (void)spin_period(&r, &p);
+    assert_true(mc_polcheck_start(&r.d.pol, &r.d.cfg->blk.pol, mc_drive_telemetry(&r.d)->omega, true));
+    for (int n = 0; n < 5; ++n) {
+        (void)spin_period(&r, &p);
+    }
+    assert_true(mc_polcheck_active(&r.d.pol));
+    assert_true(mc_drive_recover(&r.d, MC_FAULT_LOSS_OF_LOCK, mc_drive_telemetry(&r.d)->vdc));
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        (void)spin_period(&r, &p);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_false(mc_polcheck_active(&r.d.pol));
+    assert_true(mc_polcheck_bias(&r.d.pol, &r.d.cfg->blk.pol) == 0.0f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -948,6 +1016,8 @@ int main(void)
         cmocka_unit_test(test_standing_catch_with_given_angle_skips_step1),
         cmocka_unit_test(test_restart_starts_the_speed_loop_from_rest),
         cmocka_unit_test(test_recovery_budget_refills_in_run_only),
+        cmocka_unit_test(test_no_recovery_in_step3),
+        cmocka_unit_test(test_recovery_ends_a_running_polarity_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
