@@ -141,7 +141,10 @@ static void test_step1_runs_the_selected_program(void **state)
  * references start from zero, not from what an earlier run left. With zero asked, they stay
  * exactly zero; with 2 A in q asked, q moves up by control.i_slew * ts a period and d stays
  * exactly zero (a d step would be a torque-free current pulse at the start); the outputs are on
- * from the entry period. (startup.c:40; :205, the sensor drive's entry only for a sensor drive.) */
+ * from the entry period. The estimate starts at rest: with zero asked nothing moves, |omega_hat|
+ * stays below 1e-3 rad/s over those periods (with 2 A asked and no plant to answer it, the
+ * estimate moves). (startup.c:40, :56; :205, the sensor drive's entry only for a sensor
+ * drive.) */
 static void test_references_start_from_zero(void **state)
 {
     (void)state;
@@ -158,12 +161,19 @@ static void test_references_start_from_zero(void **state)
         const float step = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
         assert_true(step > 0.0f && step < 0.5f);
         /* the pipeline ran in RUN's first period (the calibration's last): one step so far */
+        float w_max = 0.0f;
         for (int k = 1; k <= 12; ++k) {
             assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+            /* the estimate starts at the given angle and at rest */
+            w_max = fmaxf(w_max, fabsf(mc_drive_telemetry(&r.d)->omega));
             const mc_dq_t ref = mc_drive_telemetry(&r.d)->i_ref;
             assert_true(ref.d == 0.0f);
             assert_near(ref.q, fminf(iq, (float)k * step), 1e-5);
             run(&r, 1);
+        }
+        if (c == 0) {
+            print_message("RUN's first 12 periods at 0 A: |omega_hat| <= %.3g rad/s\n", (double)w_max);
+            assert_true(w_max < 1e-3f);
         }
     }
 }
