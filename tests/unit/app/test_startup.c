@@ -1005,6 +1005,30 @@ static void test_recovery_ends_a_running_polarity_check(void **state)
     assert_true(mc_polcheck_bias(&r.d.pol, &r.d.cfg->blk.pol) == 0.0f);
 }
 
+/* The same refusal after a standing catch (startup.catch on, then the three-step start): in the
+ * period the catch ends the drive faults with the configuration reason, the outputs off; Step I
+ * never runs. (startup.c:309-311.) */
+static void test_step1_refused_after_the_catch(void **state)
+{
+    (void)state;
+    static rig_t r;
+    rig_init(&r, "unop", "three_step", "pulses");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_catch, "on", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    held_blocks(&r)->step1.m = 0;
+    through_calibration(&r, 0.0f, (mc_dq_t){0.0f, 0.0f});
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_INIT_POS);
+    int n = 0;
+    for (; n < 2000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        assert_int_equal(r.d.seq.step, MC_INIT_CATCH);
+        run(&r, 1);
+    }
+    assert_true(n > 1 && n < 2000);
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_FAULT);
+    assert_int_equal(mc_drive_faults(&r.d), MC_FAULT_CONFIG);
+    assert_false(hal_pwm_enabled(&r.pwm));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1022,6 +1046,7 @@ int main(void)
         cmocka_unit_test(test_sensor_entry_at_rest_gates_on_next_period),
         cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
         cmocka_unit_test(test_step1_refused_never_enables),
+        cmocka_unit_test(test_step1_refused_after_the_catch),
         cmocka_unit_test(test_step2_refused_faults_at_step1_end),
         cmocka_unit_test(test_standing_catch_with_given_angle_skips_step1),
         cmocka_unit_test(test_restart_starts_the_speed_loop_from_rest),
