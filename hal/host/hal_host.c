@@ -13,6 +13,7 @@ void hal_host_pwm_init(hal_pwm_t *pwm, float period_s, float dead_time_s)
     }
     pwm->enabled = false;
     pwm->writes = 0u;
+    pwm->on_edges = 0u;
     pwm->nonfinite = 0u;
     pwm->counts = 0u;
     pwm->off_time = false;
@@ -70,6 +71,7 @@ void hal_pwm_set_duties(hal_pwm_t *pwm, float da, float db, float dc)
 
 void hal_pwm_enable(hal_pwm_t *pwm, bool on)
 {
+    pwm->on_edges += on && !pwm->enabled ? 1u : 0u;
     pwm->enabled = on;
 }
 

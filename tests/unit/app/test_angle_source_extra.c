@@ -25,6 +25,8 @@
 #include "hal_host/host.h"
 #include "mc/angle.h"
 #include "mc/drive.h"
+#include "drive_internal.h"   /* mc_drive_recover */
+#include "spin_plant.h"
 #include "src_test_hold.h"
 
 /* ------------------------------------------------------------------------------- the tests */
@@ -488,6 +490,109 @@ static void test_cfg_of_and_equal(void **st)
     test_hold_omega = 0.0f;
 }
 
+/* RUN's first period after a catch whose (O.1) moved the offsets (mc/offset_cal.h): the source
+ * gets i(k-1) and i(k) both as the new offsets give them, so that their difference is the
+ * current's change and not the offsets' (the catch at 1500 rpm either way on the spinning plant,
+ * spin_plant.h, whose diodes' current biased the calibration's mean by 0.7-0.8 A). The test
+ * reads the two samples' raw counts and the offsets in force after the catch.
+ * (startup.c:133-134: the last sample moved with the offsets.) */
+static void test_source_inputs_after_offsets_moved(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const double speeds[] = {785.398, -785.398};
+    for (size_t v = 0; v < 2u; ++v) {
+        test_hold_omega = 0.0f;
+        rig_init(&r, "test_hold");
+        assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_catch, "on", NULL));
+        assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+        assert_true(r.d.seq.cfg.catch_first);
+        spin_t p = {.w = speeds[v], .th = 0.4, .lean = 0.25};
+        const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_TORQUE};
+        mc_drive_command(&r.d, &c);
+        uint16_t raw_prev[3] = {0u, 0u, 0u}, raw_now[3] = {0u, 0u, 0u};
+        float mean[3] = {0.0f, 0.0f, 0.0f};
+        for (int n = 0; n < 2000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+            memcpy(raw_prev, raw_now, sizeof raw_prev);
+            const bool cal = mc_drive_state(&r.d) == MC_STATE_OFFSET_CAL || n == 0;
+            (void)spin_period_on(&p, &r.d, &r.pwm, &r.adc);
+            memcpy(raw_now, r.adc.sample.i, sizeof raw_now);
+            if (cal && mc_drive_state(&r.d) != MC_STATE_OFFSET_CAL) {
+                memcpy(mean, r.d.offs.offset, sizeof mean);
+            }
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        const float k = r.d.cfg->blk.offs.amps_per_count;
+        const float *off = r.d.offs.offset;
+        float moved = 0.0f;
+        for (int j = 0; j < 3; ++j) {
+            moved = fmaxf(moved, fabsf(off[j] - mean[j]) * k);
+        }
+        const mc_ab_t prev = mc_clarke((mc_abc_t){((float)raw_prev[0] - off[0]) * k, ((float)raw_prev[1] - off[1]) * k,
+                                                  ((float)raw_prev[2] - off[2]) * k});
+        const mc_ab_t now = mc_clarke((mc_abc_t){((float)raw_now[0] - off[0]) * k, ((float)raw_now[1] - off[1]) * k,
+                                                 ((float)raw_now[2] - off[2]) * k});
+        print_message("%+.0f rad/s: offsets moved by up to %.3f A; i(k-1) (%.4f, %.4f) A for (%.4f, %.4f), i(k) (%.4f, "
+                      "%.4f) A for (%.4f, %.4f)\n", speeds[v], (double)moved, (double)test_hold_in.i_ab_prev.alpha,
+                      (double)test_hold_in.i_ab_prev.beta, (double)prev.alpha, (double)prev.beta,
+                      (double)test_hold_in.i_ab.alpha, (double)test_hold_in.i_ab.beta, (double)now.alpha, (double)now.beta);
+        assert_true(moved > 0.2f);
+        assert_float_equal(test_hold_in.i_ab_prev.alpha, prev.alpha, 1e-4);
+        assert_float_equal(test_hold_in.i_ab_prev.beta, prev.beta, 1e-4);
+        assert_float_equal(test_hold_in.i_ab.alpha, now.alpha, 1e-4);
+        assert_float_equal(test_hold_in.i_ab.beta, now.beta, 1e-4);
+    }
+}
+
+/* A recovery's catch that finds the rotor turning starts the current loop again from rest: RUN's
+ * first voltage is what a current loop fresh from its configuration gives for that period's
+ * reference, current and speed, not one carrying the integrators of the RUN before the recovery
+ * (8 A in q on the spinning plant, which has no resistance, leave the q integrator at -0.1 V). At 300 rpm (the flux held: no field-weakening entry), test_hold ramping at
+ * the rotor's speed; its current loop sees the currents themselves (no injection, no notch).
+ * (startup.c:34, the current loop's reset with the estimate's.) */
+static void test_recovery_restarts_the_current_loop(void **st)
+{
+    (void)st;
+    static rig_t r;
+    const float w = 300.0f / 60.0f * 6.2831853f * 5.0f;
+    test_hold_omega = w;
+    rig_init(&r, "test_hold");
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_startup_catch, "on", NULL));
+    assert_true(mc_param_set_choice(&r.cfg.p, MC_PARAM_protection_lock_action, "recover", NULL));
+    assert_true(mc_drive_init(&r.d, &r.link, &r.cfg, &r.adc, &r.pwm, &r.qep));
+    assert_false(r.d.cfg->blk.inject);
+    spin_t p = {.w = w, .th = 1.3, .lean = 0.25};
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT, .i_ref = {0.0f, 8.0f}};
+    mc_drive_command(&r.d, &c);
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+        (void)spin_period_on(&p, &r.d, &r.pwm, &r.adc);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    for (int n = 0; n < 400; ++n) {
+        (void)spin_period_on(&p, &r.d, &r.pwm, &r.adc);
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    }
+    const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+    const float wound_q = r.d.cc.pi_q.integ;
+    print_message("RUN: i_dq (%.2f, %.2f) A, the q integrator at %.3f V\n", (double)tm->i_dq.d, (double)tm->i_dq.q,
+                  (double)wound_q);
+    assert_true(fabsf(wound_q) > 0.05f);   /* 50 x the comparison's tolerance below */
+    assert_true(mc_drive_recover(&r.d, MC_FAULT_LOSS_OF_LOCK, tm->vdc));
+    for (int n = 0; n < 2000 && mc_drive_state(&r.d) == MC_STATE_INIT_POS; ++n) {
+        (void)spin_period_on(&p, &r.d, &r.pwm, &r.adc);
+    }
+    assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+    assert_false(mc_fwe_active(&r.d.fw_entry));
+    static mc_cc_t fresh;
+    mc_cc_init(&fresh, &r.d.cfg->cc);
+    const mc_dq_t u = mc_cc_step(&fresh, tm->i_ref, tm->i_dq, tm->omega, tm->vdc * 0.57735027f * r.d.cfg->blk.u_loop);
+    print_message("after the recovery: u_dq (%.4f, %.4f) V, a fresh loop (%.4f, %.4f) V\n", (double)tm->u_dq.d,
+                  (double)tm->u_dq.q, (double)u.d, (double)u.q);
+    assert_float_equal(tm->u_dq.d, u.d, 1e-3);
+    assert_float_equal(tm->u_dq.q, u.q, 1e-3);
+    test_hold_omega = 0.0f;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -501,6 +606,8 @@ int main(void)
         cmocka_unit_test(test_lock_loss_recovers_with_v000),
         cmocka_unit_test(test_source_inputs_at_run_entry),
         cmocka_unit_test(test_recovery_budget_per_enable),
+        cmocka_unit_test(test_source_inputs_after_offsets_moved),
+        cmocka_unit_test(test_recovery_restarts_the_current_loop),
         cmocka_unit_test(test_stale_catch_faults_at_once),
         cmocka_unit_test(test_cfg_of_and_equal),
     };

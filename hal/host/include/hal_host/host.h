@@ -19,6 +19,8 @@ struct hal_pwm {
     float active[3];    /* latched at the period boundary, seen by plant */
     bool  enabled;
     uint32_t writes;    /* number of duty writes (diagnostics)            */
+    uint32_t on_edges;  /* enables from off (diagnostics: on hardware even an enable undone
+                           later in the same interrupt fires the gates with the latched duties) */
     uint32_t nonfinite; /* duties that arrived as NaN or infinite (a firmware bug: the drive
                            checks before it writes; the port still never passes one on) */
     uint32_t counts;    /* compare resolution: 0 ideal, N: duties in whole counts of N        */
