@@ -169,9 +169,32 @@ def load_equivalent(path: Path) -> list[tuple[str, int, str, str]]:
     for raw in path.read_text().splitlines():
         if not raw.strip() or raw.lstrip().startswith("#"):
             continue
-        head, reason = raw.rsplit(" -> ", 1)
+        head, reason = raw.split(" -> ", 1)   # the reason may say "->" itself; the C line does not
         f, line, mut = head.split(":", 2)
         out.append((f.strip(), int(line), mut.strip(), reason.strip()))
+    return out
+
+
+def resolve_equivalent(entries, all_mutants, reach: int = 40) -> dict[tuple[str, int, str], str]:
+    """(file, line, mutated text) of a generated mutant -> the reason of its equivalence entry.
+    An entry names its mutant by line; one whose line moved (an edit above it) is found again by
+    its text, the nearest such mutant within `reach` lines that no entry names exactly, so the
+    judgement follows the code (scripts/mutation_lists.py --check names the ones that are lost)."""
+    out: dict[tuple[str, int, str], str] = {}
+    by_text: dict[tuple[str, str], list[int]] = {}
+    for f, ms in all_mutants.items():
+        for m in ms:
+            by_text.setdefault((f, m["mutated"].strip()), []).append(m["line"])
+    loose = []
+    for (f, ln, mu, why) in entries:
+        if ln in by_text.get((f, mu), ()):
+            out[(f, ln, mu)] = why
+        else:
+            loose.append((f, ln, mu, why))
+    for (f, ln, mu, why) in loose:
+        cands = sorted((abs(n - ln), n) for n in by_text.get((f, mu), ()) if abs(n - ln) <= reach and (f, n, mu) not in out)
+        if cands:
+            out[(f, cands[0][1], mu)] = why
     return out
 
 
@@ -197,7 +220,9 @@ def copy_tree(work: Path) -> Path:
         if dst.exists() and dst.read_bytes() == (ROOT / f).read_bytes():
             continue
         dst.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(ROOT / f, dst)
+        # copy, not copy2: the copy's time is now, so ninja rebuilds what depends on it even when
+        # the worktree's file is older than objects built from a mutant or an earlier refresh
+        shutil.copy(ROOT / f, dst)
     venv = src / ".venv"
     if not venv.exists():
         venv.symlink_to(ROOT / ".venv")
@@ -516,7 +541,7 @@ def main() -> int:
             if r.get("key") in index:
                 last[r["key"]] = dict(index[r["key"]], **{k: r[k] for k in ("status", "by", "reason", "of", "seconds") if k in r})
         # a survivor judged equivalent since its run is reported so, with the list's reason
-        judged = {(f, ln, mu): why for (f, ln, mu, why) in load_equivalent(ROOT / a.equivalent)}
+        judged = resolve_equivalent(load_equivalent(ROOT / a.equivalent), all_mutants)
         for m in last.values():
             why = judged.get((m["file"], m["line"], m["mutated"].strip()))
             if m["status"] == "survived" and why:
@@ -543,7 +568,7 @@ def main() -> int:
     elif journal.exists():
         journal.unlink()
 
-    equivalent = load_equivalent(ROOT / a.equivalent)
+    judged = resolve_equivalent(load_equivalent(ROOT / a.equivalent), all_mutants)
     use_tce = lang == "c" and not a.no_tce
     if lang == "c":
         runners = [CRunner(work, a.jobs, files if a.quick else None, f"w{i}") for i in range(a.workers)]
@@ -586,8 +611,7 @@ def main() -> int:
 
     def test_one(runner, m):
         t0 = time.monotonic()
-        eq = next((r for (f, ln, mu, r) in equivalent
-                   if f == m["file"] and ln == m["line"] and mu == m["mutated"].strip()), None)
+        eq = judged.get((m["file"], m["line"], m["mutated"].strip()))
         prev = done_before.get(mkey(m))
         if eq is not None:
             m.update(status="equivalent", reason=eq, seconds=0.0)

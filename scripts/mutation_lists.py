@@ -2,15 +2,19 @@
 """Keep the mutation lists (scripts/mutation_equivalent.txt, scripts/mutation_must_kill.txt) on
 the lines they judge after the files they name were edited.
 
-Both lists key a mutant by path:line:mutated line. An edit above a listed line moves it, and the
-entry no longer matches (the mutant is then tested again: safe, but the judgement is lost).
+Both lists key a mutant by path:line:mutated line. An edit above a listed line moves it;
+scripts/mutation.py then finds the entry's mutant by its text within 40 lines (must-kill: the
+nearest), so the judgement follows, but the numbers drift: --remap puts them back.
 
   scripts/mutation_lists.py --remap BASE    move every entry of a file changed since the commit
                                             BASE to its line in the working tree (difflib on the
                                             file at BASE and now); an entry whose line itself was
                                             edited or removed is left as is and named: re-judge it
+                                            (run it once per edit: a second run against the same
+                                            BASE moves entries of similar neighbouring lines again)
   scripts/mutation_lists.py --check         name the entries whose line no longer looks like their
-                                            mutated text (the list is stale there)
+                                            mutated text: found within 40 lines (scripts/mutation.py
+                                            finds them by text there: a note), or lost (stale: fails)
 
 Exit status 1 when an entry needs a person (re-judge or stale), else 0.
 """
@@ -24,6 +28,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 LISTS = ("scripts/mutation_equivalent.txt", "scripts/mutation_must_kill.txt")
+REACH = 40   # lines: as far as scripts/mutation.py looks for an entry's mutant by its text
 
 
 def parse(raw: str) -> tuple[str, int, str] | None:
@@ -84,6 +89,9 @@ def remap(base: str) -> int:
                 cur = ROOT / f
                 maps[f] = line_map(old, cur.read_text().splitlines()) if old is not None and cur.exists() else None
             m = maps[f]
+            old_src = at_commit(base, f) or []
+            if not (1 <= ln <= len(old_src) and looks_like(old_src[ln - 1], rest)):
+                continue   # not on its line at BASE: already moved (a second --remap) or stale (--check)
             if m is None or ln not in m:
                 print(f"{lst}:{k + 1}: {f}:{ln}: the line was edited or removed since {base}: re-judge it")
                 need += 1
@@ -109,8 +117,14 @@ def check() -> int:
             f, ln, rest = e
             src = ROOT / f
             text = src.read_text().splitlines() if src.exists() else []
-            if not (1 <= ln <= len(text)) or not looks_like(text[ln - 1], rest):
-                print(f"{lst}:{k + 1}: {f}:{ln} does not look like its mutated text: stale")
+            if 1 <= ln <= len(text) and looks_like(text[ln - 1], rest):
+                continue
+            near = [n for n in range(max(1, ln - REACH), min(len(text), ln + REACH) + 1) if looks_like(text[n - 1], rest)]
+            if near:   # scripts/mutation.py finds it by its text: only the number is off
+                n = min(near, key=lambda n: abs(n - ln))
+                print(f"{lst}:{k + 1}: {f}:{ln} is on line {n} now (found by its text; tidy with --remap)")
+            else:
+                print(f"{lst}:{k + 1}: {f}:{ln}: no line within {REACH} looks like its mutated text: stale")
                 bad += 1
     print(f"mutation lists: {bad} stale entries")
     return 1 if bad else 0
