@@ -58,6 +58,11 @@ static const want_t motor_a[] = {
     {MC_PARAM_protection_polarity_bias_a, 6.6, 0},
     {MC_PARAM_startup_catch_min_rpm, 24.0, 0},
     {MC_PARAM_estimator_l_adapt_s, 0.01, 1e-5},
+    /* I/f: nice2(0.8 i_max); nice2(T_if / 8 / J) with T_if = 1.5 p psi_pm I_f, in rpm/s; the speed
+     * where psi_pm w = 5 (Vdc t_dead / Ts / 4 + 2 drop + Rs I_f / 2) (or 2 % of Vdc/sqrt3) */
+    {MC_PARAM_startup_if_i_a, 11.0, 1e-5},
+    {MC_PARAM_startup_if_accel_rpm_s, 2600.0, 1e-5},
+    {MC_PARAM_startup_if_handover_rpm, 72.0, 1e-5},
 };
 static const want_t motor_b_unop[] = {
     {MC_PARAM_control_i_trip_a, 240.0, 1e-5},
@@ -96,6 +101,11 @@ static const want_t motor_b_unop[] = {
     {MC_PARAM_protection_polarity_bias_a, 80.0, 0},
     {MC_PARAM_startup_catch_min_rpm, 30.0, 0},
     {MC_PARAM_estimator_l_adapt_s, 0.016666666666666666, 1e-5},
+    /* I/f: nice2(0.8 i_max); nice2(T_if / 8 / J) with T_if = 1.5 p psi_pm I_f, in rpm/s; the speed
+     * where psi_pm w = 5 (Vdc t_dead / Ts / 4 + 2 drop + Rs I_f / 2) (or 2 % of Vdc/sqrt3) */
+    {MC_PARAM_startup_if_i_a, 130.0, 1e-5},
+    {MC_PARAM_startup_if_accel_rpm_s, 1400.0, 1e-5},
+    {MC_PARAM_startup_if_handover_rpm, 140.0, 1e-5},
 };
 static const want_t motor_b_slow[] = {
     {MC_PARAM_control_i_trip_a, 240.0, 1e-5},
@@ -134,6 +144,11 @@ static const want_t motor_b_slow[] = {
     {MC_PARAM_protection_polarity_bias_a, 80.0, 0},
     {MC_PARAM_startup_catch_min_rpm, 30.0, 0},
     {MC_PARAM_estimator_l_adapt_s, 0.01, 1e-5},
+    /* I/f: nice2(0.8 i_max); nice2(T_if / 8 / J) with T_if = 1.5 p psi_pm I_f, in rpm/s; the speed
+     * where psi_pm w = 5 (Vdc t_dead / Ts / 4 + 2 drop + Rs I_f / 2) (or 2 % of Vdc/sqrt3) */
+    {MC_PARAM_startup_if_i_a, 130.0, 1e-5},
+    {MC_PARAM_startup_if_accel_rpm_s, 1400.0, 1e-5},
+    {MC_PARAM_startup_if_handover_rpm, 130.0, 1e-5},
 };
 static const want_t motor_a_manual[] = {
     {MC_PARAM_control_i_trip_a, 19.935, 1e-5},
@@ -172,6 +187,11 @@ static const want_t motor_a_manual[] = {
     {MC_PARAM_protection_polarity_bias_a, 6.6, 0},
     {MC_PARAM_startup_catch_min_rpm, 24.0, 0},
     {MC_PARAM_estimator_l_adapt_s, 0.01, 1e-5},
+    /* I/f: nice2(0.8 i_max); nice2(T_if / 8 / J) with T_if = 1.5 p psi_pm I_f, in rpm/s; the speed
+     * where psi_pm w = 5 (Vdc t_dead / Ts / 4 + 2 drop + Rs I_f / 2) (or 2 % of Vdc/sqrt3) */
+    {MC_PARAM_startup_if_i_a, 32.0, 1e-5},
+    {MC_PARAM_startup_if_accel_rpm_s, 7600.0, 1e-5},
+    {MC_PARAM_startup_if_handover_rpm, 190.0, 1e-5},
 };
 
 static void set(mc_params_t *p, const char *name, float v)
@@ -240,6 +260,18 @@ static void test_rules_thesis_motor(void **state)
     check(&p, motor_a, sizeof motor_a / sizeof motor_a[0]);
     mc_param_err_t err;
     assert_true(mc_params_validate(&p, &err));
+    /* the table's default of a rule is its value on the thesis motor: the parameter docs and
+     * the EDS print it as "rule (x on the thesis motor)", to three figures (1 %) */
+    int wrong = 0;
+    for (int id = 0; id < (int)MC_PARAM_COUNT; ++id) {
+        const mc_param_info_t *e = &mc_param_table[id];
+        if (e->rule != MC_RULE_NONE && !(fabsf(mc_param_get(&p, id) - e->def) <= 0.01f * fabsf(e->def))) {
+            print_error("%s: the table says %.9g on the thesis motor, its rule gives %.9g\n", e->name, (double)e->def,
+                        (double)mc_param_get(&p, id));
+            ++wrong;
+        }
+    }
+    assert_int_equal(wrong, 0);
 }
 
 static void test_rules_brodatzki_sensorless(void **state)
