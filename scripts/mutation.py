@@ -459,6 +459,7 @@ def main() -> int:
     ap.add_argument("--no-tce", action="store_true", help="C: do not compile a mutant alone first to set apart the ones that do not build, the equivalent and the duplicate")
     ap.add_argument("--resume", action="store_true", help="reuse the results in OUT/journal.jsonl of mutants whose file has not changed since")
     ap.add_argument("--retest-survivors", action="store_true", help="with --resume: test the journal's survivors again (after new tests)")
+    ap.add_argument("--only-survivors", action="store_true", help="with --resume: test the journal's survivors again and nothing else (a record put together from several runs, after new tests)")
     ap.add_argument("--summarize", action="store_true", help="write summary.json and report.md from OUT/journal.jsonl as it stands (a run stopped early, or shards' journals put together), test nothing")
     ap.add_argument("--shard", help="I/N: only the I-th of N interleaved parts of the mutants (1-based), for several machines")
     ap.add_argument("--equivalent", default="scripts/mutation_equivalent.txt")
@@ -562,8 +563,13 @@ def main() -> int:
             r = json.loads(ln)
             if r.get("key"):
                 done_before[r["key"]] = r
-        if a.retest_survivors:
+        survived = {k for k, r in done_before.items() if r["status"] == "survived"}
+        if a.retest_survivors or a.only_survivors:
             done_before = {k: r for k, r in done_before.items() if r["status"] != "survived"}
+        if a.only_survivors:   # the journal's survivors and nothing else (after new tests)
+            chosen = [m for m in chosen if mkey(m) in survived]
+            for f in RESERVE:
+                RESERVE[f] = []
         print(f"mutation: {len(done_before)} results reused from {journal}", flush=True)
     elif journal.exists():
         journal.unlink()
