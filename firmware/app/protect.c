@@ -100,7 +100,7 @@ uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc
     const bool swing = b->lock_n > 0u && dev2 > b->lock_floor * b->lock_floor;
     const bool lock_doubt = swing || !(fabsf(w_raw - omega) <= lock_band);
     if (in->lock_paused || in->open_loop) {
-        /* the re-check's bias moves the estimate: the lock checks wait for its verdict */
+        /* the re-check's bias moves the estimate, and I/f's frame leads instead: the checks wait */
     } else if (persists(&s->lock_n, lock_doubt, b->lock_n)) {
         return MC_FAULT_LOSS_OF_LOCK;
     } else if (s->lock_n > 0u && s->lock_n == b->lock_n / 4u) {
