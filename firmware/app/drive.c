@@ -314,7 +314,8 @@ static bool running_fault(mc_drive_t *d, const mc_angle_out_t *ang, mc_dq_t i_re
                                 .omega_raw = d->tm.omega_raw, .i_ref = i_ref, .i_fb = i_fb, .u_dq = d->cc.u,
                                 .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
                                 .speed_ref = d->cmd.speed_ref, .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
-                                .lock_paused = mc_polcheck_active(&d->pol), .open_loop = d->if_open};
+                                .lock_paused = mc_polcheck_active(&d->pol), .open_loop = d->if_open,
+                                .if_slip = d->if_slip};
     bool doubt = false;
     const uint32_t reason = mc_protect_running(&d->prot, &d->cfg->blk.prot, &in, &doubt);
     if (doubt) {

@@ -99,6 +99,13 @@ uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc
     const float dev2 = avg(&s->w_dev2, dev * dev, k);
     const bool swing = b->lock_n > 0u && dev2 > b->lock_floor * b->lock_floor;
     const bool lock_doubt = swing || !(fabsf(w_raw - omega) <= lock_band);
+    /* I/f's open loop: the frame a full electrical turn ahead of (or behind) the estimate. A
+     * rotor in step stays within its load angle of the frame (less than half a turn), so this is
+     * a pull-out (the load beyond I_f's torque, a ramp too fast for the inertia) or an estimator
+     * that does not see the rotor: either way the frame is not the rotor (mc/if_start.h) */
+    if (in->open_loop && !(fabsf(in->if_slip) < 2.0f * MC_PI)) {
+        return MC_FAULT_PULL_OUT;
+    }
     if (in->lock_paused || in->open_loop) {
         /* the re-check's bias moves the estimate, and I/f's frame leads instead: the checks wait */
     } else if (persists(&s->lock_n, lock_doubt, b->lock_n)) {

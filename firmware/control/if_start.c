@@ -63,6 +63,8 @@ void mc_if_step(mc_if_t *s, const mc_if_cfg_t *c, const mc_if_in_t *in, mc_if_ou
     out->handover = false;
     out->entered = false;
     out->reseed = false;
+    out->slip = 0.0f;
+    out->theta_reseed = 0.0f;
     if (s->mode == MC_IF_CLOSED) {
         if (!(fabsf(in->omega_est) < c->w_l)) {
             out->open = false;
@@ -93,6 +95,16 @@ void mc_if_step(mc_if_t *s, const mc_if_cfg_t *c, const mc_if_in_t *in, mc_if_ou
     out->omega = s->omega;
     const float delta = s->sign * mc_wrap_pi(in->theta_est - s->theta);
     out->delta = delta;
+    /* pull-out: from w_l on, where the estimate sees the rotor, the frame's advance since the
+     * last period against the estimate's; a rotor in step keeps the sum within its load angle */
+    const bool counted = !in->est_only && fabsf(s->omega) >= c->w_l;
+    if (counted && s->slip_on) {
+        s->slip += s->sign * (mc_wrap_pi(s->theta - s->frame_prev) - mc_wrap_pi(in->theta_est - s->est_prev));
+    }
+    s->slip_on = counted;
+    s->frame_prev = s->theta;
+    s->est_prev = in->theta_est;
+    out->slip = s->slip;
     const float dw = c->accel * c->ts;
     const float e = (in->est_only ? 0.0f : in->omega_target) - s->omega;
     s->omega += e > dw ? dw : (e < -dw ? -dw : e);
@@ -105,6 +117,10 @@ void mc_if_step(mc_if_t *s, const mc_if_cfg_t *c, const mc_if_in_t *in, mc_if_ou
     const bool sync = sync_above(s, c, in, delta);
     /* from w_l on the EMF carries the estimate: one that cannot be right is moved to the frame */
     out->reseed = !in->est_only && fabsf(out->omega) >= c->w_l && !plausible(s, in, delta);
+    out->theta_reseed = mc_wrap_pi(out->theta + s->sign * 0.25f * MC_PI);
+    if (out->reseed) {
+        s->est_prev = out->theta_reseed;   /* the estimate's jump is not the rotor's motion */
+    }
     if (s->mode == MC_IF_OPEN) {
         s->n = sync ? s->n + 1u : 0u;
         if (s->n >= c->n_sync && in->est_only) {

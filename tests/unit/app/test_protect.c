@@ -763,6 +763,38 @@ static void test_reactions(void **st)
     assert_true(mc_protect_reaction_done(&c, 475.0f, 300.0f));
 }
 
+/* I/f's open loop (mc/if_start.h): the frame a full electrical turn off the estimate is a
+ * pull-out at once (either way, NaN too), just under a turn is not; out of open loop the slip
+ * means nothing. In open loop the lock checks and the voltage model wait (the frame leads). */
+static void test_pull_out(void **st)
+{
+    (void)st;
+    const mc_protect_cfg_t c = config();
+    mc_protect_t s;
+    const float turn = 2.0f * MC_PI;
+    const float slips[] = {0.999f * turn, -0.999f * turn, 1.0001f * turn, -1.0001f * turn, NAN};
+    for (int k = 0; k < 5; ++k) {
+        mc_protect_reset(&s, &c, 300.0f);
+        mc_protect_in_t in = steady(&c, 300.0f, 5.0f);
+        in.open_loop = true;
+        in.if_slip = slips[k];
+        assert_int_equal(run(&s, &c, &in, k < 2 ? 3000 : 1, NULL), k < 2 ? 0u : MC_FAULT_PULL_OUT);
+        mc_protect_reset(&s, &c, 300.0f);
+        in.open_loop = false;
+        assert_int_equal(run(&s, &c, &in, 3000, NULL), 0u);
+    }
+    /* open loop: the raw speed far off, the raw angle off, the voltage unexplained: nothing */
+    mc_protect_reset(&s, &c, 300.0f);
+    mc_protect_in_t in = steady(&c, 300.0f, 5.0f);
+    in.open_loop = true;
+    in.omega_raw = 100.0f;
+    in.theta_raw = in.theta + 2.0f;
+    in.u_dq.q += 50.0f;
+    assert_int_equal(run(&s, &c, &in, 3000, NULL), 0u);
+    in.open_loop = false;
+    assert_int_not_equal(run(&s, &c, &in, 3000, NULL), 0u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -783,6 +815,7 @@ int main(void)
         cmocka_unit_test(test_reset_restarts_persistence),
         cmocka_unit_test(test_built_detection_times),
         cmocka_unit_test(test_reactions),
+        cmocka_unit_test(test_pull_out),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -176,13 +176,111 @@ static void test_est_only(void **st)
     assert_float_equal(o.theta, 2.0f, 0.0f);
 }
 
+/* The slip (pull-out): a rotor in step swinging +-60 deg about a 40 deg load angle keeps it within
+ * a swing of the frame however long it runs; a stalled rotor (the estimate at rest, reseeded
+ * whenever it cannot be the rotor's) loses a full turn once the frame has advanced 2 pi from w_l,
+ * and the reseeds' jumps are not counted as the rotor's motion. */
+static void run_slip(const mc_if_cfg_t *c, mc_if_t *s, int n, float sign, bool stalled, float *slip_max, int *k_turn)
+{
+    mc_if_out_t o = {0};
+    float est = 0.0f, frame_adv = 0.0f, frame_prev = 0.0f;
+    *slip_max = 0.0f;
+    *k_turn = -1;
+    for (int k = 0; k < n; ++k) {
+        const float t = (float)k * c->ts;
+        if (!stalled) {
+            est = mc_wrap_pi(s->theta + sign * (0.7f + 1.05f * sinf(2.0f * MC_PI * 7.0f * t)));
+        }
+        const float w_est = stalled ? 0.0f : s->omega;
+        const mc_if_in_t in = {.omega_target = sign * (stalled ? 300.0f : 90.0f), .theta_est = est, .omega_est = w_est};
+        const bool counted = s->slip_on;
+        mc_if_step(s, c, &in, &o);
+        assert_true(o.open);
+        assert_float_equal(o.slip, s->slip, 0.0f);
+        if (counted && s->slip_on) {   /* the frame's motion since the last period, as counted */
+            frame_adv += fabsf(mc_wrap_pi(o.theta - frame_prev));
+        }
+        frame_prev = o.theta;
+        if (o.reseed) {
+            est = o.theta_reseed;   /* the source reset there; a stalled one stays */
+            assert_float_equal(o.theta_reseed, mc_wrap_pi(o.theta + sign * 0.25f * MC_PI), 1e-6f);
+        }
+        *slip_max = fmaxf(*slip_max, o.slip);
+        if (*k_turn < 0 && fabsf(o.slip) >= 2.0f * MC_PI) {
+            *k_turn = k;
+            /* never more than the frame turned since the count began (stalled: exactly that,
+             * the reseeds' jumps left out) */
+            assert_true(fabsf(o.slip) <= frame_adv + 1e-3f);
+            if (stalled) {
+                assert_float_equal(fabsf(o.slip), frame_adv, 1e-3f);
+            }
+        }
+    }
+}
+
+static void test_slip_in_step(void **st)
+{
+    (void)st;
+    const mc_if_cfg_t c = cfg();
+    for (int sg = -1; sg <= 1; sg += 2) {
+        mc_if_t s;
+        mc_if_enter(&s, &c, 0.0f, 0.0f, (float)sg);
+        float mx;
+        int k;
+        run_slip(&c, &s, 20000, (float)sg, false, &mx, &k);   /* 2 s, up to 90 rad/s: open loop */
+        assert_int_equal(k, -1);
+        assert_true(fabsf(s.slip) < 2.0f);   /* within the swing: 0.7 +- 1.05 rad about the start */
+    }
+}
+
+static void test_slip_stalled(void **st)
+{
+    (void)st;
+    const mc_if_cfg_t c = cfg();
+    for (int sg = -1; sg <= 1; sg += 2) {
+        mc_if_t s;
+        mc_if_enter(&s, &c, 0.0f, 0.0f, (float)sg);
+        float mx;
+        int k;
+        run_slip(&c, &s, 20000, (float)sg, true, &mx, &k);
+        /* counted from w_l = 50 rad/s (k = 500) on the 1000 rad/s^2 ramp, the reseeds (every
+         * quarter turn of the frame) not undoing any of it: a turn once 50 t + 500 t^2 = 2 pi,
+         * t = 72.7 ms */
+        assert_true(k >= 500 + 722);
+        assert_true(k <= 500 + 732);
+        assert_true(mx >= 2.0f * MC_PI);   /* positive: the frame ahead in the torque's direction, either sign */
+    }
+}
+
+/* Not counted: below w_l, and in torque mode (est_only: no frame speed of its own) */
+static void test_slip_not_counted(void **st)
+{
+    (void)st;
+    const mc_if_cfg_t c = cfg();
+    mc_if_t s;
+    mc_if_enter(&s, &c, 0.0f, 0.0f, 1.0f);
+    mc_if_out_t o;
+    for (int k = 0; k < 490; ++k) {   /* up to 49 rad/s */
+        const mc_if_in_t in = {.omega_target = 300.0f, .theta_est = 0.0f, .omega_est = 0.0f};
+        mc_if_step(&s, &c, &in, &o);
+        assert_float_equal(o.slip, 0.0f, 0.0f);
+    }
+    mc_if_enter(&s, &c, 0.0f, 200.0f, 1.0f);
+    for (int k = 0; k < 2000; ++k) {
+        const mc_if_in_t in = {.theta_est = 0.0f, .omega_est = 0.0f, .est_only = true};
+        mc_if_step(&s, &c, &in, &o);
+        assert_float_equal(o.slip, 0.0f, 0.0f);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cfg_valid),         cmocka_unit_test(test_ramp_and_angle),
         cmocka_unit_test(test_handover_after_reduction), cmocka_unit_test(test_reentry_hysteresis),
         cmocka_unit_test(test_alignment),         cmocka_unit_test(test_reseed_mirror),
-        cmocka_unit_test(test_est_only),
+        cmocka_unit_test(test_est_only),          cmocka_unit_test(test_slip_in_step),
+        cmocka_unit_test(test_slip_stalled),      cmocka_unit_test(test_slip_not_counted),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

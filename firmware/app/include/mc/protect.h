@@ -61,6 +61,8 @@ typedef struct {
                                     lock checks wait for its verdict                            */
     bool open_loop;              /* I/f (mc/if_start.h) runs: the frame is not the estimate, the
                                     lock checks (both) and the voltage model wait               */
+    float if_slip;               /* ... and the frame has gained this on the estimate [rad]:
+                                    a full turn is a pull-out (mc_if_out_t.slip)                */
 } mc_protect_in_t;
 
 /* The residual of the steady-state model (5.1) for voltage u, current i at speed w [V, A, rad/s el]:

@@ -43,6 +43,7 @@ X(STALL,          12, "stall",              0x7121u, GENERIC, OFF,     0, "Speed
 X(OVERRUN,        13, "isr_overrun",        0x6100u, GENERIC, OFF,     0, "The ISR overran its period (the port's flag).") \
 X(VOLTAGE_MODEL,  14, "voltage_model",      0x7300u, GENERIC, OFF,     1, "The voltage the current loop needs does not fit the motor model at the angle source's speed: a frozen encoder, a wrong estimate, an open phase.") \
 X(TORQUE,         15, "torque_plausibility", 0x8300u, GENERIC, OFF,    0, "Speed mode: strong torque one way, the speed estimate accelerating hard the other way (a wrong angle, an overload beyond the limit).") \
+X(PULL_OUT,       16, "pull_out",           0x7121u, GENERIC, OFF,     0, "I/f open loop: the frame a full electrical turn off the estimate: the rotor pulled out (a load beyond I_f's torque, a locked rotor) or the estimator does not see it.") \
 /* end of MC_FAULTS: a new row goes above this line */
 
 /* The emergency codes the table may use (CiA 301 Table 21, CiA 402 Annex), with their meaning. */

@@ -49,6 +49,13 @@ typedef struct {
     float sign;        /* +1 / -1: the torque direction the current is placed for            */
     uint32_t n;        /* periods the hand-over condition held                                */
     uint32_t align;    /* alignment periods left (mc_if_align)                                */
+    float slip;        /* [rad] the frame's advance minus the estimate's (its reseeds left out),
+                        * summed in open loop from w_l on, times sign: a rotor in step stays
+                        * within a load angle of it, one that pulled out loses a turn per slip
+                        * period                                                             */
+    float frame_prev;  /* [rad] last period's frame and estimate, for the slip                */
+    float est_prev;
+    bool  slip_on;     /* the slip counted last period                                        */
 } mc_if_t;
 
 typedef struct {
@@ -73,6 +80,9 @@ typedef struct {
                           * set it to (theta + sign pi/4, omega) now, the middle of the load
                           * angles a synchronous rotor takes (on a machine without saliency the
                           * EMF alone has the mirrored solution theta + pi, -omega too)         */
+    float theta_reseed;  /* [rad] that angle                                                   */
+    float slip;          /* [rad] mc_if_t.slip: at a full turn (2 pi) the rotor is out of step
+                          * or the estimator does not see it (the caller's pull-out fault)     */
 } mc_if_out_t;
 
 /* A configuration is usable when its numbers are finite and ordered: 0 < w_l < w_h, i_f > 0,
