@@ -317,6 +317,14 @@ DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& m
                      built->blk.if_from_zero ? ", started by I/f: the motor model's saliency is not usable for the "
                                                "injection (or startup.init_pos = if_start)"
                                              : ": the motor model's saliency is not usable for the injection");
+        if (sc.s("control.mode") == "torque") {
+            // I/f has no speed to ramp to in torque mode: said, not left for the user to find out
+            std::fprintf(stderr,
+                         "mcsim: note: torque mode below %g rpm on this motor: I/f holds its frame still and the "
+                         "torque is NOT controlled there; the estimator takes over once the load turns the rotor above it. "
+                         "Use speed mode, an encoder, or run above that speed\n",
+                         static_cast<double>(built->p.startup_if_handover_rpm));
+        }
     }
     return ds;
 }
