@@ -30,7 +30,8 @@ void mc_protect_reset(mc_protect_t *s, const mc_protect_cfg_t *c, float omega)
     s->err_d = s->err_q = s->w_dev2 = 0.0f;
     /* the averages start where a steady state at the estimate's speed (a caught rotor) would
      * have them: speeds at omega, the voltage at its back-EMF with no current */
-    s->w_raw = s->w = omega;
+    s->w_raw = s->w = s->w_trk = omega;
+    s->a_trk = 0.0f;
     s->u_d = s->i_d = s->i_q = 0.0f;
     s->u_q = omega * c->psi_pm;
 }
@@ -78,6 +79,19 @@ uint32_t mc_protect_sensors(mc_protect_t *s, const mc_protect_cfg_t *c, const ha
     return sensors;
 }
 
+/* The speed's swing for the loss-of-lock check: its deviation from a critically damped
+ * alpha-beta track (double pole at 1 - k: the 20 Hz of the averages). A ramp is not a swing: a
+ * first-order average lags a steady acceleration a by a ts / k (a 4500 rpm/s ramp on a 21-pole-
+ * pair motor: 36 rpm, beyond its 24 rpm floor), the track none; a swing well above 20 Hz (the
+ * L-error one: ~200 Hz) passes as before. */
+static float swing_dev(mc_protect_t *s, float omega, float k, float ts)
+{
+    const float e = omega - (s->w_trk + s->a_trk * ts);
+    s->w_trk += s->a_trk * ts + (2.0f * k - k * k) * e;
+    s->a_trk += k * k * e / ts;
+    return e;
+}
+
 uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc_protect_in_t *in, bool *doubt)
 {
     *doubt = false;
@@ -91,11 +105,11 @@ uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc
     const float k = b->avg_k;
     const float w_raw = avg(&s->w_raw, omega_raw, k);
     const float lock_band = b->lock_tol * fabsf(omega) + b->lock_floor;
-    /* ... or the filtered speed itself swinging about its 20 Hz average by more than the floor
+    /* ... or the filtered speed itself swinging about its 20 Hz track by more than the floor
      * (rms): an estimator whose speed error feeds back through the speed and current loops
      * (a model error, see docs/protection.md) oscillates like this for a while before it loses
      * the angle */
-    const float dev = omega - s->w;
+    const float dev = swing_dev(s, omega, k, b->ts);
     const float dev2 = avg(&s->w_dev2, dev * dev, k);
     const bool swing = b->lock_n > 0u && dev2 > b->lock_floor * b->lock_floor;
     const bool lock_doubt = swing || !(fabsf(w_raw - omega) <= lock_band);

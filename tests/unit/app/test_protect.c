@@ -569,6 +569,25 @@ static void test_lock_limits(void **st)
             assert_true(n >= t && n <= t + 30);
         }
     }
+    /* a ramp is not a swing: a steady acceleration whose first-order lag a ts / k is twice the
+     * floor (a 20 Hz average of a 5000 rad/s^2 ramp) never trips, a swing on top of it still
+     * does (the 1.1 x case above, riding the ramp) */
+    for (int side = 0; side < 2; ++side) {
+        const float a = 2.0f * c.lock_floor * c.avg_k / TS;
+        const float amp = side == 0 ? 0.0f : 1.1f * c.lock_floor * 1.41421356f;
+        mc_protect_t s;
+        mc_protect_reset(&s, &c, 300.0f);
+        uint32_t r = 0u;
+        int n = 0;
+        for (; r == 0u && n < 1200; ++n) {
+            const float w = 300.0f + a * TS * (float)n;
+            mc_protect_in_t in = steady(&c, w, 5.0f);
+            in.omega = in.omega_raw = w + amp * sinf(6.2831853f * 200.0f * TS * (float)n);
+            bool doubt;
+            r = mc_protect_running(&s, &c, &in, &doubt);
+        }
+        assert_int_equal(r, side == 0 ? 0u : MC_FAULT_LOSS_OF_LOCK);
+    }
     /* the fast path */
     for (int sign = -1; sign <= 1; sign += 2) {
         for (int side = 0; side < 2; ++side) {

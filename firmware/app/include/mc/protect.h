@@ -43,7 +43,8 @@ typedef struct {
     uint32_t i_sum_n, track_n, lock_n, stall_n, resid_n, accel_n, jump_n;   /* periods the condition held */
     float w_prev, accel;         /* last speed, its derivative low-passed [rad/s^2 el]          */
     float w_raw, err_d, err_q;   /* averages (cfg.avg_k): raw speed, current error              */
-    float w_dev2;                /* mean square of the speed's swing about w                    */
+    float w_dev2;                /* mean square of the speed's swing about its track            */
+    float w_trk, a_trk;          /* that track: speed, acceleration [rad/s, rad/s^2 el]         */
     float u_d, u_q, i_d, i_q, w; /* voltage, current, speed for the residual                    */
     uint32_t retries;            /* recoveries since the last retry_reset_n periods of clean RUN */
 } mc_protect_t;
