@@ -111,6 +111,28 @@ def test_if_start_for_motors_without_saliency(tmp_path):
     assert starts[(THESIS.name, "theta0=90")] == "initpos_sweep.toml"
 
 
+def test_if_start_target_above_the_drives_handover(tmp_path):
+    """The I/f start is judged after the hand-over: where 0.2 N_b is below 1.5 x the hand-over
+    speed the drive reports (`mcsim check`), the target is raised to that; without the note (or
+    without a simulator) it stays."""
+    lv = Motor("lv", 2315.4, 1.06, 14.0, 20000.0, 1.0)
+    fake = tmp_path / "check_mcsim.py"
+    fake.write_text("#!/usr/bin/env python3\nimport sys\n"
+                    "print('mcsim: note: the drive runs I/f below 600 rpm (startup.if_handover_rpm)', "
+                    "file=sys.stderr)\n")
+    fake.chmod(0o755)
+    build_runs([lv], tmp_path / "a", (0.0,), short=True, mcsim=str(fake))
+    d = tomllib.loads((tmp_path / "a" / "lv" / "start_if.toml").read_text())
+    assert d["control"]["speed_ref_rpm"][-1] == [0.25, 900.0]
+    build_runs([lv], tmp_path / "b", (0.0,), short=True)
+    d = tomllib.loads((tmp_path / "b" / "lv" / "start_if.toml").read_text())
+    assert d["control"]["speed_ref_rpm"][-1] == [0.25, pytest.approx(463.1, abs=0.05)]
+    spm = Motor("spm", 7155.0, 5.0, 8.06, 8000.0, 1.0)   # 1431 rpm > 1.5 x 600: unchanged
+    build_runs([spm], tmp_path / "c", (0.0,), short=True, mcsim=str(fake))
+    d = tomllib.loads((tmp_path / "c" / "spm" / "start_if.toml").read_text())
+    assert d["control"]["speed_ref_rpm"][-1] == [0.25, 1431.0]
+
+
 def test_if_windows_judged(tmp_path):
     """A window the drive spent in I/f has no estimated angle: named, not an angle error; a run
     still in I/f in every window fails with that reason."""
