@@ -10,7 +10,7 @@ import pytest
 from fakes import write_fake_mcsim
 from mctools import cli
 from mctools.sweep.common import SweepInputError
-from mctools.sweep.envelope import (DOC_BEGIN, DOC_END, classify_run, envelope_errors,
+from mctools.sweep.envelope import (DOC_BEGIN, DOC_END, classify_run, envelope_errors, percentile,
                                     replace_doc_section, summarize_cell)
 
 
@@ -124,15 +124,15 @@ def test_cell_failed_and_empty():
 def test_errors_grid():
     rows = envelope_errors()
     keys = [r.key for r in rows]
-    assert len(set(keys)) == len(keys) == 22
+    assert len(set(keys)) == len(keys) == 26
     assert keys[:2] == ["exact_fluxmap", "exact_const"] and rows[0].sets == rows[1].sets == ()
     by = {r.key: r for r in rows}
     assert by["l_0.8_const"].sets == ("estimator.l_scale=0.8",)
     assert by["l_0.95_fluxmap"].sets == ("estimator.l_scale=0.95",) and "l_0.95_const" not in by
     assert by["cross_1.25_fluxmap"].sets == ("estimator.cross_scale=1.25",)
     assert "cross_1.25_const" not in by
-    assert {k for k in keys if k.startswith("rs_")} == {"rs_0.7_const", "rs_1.3_const",
-                                                        "rs_0.7_fluxmap", "rs_1.3_fluxmap"}
+    assert {k for k in keys if k.startswith("rs_")} == {f"rs_{f}_{m}" for f in ("0.5", "0.7", "1.3", "2")
+                                                        for m in ("const", "fluxmap")}
     assert {k for k in keys if k.startswith("psi_")} == {"psi_0.9_const", "psi_1.1_const",
                                                          "psi_0.9_fluxmap", "psi_1.1_fluxmap"}
     assert all(len(r.sets) <= 1 for r in rows)  # one error at a time
@@ -208,9 +208,9 @@ def test_envelope_command(env):
                        str(root / "two.toml"), "--seeds", "1", "--jobs", "4", "--mcsim", str(fake),
                        "--out", str(out), "--doc", str(doc))
     assert rc == 1  # two runs failed
-    assert "[44/44]" in e and "elapsed" in e  # progress on stderr, one line per cell
+    assert "[52/52]" in e and "elapsed" in e  # progress on stderr, one line per cell
     data = json.loads((out / "envelope.json").read_text())
-    assert data["seeds"] == 1 and data["runs_total"] == 44 and len(data["cells"]) == 44
+    assert data["seeds"] == 1 and data["runs_total"] == 52 and len(data["cells"]) == 52
     cells = {(c["error_key"], c["scenario"]): c for c in data["cells"]}
     assert cells[("exact_fluxmap", "one")]["text"] == "holds 1.1°"
     assert cells[("exact_const", "one")]["text"] == "holds 5.1°"
@@ -236,7 +236,7 @@ def test_envelope_command(env):
     text = doc.read_text()
     assert "old table" not in text and text.startswith("# Results\n\n" + DOC_BEGIN)
     assert text.endswith(f"{DOC_END}\n\n## Later\n") and md.strip() in text
-    assert "sweep envelope: 44 runs, 2 failed" in o
+    assert "sweep envelope: 52 runs, 2 failed" in o
 
 
 def test_envelope_fail_on_runoff(env):
@@ -260,3 +260,15 @@ def test_envelope_input_errors(env):
     rc, _, e = run_cli("sweep", "envelope", "--scenarios", str(root / "one.toml"),
                        str(root / "one.toml"), "--mcsim", str(fake), "--out", str(root / "x"))
     assert rc == 2 and "same file name" in e
+
+
+def test_holding_cell_percentile():
+    """Over 5 seeds and more a holding cell also gives the nearest-rank 90th percentile of its
+    steady error (the worst stays the headline)."""
+    assert percentile([], 90.0) is None
+    assert percentile([3.0], 90.0) == 3.0
+    xs = [5.1 + i / 10 for i in range(10)]
+    assert percentile(xs, 90.0) == pytest.approx(5.9) and percentile(xs, 50.0) == pytest.approx(5.5)
+    runs = [{"outcome": "holds", "steady_deg": x, "angle_err_max_deg": x} for x in xs]
+    assert summarize_cell(runs)["text"] == "holds 6.0° (p90 5.9°)"
+    assert summarize_cell(runs[:4])["text"] == "holds 5.4°"   # fewer than 5 seeds: the worst only

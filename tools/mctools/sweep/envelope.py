@@ -19,7 +19,8 @@ from mctools.sweep.common import SweepInputError, f_toml, number, run_seed_batch
 ENVELOPE_SCENARIOS = ("scenarios/envelope/standstill_loaded.toml",
                       "scenarios/envelope/speed_reversal.toml",
                       "scenarios/envelope/torque_steps_300rpm.toml",
-                      "scenarios/sensorless_demo.toml")
+                      "scenarios/sensorless_demo.toml",
+                      "scenarios/brodatzki/speed_demo.toml")
 LOST_DEG = 90.0  # an angle error at or beyond this is a lost estimate
 PEAK_NOTE_DEG = 45.0  # a holding cell names its transient peak from here on
 DOC_BEGIN, DOC_END = "<!-- envelope:begin -->", "<!-- envelope:end -->"
@@ -45,7 +46,7 @@ def envelope_errors() -> list[EnvelopeError]:
         rows.append(EnvelopeError(f"exact_{model}", "exact (reference)", model, ()))
     groups = (("l_scale", "L", (0.8, 0.9, 0.95, 1.05, 1.1, 1.2), ("const", "fluxmap")),
               ("psi_scale", "ψpm", (0.9, 1.1), ("const", "fluxmap")),
-              ("rs_scale", "Rs", (0.7, 1.3), ("const", "fluxmap")),
+              ("rs_scale", "Rs", (0.5, 0.7, 1.3, 2.0), ("const", "fluxmap")),
               ("cross_scale", "cross-saturation", (0.75, 1.25), ("fluxmap",)))
     for key, name, factors, models in groups:
         for model in models:
@@ -107,6 +108,16 @@ def classify_run(metrics: dict | None, error: str | None = None) -> dict:
             "steady_deg": steady_angle_deg(metrics)}
 
 
+def percentile(xs: list[float], q: float) -> float | None:
+    """The nearest-rank q-th percentile (the smallest value with at least q % of them at or
+    below it); None for no values."""
+    if not xs:
+        return None
+    v = sorted(xs)
+    k = max(1, -(-len(v) * q // 100))   # ceil(n q / 100)
+    return v[int(k) - 1]
+
+
 def _deg(v: float | None, digits: int = 1) -> str:
     return "?" if v is None else f"{v:.{digits}f}°"
 
@@ -118,6 +129,9 @@ def _outcome_text(outcome: str, sel: list[dict], n: int) -> str:
     notes = [f"{len(sel)}/{n}"] if len(sel) < n else []
     if outcome == "holds":
         text = f"holds {_deg(maxof('steady_deg'))}"
+        p90 = percentile([r["steady_deg"] for r in sel if r.get("steady_deg") is not None], 90.0)
+        if len(sel) >= 5 and p90 is not None:
+            notes.append(f"p90 {_deg(p90)}")
         peak = maxof("angle_err_max_deg")
         if peak is not None and peak >= PEAK_NOTE_DEG:
             notes.append(f"peak {_deg(peak, 0)}")
