@@ -25,7 +25,7 @@ def metrics(faults=(), amax=1.0, steady=0.5, t_fault=None, windows=None):
 def test_classify_holds_trips_runs_off():
     assert classify_run(metrics(amax=12.0, steady=-3.5)) == {
         "outcome": "holds", "faults": [], "recoveries": 0, "recovered_from": [], "fault_time_s": None,
-        "angle_err_max_deg": 12.0, "steady_deg": 3.5}
+        "angle_err_max_deg": 12.0, "steady_deg": 3.5, "current_ratio": None}
     c = classify_run(metrics(["voltage_model"], amax=40.0, steady=None, t_fault=0.22))
     assert c["outcome"] == "trips" and c["faults"] == ["voltage_model"] and c["fault_time_s"] == 0.22
     # no fault, angle lost: the finding
@@ -272,3 +272,19 @@ def test_holding_cell_percentile():
     runs = [{"outcome": "holds", "steady_deg": x, "angle_err_max_deg": x} for x in xs]
     assert summarize_cell(runs)["text"] == "holds 6.0° (p90 5.9°)"
     assert summarize_cell(runs[:4])["text"] == "holds 5.4°"   # fewer than 5 seeds: the worst only
+
+
+def test_cell_names_current_over_the_limit():
+    """A limit is a limit in every mode: a cell names the worst seed's peak current above
+    1.1 x the configured limit, whatever its outcome."""
+    ok = classify_run({"faults": [], "angle_err_max_deg": 3.0, "angle_err_steady_max_deg": 2.0,
+                       "current_peak_a": 11.0, "current_limit_a": 10.0})
+    over = classify_run({"faults": [], "angle_err_max_deg": 3.0, "angle_err_steady_max_deg": 2.5,
+                         "current_peak_a": 14.7, "current_limit_a": 10.0})
+    assert ok["current_ratio"] == pytest.approx(1.1) and over["current_ratio"] == pytest.approx(1.47)
+    assert summarize_cell([ok])["text"] == "holds 2.0°"
+    assert summarize_cell([ok, over])["text"] == "holds 2.5° (**current 1.47 × limit**)"
+    tripped = classify_run({"faults": ["overcurrent"], "angle_err_max_deg": 30.0, "fault_time_s": 0.2,
+                            "current_peak_a": 30.0, "current_limit_a": 10.0})
+    assert summarize_cell([tripped])["text"] == "trips: overcurrent at 0.20 s (max 30°, **current 3.00 × limit**)"
+    assert classify_run({"faults": []})["current_ratio"] is None

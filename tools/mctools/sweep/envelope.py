@@ -23,6 +23,7 @@ ENVELOPE_SCENARIOS = ("scenarios/envelope/standstill_loaded.toml",
                       "scenarios/brodatzki/speed_demo.toml")
 LOST_DEG = 90.0  # an angle error at or beyond this is a lost estimate
 PEAK_NOTE_DEG = 45.0  # a holding cell names its transient peak from here on
+CURRENT_NOTE_X = 1.1  # a cell names its peak phase current above this x the configured limit
 DOC_BEGIN, DOC_END = "<!-- envelope:begin -->", "<!-- envelope:end -->"
 # worst first: the cell shows the worst outcome over its seeds
 OUTCOME_RANK = {"holds": 0, "no_run": 1, "recovers": 2, "trips": 3, "runs_off": 4, "failed": 5}
@@ -105,7 +106,14 @@ def classify_run(metrics: dict | None, error: str | None = None) -> dict:
             "recovered_from": [str(f) for f in (metrics.get("recovered_from") or [])],
             "fault_time_s": number(metrics.get("fault_time_s")),
             "angle_err_max_deg": None if amax is None else abs(amax),
-            "steady_deg": steady_angle_deg(metrics)}
+            "steady_deg": steady_angle_deg(metrics),
+            "current_ratio": current_ratio(metrics)}
+
+
+def current_ratio(m: dict) -> float | None:
+    """The peak phase current over the configured limit (current_peak_a / current_limit_a)."""
+    pk, lim = number(m.get("current_peak_a")), number(m.get("current_limit_a"))
+    return pk / lim if pk is not None and lim else None
 
 
 def percentile(xs: list[float], q: float) -> float | None:
@@ -165,6 +173,9 @@ def _outcome_text(outcome: str, sel: list[dict], n: int) -> str:
         text = "never ran"
     else:
         text = "run failed"
+    over = maxof("current_ratio")
+    if over is not None and over > CURRENT_NOTE_X:
+        notes.append(f"**current {over:.2f} × limit**")   # a limit is a limit, in every mode
     return text + (f" ({', '.join(notes)})" if notes else "")
 
 
@@ -194,7 +205,8 @@ def envelope_markdown(rows: list[EnvelopeError], scen_names: list[str], cells: d
     counts = {o: sum(1 for c in cells.values() if c["outcome"] == o) for o in OUTCOME_RANK}
     silent = sum(1 for c in cells.values() if c.get("silent_runs_off"))
     lines = ["## Robustness envelope: estimator parameter errors × sensorless scenarios", "",
-             f"`{command}`: sun2016-ipm-5kw, UNOP, one estimator parameter wrong at a time (the "
+             f"`{command}`: UNOP on the scenarios' motors (sun2016-ipm-5kw unless the column "
+             f"is brodatzki's), one estimator parameter wrong at a time (the "
              f"others exact), scenario.seed = 1..{seeds} per cell, {n_runs} runs in {wall:.0f} s. "
              f"A cell shows the worst of its seeds (then the other outcomes; k/{seeds}: how many seeds had it): "
              f"**holds x°** no fault and the angle error stayed below {LOST_DEG:g}°, x = the largest "
@@ -207,7 +219,10 @@ def envelope_markdown(rows: list[EnvelopeError], scen_names: list[str], cells: d
              f"else \"then reason\" (the trip came after the angle was lost); **recovers ×k (reason), then x°** "
              f"the firmware detected the loss (reason), turned the outputs off and caught the rotor "
              f"again k times (protection.lock_action = recover, the default) and ran on without a "
-             f"fault, x = the steady error after. L = the estimator's "
+             f"fault, x = the steady error after; \"p90\": the 90th percentile of the steady "
+             f"error over the seeds (5 or more); **current k × limit**: a seed's peak phase "
+             f"current above {CURRENT_NOTE_X:g} × the configured limit (`current_peak_a` / "
+             f"`current_limit_a`). L = the estimator's "
              f"estimator.l_scale: the constants Ld, Lq (const model) or the flux map's "
              f"current-dependent part (fluxmap); ψpm = psi_scale, Rs = rs_scale, "
              f"cross-saturation = cross_scale (flux-map model only; docs/simulator.md "
