@@ -77,7 +77,8 @@ static uint32_t periods_up(float x)
 static float catch_i1(const mc_est_model_t *m, float w, float ts)
 {
     const float dl = w * ts;
-    return m->psi_pm * hypotf((cosf(dl) - 1.0f) / m->ld, sinf(dl) / m->lq);
+    const float id = (cosf(dl) - 1.0f) / m->ld, iq = sinf(dl) / m->lq;
+    return m->psi_pm * sqrtf(id * id + iq * iq);
 }
 
 /* The catch (mc/catch.h) from the estimator's model: the time the back-EMF at the slowest speed
