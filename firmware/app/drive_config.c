@@ -73,6 +73,14 @@ static uint32_t periods_up(float x)
     return x < 1.0f ? 1u : (x > 1.0e6f ? 1000000u : (uint32_t)ceilf(x));
 }
 
+/* The current one V(000) period drives at speed w by (C.1) of mc/catch.h, from i = 0 [A]. */
+static float catch_i1(const mc_est_model_t *m, float w, float ts)
+{
+    const float dl = w * ts;
+    const float id = (cosf(dl) - 1.0f) / m->ld, iq = sinf(dl) / m->lq;
+    return m->psi_pm * sqrtf(id * id + iq * iq);
+}
+
 /* The catch (mc/catch.h) from the estimator's model: the time the back-EMF at the slowest speed
  * that counts as turning takes to drive a current, i Lq / (psi_pm w_min), sets the probe (a
  * quarter of catch_i_a), the longest pulse (1.5 x catch_i_a) and the longest gap (a 20 deg turn). */
@@ -99,6 +107,26 @@ static void build_catch(const mc_params_t *p, const mc_est_model_t *m, mc_drive_
     }
     if (b->flying.n_wait_max > b->flying.n_gap_max) {
         b->flying.n_wait_max = b->flying.n_gap_max;
+    }
+    /* The shortest pulse is one period: where it drives more than 1.1 i_max below the generation
+     * speed, the catch cannot keep the limit there at this f_s (siemens-1ft7044-spm at 8 kHz:
+     * 10 A for 8.06 A at its base speed). The speed it still can, for the configuration's
+     * report, by bisection of (C.1), monotone in w ts up to pi. */
+    const float i_lim = 1.1f * p->control_i_max_a;
+    b->flying.w_limit = 0.0f;
+    b->flying.ts_cover = 0.0f;
+    if (catch_i1(m, w_ug, p->control_ts_s) > i_lim) {
+        float lo = 0.0f, hi = fminf(w_ug, MC_PI / p->control_ts_s);
+        for (int k = 0; k < 24; ++k) {
+            const float mid = 0.5f * (lo + hi);
+            if (catch_i1(m, mid, p->control_ts_s) > i_lim) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        b->flying.w_limit = lo;
+        b->flying.ts_cover = lo * p->control_ts_s / w_ug;   /* (C.1) depends on w ts only */
     }
     b->seq.timeout_catch =
         (float)(2u * b->flying.n_pulse_max + 2u * b->flying.n_gap_max + 10u) * p->control_ts_s;

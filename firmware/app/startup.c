@@ -107,10 +107,15 @@ static bool begin_step1(mc_drive_t *d)
 }
 
 /* RUN's current references start from the current that flows (bumpless: a rotor caught or
- * enabled at speed carries the diodes' or the catch's current), in the frame at theta. */
+ * enabled at speed carries the diodes' or the catch's current), in the frame at theta, but
+ * within the references' limit: a catch at speed may end above it (one zero-vector period of a
+ * low-inductance motor, mc/catch.h), and references there would hold the current above it. */
 static void refs_from_current(mc_drive_t *d, mc_ab_t i_ab, float theta)
 {
-    d->i_ref_prev = mc_park(i_ab, mc_sincos(mc_wrap_pi(theta)));
+    const mc_dq_t i = mc_park(i_ab, mc_sincos(mc_wrap_pi(theta)));
+    const float m = sqrtf(i.d * i.d + i.q * i.q), lim = d->cfg->blk.i_ref_max;
+    const float k = m > lim ? lim / m : 1.0f;
+    d->i_ref_prev = (mc_dq_t){k * i.d, k * i.q};
 }
 
 /* A RUN entry that may find the rotor turning (the catch, an angle-sensor drive): the field-

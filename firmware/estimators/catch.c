@@ -415,7 +415,12 @@ mc_ip_status_t mc_catch_step(mc_catch_t *s, mc_ab_t i_ab, float vdc, mc_abc_t *d
         s->psi2 = s->psi;
         s->phase = END;
         s->status = conclude(s);
-        if (s->status == MC_IP_FAILED) {
+        /* the V(000) latched for the next period acts before the control's first duties: one
+         * more period's rise. Where a period's rise is i_pulse or more (a short pulse at speed)
+         * that would double the current: off instead, the diodes return it to the link until
+         * the control's duties come on with the outputs (siemens-1ft7044-spm at half its base
+         * speed: 9.7 A for an 8.06 A limit kept on) */
+        if (s->status == MC_IP_FAILED || mag(s->di2) >= c->i_pulse * (float)s->n1) {
             *off = true;
         }
         return s->status;

@@ -326,6 +326,22 @@ DriveSetup drive_setup(const Scenario& sc, const Resolved& r, const FluxModel& m
                          static_cast<double>(built->p.startup_if_handover_rpm));
         }
     }
+    const mc_catch_cfg_t& fc = built->blk.flying;
+    if ((built->blk.seq.catch_first || built->blk.prot.recover) && fc.w_limit > 0.0f) {
+        // the flying-start catch's shortest pulse at this f_s (drive_config.c, build_catch): said once
+        const mc_param_info_t& ts = mc_param_table[MC_PARAM_control_ts_s];
+        const double rpm = 60.0 / (2.0 * M_PI * built->p.motor_pole_pairs);
+        std::fprintf(stderr,
+                     "mcsim: note: the flying-start catch keeps the current within 1.1 x control.i_max_a (%g A) "
+                     "only below %.0f rpm: its shortest pulse, one zero-vector period of control.ts_s = %g s "
+                     "(range %g..%g s), drives more above it, up to the generation speed; control.ts_s <= %.3g s "
+                     "covers every speed%s\n",
+                     1.1 * built->p.control_i_max_a, fc.w_limit * rpm, static_cast<double>(built->p.control_ts_s),
+                     static_cast<double>(ts.min), static_cast<double>(ts.max), static_cast<double>(fc.ts_cover),
+                     fc.ts_cover < ts.min ? " (below the range: startup.catch = off, or a drive with phase-voltage "
+                                            "sensing, for rotors turning faster)"
+                                          : " (or startup.catch = off)");
+    }
     return ds;
 }
 

@@ -5,7 +5,8 @@
  * the catch must not wait for it). Checked: angle and speed at both signs and several speeds
  * and angles, the standstill verdict, the single-pulse sign above base speed (C.4), its fallback
  * to two pulses when Lq = 2 Ld, the sign taken from the diodes' current before the pulse (C.5),
- * the peak current, and refusals of bad configurations. Above the generation speed the pulse is
+ * the peak current, the outputs off with the result where a period rises i_pulse or more, and
+ * refusals of bad configurations. Above the generation speed the pulse is
  * the known corner of (C.6): there the test plant moves the stator flux by the latched duties'
  * vector while the outputs are on. */
 #include <math.h>
@@ -64,6 +65,7 @@ typedef struct {
     mc_catch_t c;
     double th_true, w_true, i_peak;
     int calls;
+    bool off_end;              /* the outputs' state the catch asked for with its result */
 } outcome_t;
 
 static mc_catch_cfg_t cfg_for(double ld, double lq)
@@ -95,6 +97,7 @@ static outcome_t run_catch(double ld, double lq, double w, double th0)
         if (o.st != MC_IP_RUNNING) {
             o.th_true = p.th;
             o.w_true = w;
+            o.off_end = off;
             return o;
         }
         p.on = !off;
@@ -406,6 +409,34 @@ static void test_gap_waits_for_rest(void **st)
     }
 }
 
+/* Pulse 2 ends with the outputs on (the V(000) latched for the next period acts until the
+ * control's duties), unless a period's mean rise is i_pulse or more: then that period would
+ * double the current (a low-inductance motor at speed), and the outputs go off with the result. */
+static void test_pulse2_end_off_where_a_period_rises_i_pulse(void **st)
+{
+    (void)st;
+    const double w = 300.0 * 2.0 * PI_D / 60.0 * 5.0;   /* 157 rad/s: two pulses, below (C.4) */
+    for (int a = 0; a < 8; ++a) {
+        const double th0 = -3.0 + 0.77 * a;
+        /* the thesis motor: 0.42 A a period, pulses of several periods: kept on */
+        outcome_t o = run_catch(10.5e-3, 12.9e-3, w, th0);
+        assert_int_equal(o.st, MC_IP_DONE);
+        assert_false(o.c.single);
+        assert_true(o.c.n1 > 1u);
+        assert_false(o.off_end);
+        /* psi / L 8 x higher: 3.6 A in one period for i_pulse 3.3 A: off */
+        o = run_catch(1.5e-3, 1.5e-3, w, th0);
+        assert_int_equal(o.st, MC_IP_DONE);
+        assert_false(o.c.single);
+        assert_int_equal(o.c.n1, 1u);
+        assert_true(o.off_end);
+        if (ang_err_deg(o.c.theta, o.th_true) > 2.0 || fabs(o.c.omega - w) > 0.05 * w) {
+            fail_msg("th0 %g: theta err %g deg, omega %g for %g", th0, ang_err_deg(o.c.theta, o.th_true),
+                     (double)o.c.omega, w);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -419,6 +450,7 @@ int main(void)
         cmocka_unit_test(test_bad_config),
         cmocka_unit_test(test_nan_currents),
         cmocka_unit_test(test_drive_side),
+        cmocka_unit_test(test_pulse2_end_off_where_a_period_rises_i_pulse),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

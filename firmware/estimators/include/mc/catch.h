@@ -38,7 +38,12 @@
  *   gap:     outputs off (the diodes return the current to the link) for the rotation time,
  *            and until |i| <= i_rest (bounded);
  *   pulse 2: V(000) for exactly as long as pulse 1, so that the second-order part of (C.2) is
- *            the same in both and cancels in (C.3);
+ *            the same in both and cancels in (C.3). It ends with the outputs on (the V(000)
+ *            latched for the next period acts until the control's first duties), except where a
+ *            period's mean rise |delta i2| / n1 is i_pulse or more: that period would double the
+ *            current of a one-period pulse at speed (siemens-1ft7044-spm at half its base speed:
+ *            9.7 A for an 8.06 A limit), so the outputs go off and come on with the control's
+ *            duties, as after a single pulse;
  *   result:  omega from (C.3), theta at the last sample from (C.2) with Delta = omega t_pulse.
  * HIGH SPEED: where the back-EMF's line-to-line peak sqrt3 |omega| psi_pm comes near Vdc, the
  * gap cannot be a gap: the diodes rectify and the current grows while the outputs are off
@@ -75,6 +80,16 @@
  * check then trips on at RUN entry: a checked fault, not a guess that runs). A check against the
  * diode pulses' rate (six to a turn) was tried and dropped: near the generation speed their
  * falls are not regular enough (1100-1200 rpm: a fall 3 periods after another).
+ * THE LIMIT. The shortest pulse is one period: from i = 0 at speed w it drives
+ * psi |((cos w Ts - 1) / Ld, sin w Ts / Lq)| by (C.1), ~ w psi Ts / L, whatever voltage the period
+ * holds (the back-EMF's direction is what the pulse is to find). Below the generation speed this
+ * is at most one period of Vdc / sqrt3 across L: on a motor whose psi / L is several times its
+ * rating at a low f_s, more than the current limit (siemens-1ft7044-spm at 8 kHz: 9.9 A for
+ * 8.06 A at its base speed; minicheetah-24v-lv at 20 kHz: 20 A for 14 A). The configuration
+ * reports the speed up to which the catch keeps 1.1 x the limit and the period that would keep
+ * it at every speed (w_limit, ts_cover), and does not refuse: a rotor that fast at the enable is
+ * the exception, and the pulse ends after that one period (siemens at its generation speed:
+ * 10.3 A, below its 12.1 A trip; minicheetah above ~2400 rpm: over its 21 A trip, a fault).
  * V(000) PULSES, (C.1)-(C.5): FAILED when the rotation is too small to give its sign (|phi2 - phi1| < 5 deg) or the second
  * current does not fit (C.1) within a factor of 2 (a model or sensor far off): the caller faults
  * rather than guess. The current peaks at about i_pulse plus one period's rise.
@@ -108,6 +123,13 @@ typedef struct {
                                  speed, bends the current away from (C.1); its flux is added up
                                  and its current taken out before (C.2), (C.3) */
     float i_band;             /* soft sign of that drop: linear within +-i_band [A] */
+    float w_limit;            /* [rad/s el] informational, for the configuration's report (not used
+                                 by the catch): above it one V(000) period, the shortest pulse,
+                                 drives more than 1.1 x the current limit by (C.1); 0: not below
+                                 the generation speed Vdc / (sqrt3 psi_pm), where the diodes conduct
+                                 and (C.6) replaces the V(000) pulse */
+    float ts_cover;           /* [s] informational: the longest period whose V(000) pulse keeps
+                                 1.1 x the limit up to the generation speed (with w_limit > 0) */
 } mc_catch_cfg_t;
 
 #define MC_CATCH_HIST 16      /* samples of pulse 1 kept for the single-pulse sign (C.4) */
