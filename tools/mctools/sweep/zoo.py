@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import time
@@ -476,7 +477,10 @@ def judge_low_fs(runs: list[Run]) -> Cell:
         r = below[0]
         nums["below"] = {"label": r.label, "refused": r.refused, **_where(r)}
         if r.refused:
-            text += f"; 2 kHz refused: {r.refused}" if at_min else f": 2 kHz refused: {r.refused}"
+            # the allowed period from the reason (the whole reason is in the JSON)
+            m = re.search(r"allowed range \[[^,]+, ([^\]]+)\]", r.refused)
+            short = f"control.ts_s ≤ {float(m.group(1)) * 1e6:.4g} µs" if m else r.refused
+            text += f"; 2 kHz refused ({short})" if at_min else f": 2 kHz refused ({short})"
         else:
             ok = False
             text += "; **2 kHz not refused** (the rule and mctools.preset.fs_min_hz disagree)"
