@@ -189,7 +189,7 @@ def test_low_fs_cell():
     runs = [_low(f"6.3 kHz, seed {s}", ok) for s in (1, 2, 3)] + [_low("2 kHz", refused=why, expect=True)]
     c = judge_cell("demo_low_fs", runs)
     assert c.passed and not c.refused
-    assert c.text.startswith("6.3 kHz × 3 seeds: pass ")
+    assert c.text.startswith("6.3 kHz × 3 seeds: pass seed 1: 1.5°, peak 0.90× / seed 2: ")
     assert c.text.endswith("; 2 kHz refused (control.ts_s ≤ 166.9 µs)") and c.numbers["below"]["refused"] == why
     # a seed failing at f_s,min fails the cell; the refusal below is still reported apart
     bad = dict(ok, faults=["tracking"], fault_time_s=2.5)
@@ -293,8 +293,8 @@ def test_zoo_command(fake, tmp_path):
     assert not b["passed"] and b["text"] == "**FAIL** loss_of_lock at 1.23 s; peak 14.5 A = 1.45 × limit"
     low = cells[("brodatzki-35kw", "demo_low_fs")]
     assert not low["passed"] and not low["refused"]   # seed 3 over the limit at 6.3 kHz
-    assert low["text"].startswith("6.3 kHz × 3 seeds: **FAIL** 6.3 kHz, seed 1: 1.2°")
-    assert "6.3 kHz, seed 3: peak 12 A = 1.20 × limit" in low["text"]
+    assert low["text"].startswith("6.3 kHz × 3 seeds: **FAIL** seed 1: 1.2°")
+    assert "seed 3: peak 12 A = 1.20 × limit" in low["text"]
     assert low["text"].endswith("; 2 kHz refused (control.ts_s ≤ 166.9 µs)")
     assert low["below"]["refused"].startswith("key 'control.ts_s' = 0.0005: the sampling rate is too low")
     run0 = low["runs"][0]   # enough to run it again

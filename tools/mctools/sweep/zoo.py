@@ -468,9 +468,10 @@ def judge_low_fs(runs: list[Run]) -> Cell:
     a refusal with the reason); f_s,min above 20 kHz: every f_s refused."""
     at_min = [r for r in runs if not r.expect_refusal]
     below = [r for r in runs if r.expect_refusal]
+    f_lo = at_min[0].label.split(",")[0] if at_min else ""
     if at_min:
         cell = judge_cell("demo", at_min)
-        ok, text, nums = cell.passed, cell.text, dict(cell.numbers)
+        ok, text, nums = cell.passed, cell.text.replace(f"{f_lo}, ", ""), dict(cell.numbers)
     else:
         ok, text, nums = False, "f_s,min above the 20 kHz range", {"runs": []}
     if below:
@@ -484,7 +485,6 @@ def judge_low_fs(runs: list[Run]) -> Cell:
         else:
             ok = False
             text += "; **2 kHz not refused** (the rule and mctools.preset.fs_min_hz disagree)"
-    f_lo = at_min[0].label.split(",")[0] if at_min else ""
     text = (f"{f_lo} × {len(at_min)} seeds: " if at_min else "") + text
     refused_only = not at_min and bool(below) and bool(below[0].refused)
     return Cell(runs[0].motor, "demo_low_fs", ok, text, nums, refused=refused_only)
