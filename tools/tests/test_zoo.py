@@ -4,7 +4,9 @@ against a fake mcsim (no simulator runs here)."""
 import contextlib
 import io
 import json
+import subprocess
 import tomllib
+from pathlib import Path
 
 import pytest
 
@@ -172,6 +174,32 @@ def test_fs_min_by_hand():
     assert [Motor("x", 1, 1, 1, 1, 1, f).fs_low_hz for f in (1607.2, 2000.0, 5993.2, 7443.0, 18378.0)] == \
         [2000.0, 2000.0, 6300.0, 8000.0, 20000.0]
     assert Motor("x", 1, 1, 1, 1, 1, 20001.0).fs_low_hz != Motor("x", 1, 1, 1, 1, 1, 20001.0).fs_low_hz
+
+
+REPO = Path(__file__).resolve().parents[2]
+MCSIM = REPO / "build/host/sim/app/mcsim"
+
+
+@pytest.mark.skipif(not MCSIM.is_file(), reason="mcsim not built")
+@pytest.mark.parametrize("name", ["sun2016-ipm-5kw", "baldor-5p6kw-pmsyrm", "brodatzki-35kw",
+                                  "siemens-1ft7044-spm", "minicheetah-24v-lv"])
+def test_fs_min_agrees_with_the_drive(name, tmp_path):
+    """The tool's f_s,min is the drive's: mcsim refuses control.ts_s 0.2 % above its period (where
+    the range reaches) and takes it 0.2 % below (the range's 2 kHz where f_s,min is lower)."""
+    m = motor_info(name)
+    scen = tmp_path / "demo.toml"
+    scen.write_text(demo_toml(m, short=True))
+
+    def check(ts):
+        p = subprocess.run([str(MCSIM), "check", str(scen), "--set", f"control.ts_s={ts!r}"],
+                           capture_output=True, text=True, timeout=60)
+        return p.returncode, p.stderr
+    ts_max = 1.0 / m.fs_min_hz
+    if ts_max * 1.002 <= 5e-4:
+        rc, err = check(ts_max * 1.002)
+        assert rc == 2 and "key 'control.ts_s'" in err and "the sampling rate is too low" in err
+    rc, err = check(min(ts_max * 0.998, 5e-4))
+    assert rc == 0, err
 
 
 def _low(label, metrics=None, refused="", expect=False):
