@@ -373,10 +373,9 @@ static bool check_sampling(const mc_params_t *p, mc_param_err_t *err)
         *err = (mc_param_err_t){.kind = MC_PERR_CROSS, .param = MC_PARAM_control_ts_s, .param2 = why, .value = p->control_ts_s,
                                 .value2 = mc_param_get(p, why), .min = mc_param_table[MC_PARAM_control_ts_s].min, .max = 1.0f / fs_min,
                                 .text = why == MC_PARAM_injection_f_hz
-                                            ? "the sampling rate must give the injection 4 samples a period: shorten control.ts_s "
-                                              "(or lower injection.f_hz)"
-                                            : "the sampling rate is too low for this motor: f_s must be at least 20 x the electrical "
-                                              "frequency at the no-load base speed Vdc / (sqrt3 psi_pm): shorten control.ts_s"};
+                                            ? "f_s is below 4 x injection.f_hz: shorten control.ts_s or lower injection.f_hz"
+                                            : "f_s is below this motor's lowest, 20 x the electrical frequency at Vdc / (sqrt3 "
+                                              "psi_pm): shorten control.ts_s"};
     }
     return false;
 }

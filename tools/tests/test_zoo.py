@@ -41,8 +41,8 @@ if scenario == "demo" and motor == "brodatzki-35kw" and "control.ts_s" not in se
     m.update(faults=["loss_of_lock"], fault_time_s=1.23, angle_err_steady_max_deg=None,
              current_peak_a=14.5, final_state="FAULT")
 if motor == "brodatzki-35kw" and sets.get("control.ts_s") == 0.0005:
-    print("mcsim: error: x.toml: key 'control.ts_s' = 0.0005: the sampling rate is too low for this "
-          "motor; allowed range [5e-05, 0.000166855]", file=sys.stderr)
+    print("mcsim: error: x.toml: key 'control.ts_s' = 0.0005: f_s is below this motor's lowest; "
+          "allowed range [5e-05, 0.000166855]", file=sys.stderr)
     sys.exit(2)
 if motor == "brodatzki-35kw" and "control.ts_s" in sets and sets.get("scenario.seed") == 3:
     m.update(current_peak_a=12.0)
@@ -197,7 +197,7 @@ def test_fs_min_agrees_with_the_drive(name, tmp_path):
     ts_max = 1.0 / m.fs_min_hz
     if ts_max * 1.002 <= 5e-4:
         rc, err = check(ts_max * 1.002)
-        assert rc == 2 and "key 'control.ts_s'" in err and "the sampling rate is too low" in err
+        assert rc == 2 and "key 'control.ts_s'" in err and "f_s is below this motor's lowest" in err
     rc, err = check(min(ts_max * 0.998, 5e-4))
     assert rc == 0, err
 
@@ -213,7 +213,7 @@ def _low(label, metrics=None, refused="", expect=False):
 def test_low_fs_cell():
     ok = {"faults": [], "angle_err_steady_max_deg": 1.5, "current_peak_a": 9.0, "current_limit_a": 10.0,
           "final_state": "RUN"}
-    why = "key 'control.ts_s' = 0.0005: the sampling rate is too low; allowed range [5e-05, 0.000166855]"
+    why = "key 'control.ts_s' = 0.0005: f_s is below this motor's lowest; allowed range [5e-05, 0.000166855]"
     runs = [_low(f"6.3 kHz, seed {s}", ok) for s in (1, 2, 3)] + [_low("2 kHz", refused=why, expect=True)]
     c = judge_cell("demo_low_fs", runs)
     assert c.passed and not c.refused
@@ -324,7 +324,7 @@ def test_zoo_command(fake, tmp_path):
     assert low["text"].startswith("6.3 kHz × 3 seeds: **FAIL** seed 1: 1.2°")
     assert "seed 3: peak 12 A = 1.20 × limit" in low["text"]
     assert low["text"].endswith("; 2 kHz refused (control.ts_s ≤ 166.9 µs)")
-    assert low["below"]["refused"].startswith("key 'control.ts_s' = 0.0005: the sampling rate is too low")
+    assert low["below"]["refused"].startswith("key 'control.ts_s' = 0.0005: f_s is below this motor's lowest")
     run0 = low["runs"][0]   # enough to run it again
     assert run0["sets"][0] == 'machine.preset="brodatzki-35kw"' and f"control.ts_s={1 / 6300!r}" in run0["sets"]
     assert run0["scenario"].endswith("brodatzki-35kw/demo.toml")

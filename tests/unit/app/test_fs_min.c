@@ -91,7 +91,7 @@ static void test_injection_samples(void **st)
             assert_int_equal(err.param, MC_PARAM_control_ts_s);
             assert_int_equal(err.param2, MC_PARAM_injection_f_hz);
             assert_float_equal(err.max, 1.0 / (4.0 * 2510.0), 1e-9);
-            assert_non_null(strstr(err.text, "4 samples a period"));
+            assert_non_null(strstr(err.text, "4 x injection.f_hz"));
         }
     }
     /* the same injection with the angle from an encoder: nothing is injected, nothing refused */
