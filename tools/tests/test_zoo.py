@@ -163,13 +163,17 @@ def test_runs_per_motor(tmp_path):
 
 
 def test_fs_min_by_hand():
-    """20 x the electrical frequency at the no-load base speed, Vdc / (sqrt3 psi_pm) / 2 pi."""
+    """20 (sensorless; 6 with a sensor) x the electrical frequency at the no-load base speed,
+    Vdc / (sqrt3 psi_pm) / 2 pi."""
     # thesis: 300 V / sqrt3 = 173.21 V; / 0.34305 Wb = 504.9 rad/s = 80.36 Hz; x 20 = 1607 Hz
     assert fs_min_hz(load_preset("sun2016-ipm-5kw")) == pytest.approx(1607.2, abs=0.5)
     # brodatzki: 250 / sqrt3 / 0.07666 = 1882.8 rad/s = 299.66 Hz -> 5993 Hz
     assert fs_min_hz(load_preset("brodatzki-35kw")) == pytest.approx(5993.2, abs=1.0)
     # minicheetah: 24 / sqrt3 / 0.0024 = 5773.5 rad/s = 918.9 Hz -> 18378 Hz
     assert fs_min_hz(load_preset("minicheetah-24v-lv")) == pytest.approx(18378.0, abs=5.0)
+    # with an angle sensor 6 samples a period: 5513 Hz on minicheetah, 2233 Hz on siemens
+    assert fs_min_hz(load_preset("minicheetah-24v-lv"), sensorless=False) == pytest.approx(5513.3, abs=2.0)
+    assert fs_min_hz(load_preset("siemens-1ft7044-spm"), sensorless=False) == pytest.approx(2232.8, abs=1.0)
     # rounded up to a PWM frequency (R10), at least the 2 kHz end of the range, none above 20 kHz
     assert [Motor("x", 1, 1, 1, 1, 1, f).fs_low_hz for f in (1607.2, 2000.0, 5993.2, 7443.0, 18378.0)] == \
         [2000.0, 2000.0, 6300.0, 8000.0, 20000.0]
@@ -181,20 +185,23 @@ MCSIM = REPO / "build/host/sim/app/mcsim"
 
 
 @pytest.mark.skipif(not MCSIM.is_file(), reason="mcsim not built")
+@pytest.mark.parametrize("sensorless", [True, False])
 @pytest.mark.parametrize("name", ["sun2016-ipm-5kw", "baldor-5p6kw-pmsyrm", "brodatzki-35kw",
                                   "siemens-1ft7044-spm", "minicheetah-24v-lv"])
-def test_fs_min_agrees_with_the_drive(name, tmp_path):
+def test_fs_min_agrees_with_the_drive(name, sensorless, tmp_path):
     """The tool's f_s,min is the drive's: mcsim refuses control.ts_s 0.2 % above its period (where
-    the range reaches) and takes it 0.2 % below (the range's 2 kHz where f_s,min is lower)."""
+    the range reaches) and takes it 0.2 % below (the range's 2 kHz where f_s,min is lower);
+    sensorless (the demo's UNOP) and with the encoder."""
     m = motor_info(name)
     scen = tmp_path / "demo.toml"
     scen.write_text(demo_toml(m, short=True))
+    src = [] if sensorless else ["--set", 'control.angle_source="encoder"']
 
     def check(ts):
-        p = subprocess.run([str(MCSIM), "check", str(scen), "--set", f"control.ts_s={ts!r}"],
+        p = subprocess.run([str(MCSIM), "check", str(scen), "--set", f"control.ts_s={ts!r}", *src],
                            capture_output=True, text=True, timeout=60)
         return p.returncode, p.stderr
-    ts_max = 1.0 / m.fs_min_hz
+    ts_max = 1.0 / fs_min_hz(load_preset(name), sensorless)
     if ts_max * 1.002 <= 5e-4:
         rc, err = check(ts_max * 1.002)
         assert rc == 2 and "key 'control.ts_s'" in err and "f_s is below this motor's lowest" in err
