@@ -233,6 +233,10 @@ def test_low_fs_cell():
     # 2 kHz below f_s,min run without a refusal: the rule and the tool disagree, a failure
     c = judge_cell("demo_low_fs", runs[:3] + [_low("2 kHz", ok, expect=True)])
     assert not c.passed and "**2 kHz not refused**" in c.text
+    # refused at 2 kHz, but not for the sampling rate: a failure with that reason
+    other = "key 'injection.v1_v' = 900: out of range"
+    c = judge_cell("demo_low_fs", runs[:3] + [_low("2 kHz", refused=other, expect=True)])
+    assert not c.passed and f"**2 kHz refused for another reason**: {other}" in c.text
     # f_s,min above the range: only the refusal, a refused cell
     c = judge_cell("demo_low_fs", [_low("2 kHz", refused=why, expect=True)])
     assert c.refused and not c.passed and c.text == "f_s,min above the 20 kHz range: 2 kHz refused (control.ts_s ≤ 166.9 µs)"

@@ -477,7 +477,10 @@ def judge_low_fs(runs: list[Run]) -> Cell:
     if below:
         r = below[0]
         nums["below"] = {"label": r.label, "refused": r.refused, **_where(r)}
-        if r.refused:
+        if r.refused and not r.refused.startswith("key 'control.ts_s'"):
+            ok = False
+            text += f"; **2 kHz refused for another reason**: {r.refused}"
+        elif r.refused:
             # the allowed period from the reason (the whole reason is in the JSON)
             m = re.search(r"allowed range \[[^,]+, ([^\]]+)\]", r.refused)
             short = f"control.ts_s ≤ {float(m.group(1)) * 1e6:.4g} µs" if m else r.refused
