@@ -375,12 +375,47 @@ static bool build_if(const mc_params_t *p, bool salient, mc_drive_blk_t *b, mc_p
     return true;
 }
 
+/* The lowest sampling rate this motor allows (docs/parameters.md, "The lowest sampling rate"), in
+ * samples a period of the electrical frequency at the no-load base speed Vdc / (sqrt3 psi_pm):
+ * - 6 with any angle source: the voltage lands 1.5 periods after its angle was read, and the
+ *   advance that compensates it assumes a constant speed; 6 keep that within a quarter turn;
+ * - 20 sensorless: the current loop's rule bandwidth f_s / 40 is then half that frequency, so the
+ *   back-EMF of a frame off the rotor (an angle error, I/f's open-loop frame), which turns at the
+ *   electrical frequency, stays within the loop's reach (the demo failed below it: brodatzki-35kw
+ *   at 5 kHz, siemens-1ft7044-spm at 7 kHz);
+ * - while injecting, 4 a period of the injection (a sampled sine's two quadratures; at 2 a sine
+ *   is seen only at its zero crossings or its peaks).
+ * Refused above it with the period it needs (exit 2 in mcsim). */
+static bool check_sampling(const mc_params_t *p, mc_param_err_t *err)
+{
+    const float f_el = p->hw_vdc_nominal_v * 0.57735027f / (MC_2PI * p->motor_psi_pm_wb);
+    const mc_angle_src_desc_t *src = mc_angle_src_get(p->control_angle_source);
+    float fs_min = (src->cls == MC_ANGLE_ESTIMATOR ? 20.0f : 6.0f) * f_el;
+    int why = MC_PARAM_motor_psi_pm_wb;
+    if (src->needs_injection && p->injection_kind != MC_CHOICE_injection_kind_off && 4.0f * p->injection_f_hz > fs_min) {
+        fs_min = 4.0f * p->injection_f_hz;
+        why = MC_PARAM_injection_f_hz;
+    }
+    if (p->control_ts_s * fs_min <= 1.0f) {
+        return true;
+    }
+    if (err != NULL) {
+        *err = (mc_param_err_t){.kind = MC_PERR_CROSS, .param = MC_PARAM_control_ts_s, .param2 = why, .value = p->control_ts_s,
+                                .value2 = mc_param_get(p, why), .min = mc_param_table[MC_PARAM_control_ts_s].min, .max = 1.0f / fs_min,
+                                .text = why == MC_PARAM_injection_f_hz
+                                            ? "f_s is below 4 x injection.f_hz: shorten control.ts_s or lower injection.f_hz"
+                                            : "f_s is below this motor's lowest, 20 (sensorless; 6 with a sensor) x the electrical "
+                                              "frequency at Vdc / (sqrt3 psi_pm): shorten control.ts_s"};
+    }
+    return false;
+}
+
 bool mc_drive_build(const mc_drive_cfg_t *cfg, mc_drive_built_t *out, mc_param_err_t *err)
 {
     out->p = cfg->p;
     mc_params_t *p = &out->p;
     mc_params_derive(p);
-    if (!mc_params_validate(p, err)) {
+    if (!mc_params_validate(p, err) || !check_sampling(p, err)) {
         return false;
     }
     /* the flux map: where the source needs it with this estimator.model, and for Steps I-II's

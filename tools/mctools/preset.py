@@ -67,6 +67,21 @@ def load_preset(name_or_path: str, preset_dir=None) -> Machine:
         raise PresetError(f"{path}: {exc}") from None
 
 
+FS_RANGE_HZ = (2000.0, 20000.0)   # control.ts_s's range (the parameter table)
+FS_PULSE_RATIO = 20.0             # samples a period at the no-load base speed, sensorless
+FS_PULSE_RATIO_SENSOR = 6.0       # ... with an angle sensor (drive_config.c, check_sampling)
+
+
+def fs_min_hz(m: Machine, sensorless: bool = True) -> float:
+    """The drive's lowest sampling rate for this motor on default keys (check_sampling in
+    firmware/app/drive_config.c, docs/parameters.md "The lowest sampling rate"): 20 samples
+    (sensorless; 6 with an angle sensor) a period of the electrical frequency at the no-load base
+    speed Vdc / (sqrt3 psi_pm). The injection's 4 samples a period hold by its own rule
+    (min(500 Hz, f_s / 4)). NaN without Vdc."""
+    f_el = m.vdc_nominal_v / math.sqrt(3.0) / (2.0 * math.pi * m.psi_pm_wb)
+    return (FS_PULSE_RATIO if sensorless else FS_PULSE_RATIO_SENSOR) * f_el
+
+
 def derived_figures(m: Machine) -> dict:
     """Figures derived from the model, for the `preset` report and for tests."""
     psi_pm, ld, lq = m.small_signal()
@@ -98,6 +113,8 @@ def derived_figures(m: Machine) -> dict:
         out["vdc_nominal_v"] = m.vdc_nominal_v
         out["u_max_v"] = m.u_max()
         out["base_speed_noload_rpm"] = m.base_speed_rpm()
+        out["fs_min_hz"] = fs_min_hz(m)
+        out["fs_min_sensor_hz"] = fs_min_hz(m, sensorless=False)
     if math.isfinite(m.i_rated_peak_a):
         p = m.mtpa(m.i_rated_peak_a)
         out.update({
@@ -150,9 +167,15 @@ def format_report(f: dict, source: Path | None = None) -> str:
     if "u_max_v" in f:
         lines += [f"  at Vdc = {f['vdc_nominal_v']:g} V (u_max = Vdc/sqrt(3) = {f['u_max_v']:.1f} V):",
                   f"    no-load base speed       {f['base_speed_noload_rpm']:.0f} rpm"]
-        if "base_speed_mtpa_rated_rpm" in f:
-            lines.append(f"    base speed, MTPA rated   {f['base_speed_mtpa_rated_rpm']:.0f} rpm"
-                         "  (incl. Rs drop)")
+        lo, hi = FS_RANGE_HZ
+        for key, what, k in (("fs_min_hz", "sensorless", FS_PULSE_RATIO),
+                             ("fs_min_sensor_hz", "with a sensor", FS_PULSE_RATIO_SENSOR)):
+            fs = f[key]
+            note = ("" if lo <= fs <= hi else "; below the range: 2 kHz" if fs < lo
+                    else "; above the 20 kHz range: every f_s refused")
+            lines.append(f"    lowest sampling rate     {fs / 1e3:.3g} kHz {what}  ({k:g} x the electrical "
+                         f"frequency at the no-load base speed; control.ts_s <= {1e6 / max(fs, lo):.4g} us"
+                         f"{note})")
     if "mtpa_torque_nm" in f:
         rated = (f"  (preset rated {f['torque_rated_nm']:g} N m)" if "torque_rated_nm" in f else "")
         lines += [f"  MTPA at rated {f['i_rated_peak_a']:g} A peak:",

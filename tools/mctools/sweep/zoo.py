@@ -15,9 +15,11 @@ every drive key keeps its default rule. Scaling rules (documented in docs/zoo.md
 * torque steps: +-76 % of the rated torque in torque mode, the dyno at 10 % of N_b, the start the
   drive picks (startup.init_pos = auto: three steps, or I/f);
 * flying starts: scenarios/flying/catch_dyno.toml at the dyno speed, then 50 % rated torque;
-* the lowest sampling rate: control.ts_s's upper bound, 500 us (2 kHz): the only rule that bounds
-  f_s from below (the cross-checks, current loop <= f_s/20 and injection <= f_s/2, hold for every
-  f_s with the default rules).
+* the lowest sampling rate: the demo at the drive's f_s,min for the motor (`fs_min_hz`: 20 samples a
+  period at the no-load base speed, check_sampling in drive_config.c), rounded up to the R10 series
+  (2, 2.5, 3.15, 4, 5, 6.3, 8, 10, 12.5, 16, 20 kHz), with LOW_FS_SEEDS seeds; and the demo at 2 kHz
+  (control.ts_s's upper bound) wherever that is below f_s,min: the drive must refuse it with the
+  reason (a refusal, kept apart from a failure).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
-from mctools.preset import PresetError, find_preset, load_preset, search_dirs
+from mctools.preset import FS_RANGE_HZ, PresetError, find_preset, fs_min_hz, load_preset, search_dirs
 from mctools.report import _clear_outputs, find_mcsim, read_metrics, run_mcsim
 from mctools.sweep.common import SweepInputError, f_toml, number, parse_floats, write_outputs
 from mctools.sweep.envelope import replace_doc_section
@@ -49,6 +51,9 @@ TORQUE_SPEED_SHARE = 0.10
 FLY_SHARES = (0.05, 0.5, 1.0)
 DOC_MARKERS = ("<!-- zoo:begin -->", "<!-- zoo:end -->")
 LOW_TS_S = 500e-6          # control.ts_s upper bound (docs/simulator.md): 2 kHz
+LOW_FS_SEEDS = (1, 2, 3)   # the demo at f_s,min: sensor-noise seeds
+# PWM frequencies an engineer would pick: the R10 preferred numbers (ISO 3) between 2 and 20 kHz
+PWM_STEPS_HZ = (2000.0, 2500.0, 3150.0, 4000.0, 5000.0, 6300.0, 8000.0, 10000.0, 12500.0, 16000.0, 20000.0)
 SCEN_DEMO = "scenarios/sensorless_demo.toml"
 SCEN_START = "scenarios/thesis/initpos_sweep.toml"
 SCEN_FLY = "scenarios/flying/catch_dyno.toml"
@@ -60,7 +65,7 @@ IF_SALIENCY_MIN = 0.05     # |Lq/Ld - 1| below this: the zoo starts the motor wi
 
 TESTS = (("start", "start, 8 angles"), ("demo", "speed demo"), ("torque", "±76 % torque"),
          ("fly5", "fly ±5 %"), ("fly50", "fly ±50 %"), ("fly100", "fly ±100 %"),
-         ("demo_low_fs", "demo at 2 kHz"))
+         ("demo_low_fs", "demo at the lowest f_s the rules allow"))
 
 
 @dataclass
@@ -71,6 +76,12 @@ class Motor:
     i_rated_a: float
     f_sample_hz: float
     lq_over_ld: float
+    fs_min_hz: float = float("nan")   # the drive's rule (mctools.preset.fs_min_hz)
+
+    @property
+    def fs_low_hz(self) -> float:
+        """f_s,min rounded up to a PWM frequency (PWM_STEPS_HZ), at least 2 kHz; NaN above 20 kHz."""
+        return next((f for f in PWM_STEPS_HZ if f >= self.fs_min_hz), float("nan"))
 
 
 @dataclass
@@ -87,6 +98,7 @@ class Run:
     seconds: float = 0.0
     log_tail: str = ""
     refused: str = ""     # the drive refused the configuration (mcsim exit 2): its reason
+    expect_refusal: bool = False   # a run the rules must refuse (2 kHz below f_s,min)
 
 
 @dataclass
@@ -113,7 +125,7 @@ def motor_info(name: str) -> Motor:
         raise SweepInputError(f"preset {name}: the rated MTPA voltage exceeds Vdc/sqrt(3) at "
                               f"standstill (base speed 0)")
     _, ld, lq = m.small_signal()
-    return Motor(name, base, m.torque_rated_nm, m.i_rated_peak_a, m.f_sample_hz, lq / ld)
+    return Motor(name, base, m.torque_rated_nm, m.i_rated_peak_a, m.f_sample_hz, lq / ld, fs_min_hz(m))
 
 
 def all_presets() -> list[str]:
@@ -306,8 +318,15 @@ def build_runs(motors: list[Motor], out: Path, angles, short: bool, mcsim: str |
                 sets = (*pre, f"mechanics.dyno_speed_rpm={f_toml(n)}", f"control.torque_ref_nm={fly_t}")
                 runs.append(Run(m.name, f"fly{round(100 * share)}", f"{n:+g} rpm", scenario_path(SCEN_FLY),
                                 sets, d / f"fly_{'p' if sign > 0 else 'm'}{round(100 * share)}"))
-        runs.append(Run(m.name, "demo_low_fs", "demo 2 kHz", demo,
-                        (*pre, f"control.ts_s={f_toml(LOW_TS_S)}"), d / "demo_low_fs"))
+        f_lo = m.fs_low_hz
+        if math.isfinite(f_lo):
+            for seed in LOW_FS_SEEDS:
+                runs.append(Run(m.name, "demo_low_fs", f"{f_lo / 1e3:g} kHz, seed {seed}", demo,
+                                (*pre, f"control.ts_s={f_toml(1.0 / f_lo)}", f"scenario.seed={seed}"),
+                                d / f"demo_low_fs_s{seed}"))
+        if not f_lo == 1.0 / LOW_TS_S:   # 2 kHz is below f_s,min: the drive must refuse it
+            runs.append(Run(m.name, "demo_low_fs", "2 kHz", demo,
+                            (*pre, f"control.ts_s={f_toml(LOW_TS_S)}"), d / "demo_2khz", expect_refusal=True))
     return runs
 
 
@@ -461,7 +480,39 @@ def judge_if_start(runs: list[Run]) -> Cell:
     return Cell(runs[0].motor, "start", not bad, text, {"angles": per})
 
 
+def judge_low_fs(runs: list[Run]) -> Cell:
+    """The demo at f_s,min (every seed must pass) and 2 kHz below it (must be refused: not a failure,
+    a refusal with the reason); f_s,min above 20 kHz: every f_s refused."""
+    at_min = [r for r in runs if not r.expect_refusal]
+    below = [r for r in runs if r.expect_refusal]
+    f_lo = at_min[0].label.split(",")[0] if at_min else ""
+    if at_min:
+        cell = judge_cell("demo", at_min)
+        ok, text, nums = cell.passed, cell.text.replace(f"{f_lo}, ", ""), dict(cell.numbers)
+    else:
+        ok, text, nums = False, "f_s,min above the 20 kHz range", {"runs": []}
+    if below:
+        r = below[0]
+        nums["below"] = {"label": r.label, "refused": r.refused, **_where(r)}
+        if r.refused and not r.refused.startswith("key 'control.ts_s'"):
+            ok = False
+            text += f"; **2 kHz refused for another reason**: {r.refused}"
+        elif r.refused:
+            # the allowed period from the reason (the whole reason is in the JSON)
+            m = re.search(r"allowed range \[[^,]+, ([^\]]+)\]", r.refused)
+            short = f"control.ts_s ≤ {float(m.group(1)) * 1e6:.4g} µs" if m else r.refused
+            text += f"; 2 kHz refused ({short})" if at_min else f": 2 kHz refused ({short})"
+        else:
+            ok = False
+            text += "; **2 kHz not refused** (the rule and mctools.preset.fs_min_hz disagree)"
+    text = (f"{f_lo} × {len(at_min)} seeds: " if at_min else "") + text
+    refused_only = not at_min and bool(below) and bool(below[0].refused)
+    return Cell(runs[0].motor, "demo_low_fs", ok, text, nums, refused=refused_only)
+
+
 def judge_cell(test: str, runs: list[Run]) -> Cell:
+    if test == "demo_low_fs":
+        return judge_low_fs(runs)
     refused = refused_cell(test, runs)
     if refused is not None:
         return refused
@@ -507,10 +558,11 @@ def zoo_markdown(motors: list[Motor], cells: dict, command: str, stamp: str, n_r
              f"at every angle), peak phase current ≤ {PEAK_FACTOR:g} × the configured limit "
              f"(`current_limit_a`); else the reasons (fault at its time, the worst number). *refused*: the "
              f"drive refused the configuration with the reason shown (mcsim exit 2).", "",
-             "| motor | N_b [rpm] | rated [N m] | f_s [kHz] | Lq/Ld |", "|---|---|---|---|---|"]
+             "| motor | N_b [rpm] | rated [N m] | f_s [kHz] | f_s,min [kHz] (run at) | Lq/Ld |",
+             "|---|---|---|---|---|---|"]
     for m in motors:
         lines.append(f"| {m.name} | {m.base_rpm:.0f} | {m.torque_nm:g} | {m.f_sample_hz / 1e3:g} | "
-                     f"{m.lq_over_ld:.2f} |")
+                     f"{m.fs_min_hz / 1e3:.3g} ({m.fs_low_hz / 1e3:g}) | {m.lq_over_ld:.2f} |")
     lines += ["", "| motor | " + " | ".join(t for _, t in TESTS) + " |",
               "|---|" + "---|" * len(TESTS)]
     for m in motors:
@@ -561,7 +613,7 @@ def cmd_zoo(args) -> int:
     md = zoo_markdown(motors, cells, command, stamp, len(runs), wall)
     data = {"command": command, "stamp": stamp, "wall_s": wall, "runs_total": len(runs),
             "criteria": {"steady_max_deg": STEADY_MAX_DEG, "peak_factor": PEAK_FACTOR,
-                         "low_ts_s": LOW_TS_S},
+                         "low_ts_s": LOW_TS_S, "low_fs_seeds": list(LOW_FS_SEEDS)},
             "motors": [vars(m) for m in motors],
             "cells": [{"motor": c.motor, "test": c.test, "passed": c.passed, "refused": c.refused,
                        "text": c.text, **c.numbers} for c in cells.values()]}
