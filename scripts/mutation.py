@@ -32,6 +32,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from mutation_cov import TCE, build_coverage, tree_key  # noqa: E402
+from mutation_keys import Keys, journal_fkeys  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 C_FILES = "firmware/{core,control,estimators,app,comms}/*.c"
@@ -456,6 +457,7 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=None, help="ninja/ctest jobs of a worker (default: the cores shared among the workers)")
     ap.add_argument("--workers", type=int, default=1, help="mutants tested at once, each in its own copy and build folder")
     ap.add_argument("--no-coverage", action="store_true", help="C: do not select the tests by per-test line coverage (run the file's tests, then the rest)")
+    ap.add_argument("--no-carry", action="store_true", help="with --resume or --summarize: use only results of the files' present content (no results carried over from an older content whose function is unchanged)")
     ap.add_argument("--no-tce", action="store_true", help="C: do not compile a mutant alone first to set apart the ones that do not build, the equivalent and the duplicate")
     ap.add_argument("--resume", action="store_true", help="reuse the results in OUT/journal.jsonl of mutants whose file has not changed since")
     ap.add_argument("--retest-survivors", action="store_true", help="with --resume: test the journal's survivors again (after new tests)")
@@ -531,16 +533,29 @@ def main() -> int:
 
     def mkey(m):
         return f"{m['file']}@{fhash[m['file']]}:{m['line']}:{m['mutated']}"
+    fkeys = {f: Keys(f, (ROOT / f).read_text()) for f in files}
+
+    def fk(m):
+        """The block key (mutation_keys.py): unchanged while the mutant's function is."""
+        return fkeys[m["file"]].fkey(m["line"], m["mutated"])
     journal = out / "journal.jsonl"
+    entries = [json.loads(ln) for ln in journal.read_text().splitlines()] if journal.exists() else []
+    entry_fk = journal_fkeys(ROOT, entries) if (a.summarize or a.resume) and not a.no_carry else {}
     if a.summarize:
         index = {mkey(m): m for f in files for m in all_mutants[f]}
+        index_f = {fk(m): m for f in files for m in all_mutants[f]}
         # journals put together (shards, per-file runs, a re-test of survivors): the last result of
-        # a mutant counts; results of a file's older content do not match its key and are left out
+        # a mutant counts; a result of a file's older content counts while the mutant's function
+        # (its top-level block) is unchanged: carried over (docs/testing.md)
         last = {}
-        for ln in (journal.read_text().splitlines() if journal.exists() else []):
-            r = json.loads(ln)
+        for i, r in enumerate(entries):
+            fields = {k: r[k] for k in ("status", "by", "reason", "of", "seconds") if k in r}
             if r.get("key") in index:
-                last[r["key"]] = dict(index[r["key"]], **{k: r[k] for k in ("status", "by", "reason", "of", "seconds") if k in r})
+                m = index[r["key"]]
+                last[fk(m)] = dict(m, **fields)
+            elif entry_fk.get(i) in index_f:
+                m = index_f[entry_fk[i]]
+                last[entry_fk[i]] = dict(m, **fields, carried=True)
         # a survivor judged equivalent since its run is reported so, with the list's reason
         judged = resolve_equivalent(load_equivalent(ROOT / a.equivalent), all_mutants)
         for m in last.values():
@@ -558,19 +573,27 @@ def main() -> int:
               f"{t['no_compile']} not compiling (from {journal}): score {t['score']:.1f} % {t['ci95']}")
         return 0
     done_before: dict[str, dict] = {}
+    done_f: dict[str, dict] = {}   # by block key: results carried over from a file's older content
     if a.resume and journal.exists():
-        for ln in journal.read_text().splitlines():
-            r = json.loads(ln)
+        for i, r in enumerate(entries):
             if r.get("key"):
                 done_before[r["key"]] = r
+            if i in entry_fk:
+                done_f[entry_fk[i]] = r
         survived = {k for k, r in done_before.items() if r["status"] == "survived"}
+        survived_f = {k for k, r in done_f.items() if r["status"] == "survived"}
         if a.retest_survivors or a.only_survivors:
             done_before = {k: r for k, r in done_before.items() if r["status"] != "survived"}
+            done_f = {k: r for k, r in done_f.items() if r["status"] != "survived"}
         if a.only_survivors:   # the journal's survivors and nothing else (after new tests)
-            chosen = [m for m in chosen if mkey(m) in survived]
+            chosen = [m for m in chosen if mkey(m) in survived or fk(m) in survived_f]
             for f in RESERVE:
                 RESERVE[f] = []
-        print(f"mutation: {len(done_before)} results reused from {journal}", flush=True)
+        n_same = sum(1 for m in chosen if mkey(m) in done_before)
+        n_carry = sum(1 for m in chosen if mkey(m) not in done_before and fk(m) in done_f)
+        print(f"mutation: {n_same} of the {len(chosen)} mutants have a result in {journal}, {n_carry} more "
+              f"carried over from an older content of their file (their function unchanged); "
+              f"{len(chosen) - n_same - n_carry} to test", flush=True)
     elif journal.exists():
         journal.unlink()
 
@@ -619,11 +642,14 @@ def main() -> int:
         t0 = time.monotonic()
         eq = judged.get((m["file"], m["line"], m["mutated"].strip()))
         prev = done_before.get(mkey(m))
+        carried = prev is None and fk(m) in done_f
+        prev = done_f.get(fk(m)) if carried else prev
         if eq is not None:
             m.update(status="equivalent", reason=eq, seconds=0.0)
             return
         if prev is not None:
-            m.update({k: prev[k] for k in ("status", "by", "reason", "of", "seconds") if k in prev}, reused=True)
+            m.update({k: prev[k] for k in ("status", "by", "reason", "of", "seconds") if k in prev}, reused=True,
+                     **({"carried": True} if carried else {}))
             return
         if use_tce:
             orig = runner.original_object(m["file"])
@@ -699,7 +725,7 @@ def main() -> int:
                 if not m.get("reused"):
                     with journal.open("a") as j:
                         j.write(json.dumps(dict({k: m[k] for k in ("file", "line", "mutated", "status", "by", "reason", "of", "seconds") if k in m},
-                                                key=mkey(m))) + "\n")
+                                                key=mkey(m), fkey=fk(m))) + "\n")
                 el = time.monotonic() - t_start
                 tested = [x for x in results if x["status"] in ("killed", "survived")]
                 sc = 100.0 * sum(x["status"] == "killed" for x in tested) / len(tested) if tested else 0.0
@@ -766,6 +792,7 @@ def summarize(results, files, a, generated, lang, seconds, gen_per_file=None):
         c["score"] = round(100.0 * c["killed"] / den, 1) if den else None
         c["ci95"] = wilson(c["killed"], den)
         c["results"] = len(rs)   # of the file's generated mutants: all of them in a full run
+        c["carried"] = sum(1 for m in rs if m.get("carried"))   # of them, from an older content
         c["generated"] = (gen_per_file or {}).get(f)
         per_file[f] = c
     tot = {st: sum(1 for m in results if m["status"] == st) for st in STATUSES}
@@ -774,6 +801,7 @@ def summarize(results, files, a, generated, lang, seconds, gen_per_file=None):
     tot["score"] = round(100.0 * tot["killed"] / den, 1) if den else 100.0
     tot["ci95"] = wilson(tot["killed"], den)
     tot["timeouts"] = sum(1 for m in results if m.get("by", "").startswith("timeout"))
+    tot["carried"] = sum(1 for m in results if m.get("carried"))
     tested = [m["seconds"] for m in results if m["status"] in ("killed", "survived")]
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
     dirty = bool(subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
@@ -805,12 +833,14 @@ def report(s) -> str:
          f"{t['duplicate']} duplicate, {t['no_compile']} not compiling: "
          f"score {t['score']:.1f} % of the non-equivalent, non-duplicate mutants that build.", "",
          f"95 % interval of the score (Wilson): {t['ci95']} %." if t.get("ci95") else "", "",
-         "| file | results of generated | killed | survived | equivalent | duplicate | not compiling | score | 95 % interval |",
+         (f"{t['carried']} of the results carried over from an older content of their file, their function "
+          f"unchanged (docs/testing.md); the column *carried* per file." if t.get("carried") else ""), "",
+         "| file | results of generated (carried) | killed | survived | equivalent | duplicate | not compiling | score | 95 % interval |",
          "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for f, c in s["per_file"].items():
         sc = f"{c['score']:.1f} %" if c["score"] is not None else "-"
         ci = f"{c['ci95'][0]:.0f}-{c['ci95'][1]:.0f} %" if c.get("ci95") else "-"
-        L.append(f"| {f} | {c.get('results', '-')} of {c.get('generated') or '-'} | {c['killed']} | {c['survived']} | {c['equivalent']} | {c['duplicate']} | {c['no_compile']} | {sc} | {ci} |")
+        L.append(f"| {f} | {c.get('results', '-')} of {c.get('generated') or '-'} ({c.get('carried', 0)}) | {c['killed']} | {c['survived']} | {c['equivalent']} | {c['duplicate']} | {c['no_compile']} | {sc} | {ci} |")
     L += ["", "## Survivors", ""]
     for m in s["survived"] or []:
         L += [f"- `{m['file']}:{m['line']}`{' (' + m['reason'] + ')' if m.get('reason') else ''}",
