@@ -315,7 +315,7 @@ static bool running_fault(mc_drive_t *d, const mc_angle_out_t *ang, mc_dq_t i_re
                                 .torque_ref = d->tm.torque_ref, .speed_mode = d->cmd.mode == MC_MODE_SPEED,
                                 .speed_ref = d->cmd.speed_ref, .reacting = d->seq.state == MC_STATE_FAULT_REACTION,
                                 .lock_paused = mc_polcheck_active(&d->pol), .open_loop = d->if_open,
-                                .if_slip = d->if_slip};
+                                .if_slip = d->if_open ? d->ifs.slip : 0.0f};   /* ifs: the union's I/f state while it runs */
     bool doubt = false;
     const uint32_t reason = mc_protect_running(&d->prot, &d->cfg->blk.prot, &in, &doubt);
     if (doubt) {

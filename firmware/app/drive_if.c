@@ -13,7 +13,6 @@
 void mc_drive_if_reset(mc_drive_t *d)
 {
     d->if_open = false;
-    d->if_slip = 0.0f;
     d->tm.if_mode = 0u;
 }
 
@@ -52,7 +51,6 @@ bool mc_drive_if_step(mc_drive_t *d, mc_angle_out_t *ang, mc_ab_t i_ab, mc_dq_t 
     const mc_drive_blk_t *b = &d->cfg->blk;
     d->tm.if_on = b->if_on;
     d->if_open = false;
-    d->if_slip = 0.0f;
     d->tm.if_mode = 0u;
     if (!b->if_on || d->seq.state != MC_STATE_RUN || d->cmd.mode == MC_MODE_CURRENT) {
         return false;
@@ -86,6 +84,5 @@ bool mc_drive_if_step(mc_drive_t *d, mc_angle_out_t *ang, mc_ab_t i_ab, mc_dq_t 
     ang->omega = out.omega;
     *i_ref = out.i_ref;
     d->if_open = true;
-    d->if_slip = out.slip;
     return true;
 }

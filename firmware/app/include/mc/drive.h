@@ -178,7 +178,6 @@ typedef struct {
     mc_catch_entry_t entry;      /* a RUN entry at speed: the corner latched, the gates' enable
                                     next period (mc/catch.h) */
     bool if_open;                /* I/f's open loop runs this period (mc/if_start.h)           */
-    float if_slip;               /* ... its slip against the estimate [rad] (mc_if_out_t.slip)  */
     mc_fwe_t fw_entry;           /* a RUN entry at speed: the flux into the voltage limit first
                                     (mc/fw_entry.h) */
 
