@@ -283,7 +283,13 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         if (estimating(p)) {
             bw = minf(bw, p->estimator_pll_bw_hz);
         }
-        return bw;
+        /* and a quarter of the q current's large-signal bandwidth: a load step makes the PI ask
+         * for the current at w_bw di, while the voltage the injection leaves slews it at most at
+         * (Vdc/sqrt3 - V1) / Lq; beyond that the loop limit-cycles at the voltage limit
+         * (docs/parameters.md, "Speed-loop bandwidth"). 3.6 Hz on baldor-5p6kw-pmsyrm */
+        const float u_free = p->hw_vdc_nominal_v * 0.57735027f - (injecting(p) ? p->injection_v1_v : 0.0f);
+        const float f_slew = u_free / (pi2 * p->motor_lq_h * p->control_i_max_a);
+        return minf(bw, nice2(0.25f * f_slew));
     }
     case MC_RULE_OVERSPEED: {
         /* the highest speed the drive can control: the voltage circle Vdc/sqrt3 over the flux
@@ -353,7 +359,10 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
          * ~25 dB while the PLL still follows the speed loop (30 Hz at 500 Hz) */
         return nice2(0.06f * p->injection_f_hz);
     case MC_RULE_PLL_FC:
-        return minf(200.0f, fs / 10.0f);
+        /* the speed loop reads the speed only up to a few times its bandwidth; above, its
+         * proportional gain J w_bw passes the estimate's noise to the current reference. 8 x
+         * costs the loop 7 deg of phase at crossover */
+        return nice2(minf(minf(200.0f, fs / 10.0f), 8.0f * p->control_speed_bw_hz));
     case MC_RULE_K2: {
         /* K2 acts on the scaled speed omega / w_base; the data term's curvature in that variable
          * is (psi_pm w_base)^2. Keeping their ratio as on the thesis motor (psi_pm w_base =
@@ -442,8 +451,8 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
 }
 
 /* Rules read the motor and hardware entries (never derived) and other rule results (speed_kp
- * reads speed_bw, which reads pll_bw, which reads inj_f): four passes settle the deepest chain
- * whatever the table order. A rule result that is not finite (a motor entry out of range) is
+ * and pll_speed_fc read speed_bw, which reads pll_bw and inj_v1, which read inj_f): four passes
+ * settle the deepest chain whatever the table order. A rule result that is not finite (a motor entry out of range) is
  * stored as it is, for the validation to report. */
 void mc_params_derive(mc_params_t *p)
 {
