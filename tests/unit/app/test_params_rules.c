@@ -327,8 +327,8 @@ static void baldor_motor(mc_params_t *p)
 }
 
 /* The speed loop's slew bound, a quarter of (Vdc/sqrt3 - V1) / (2 pi Lq i_max), V1 only while
- * injecting, rounded to two digits, and the speed filter at 8 x the bandwidth (nice2), with the
- * gains J w_bw and J w_bw^2 / 4 that follow; on three motors (the other two sets are above:
+ * injecting, rounded to two digits, the PLL at most 6 x the bound (unrounded), the speed filter at
+ * 8 x the bandwidth (nice2), with the gains J w_bw and J w_bw^2 / 4 that follow; on three motors (the other two sets are above:
  * brodatzki with UNOP, where the PLL's 18 Hz binds, and the thesis motor at 40 A, 13 Hz). */
 static void test_rules_speed_slew(void **state)
 {
@@ -337,24 +337,25 @@ static void test_rules_speed_slew(void **state)
         const char *name;
         void (*motor)(mc_params_t *);
         const char *source;
-        double v1, bw, fc, kp, ki;
+        double v1, pll, bw, fc, kp, ki;
     } c[] = {
         /* 173.2 V - 70 V over 2 pi 12.9 mH 13.29 A: 95.8 Hz, a quarter 23.95 Hz */
-        {"thesis, UNOP", thesis_motor, "unop", 70.0, 24.0, 190.0, 1.9603538158400309, 73.90359775535711},
-        /* the injection at its cap, half of 311.8 V; 155.9 V over 2 pi 140.8 mH 12.45 A: 14.2 Hz */
-        {"baldor, UNOP", baldor_motor, "unop", 155.88457268119896, 3.5, 28.0, 1.0995574287564276, 6.045132695667232},
-        /* no injection: the whole 311.8 V, 28.3 Hz, a quarter 7.08 Hz */
-        {"baldor, encoder", baldor_motor, "encoder", -1.0, 7.1, 57.0, 2.230530784048753, 24.876337892945724},
+        {"thesis, UNOP", thesis_motor, "unop", 70.0, 30.0, 24.0, 190.0, 1.9603538158400309, 73.90359775535711},
+        /* the injection at its cap, half of 311.8 V; 155.9 V over 2 pi 140.8 mH 12.45 A: 14.2 Hz,
+         * a quarter 3.538 Hz; the PLL nice2(6 x 3.538) = 21 Hz below 6 % of 500 Hz */
+        {"baldor, UNOP", baldor_motor, "unop", 155.88457268119896, 21.0, 3.5, 28.0, 1.0995574287564276, 6.045132695667232},
+        /* no injection: the whole 311.8 V, 28.3 Hz, a quarter 7.08 Hz (6 x: 42 Hz, the PLL's 30) */
+        {"baldor, encoder", baldor_motor, "encoder", -1.0, 30.0, 7.1, 57.0, 2.230530784048753, 24.876337892945724},
     };
     for (size_t k = 0; k < sizeof c / sizeof c[0]; ++k) {
         mc_params_t p;
         c[k].motor(&p);
         assert_true(mc_param_set_choice(&p, MC_PARAM_control_angle_source, c[k].source, NULL));
         mc_params_derive(&p);
-        const double got[] = {p.injection_v1_v, p.control_speed_bw_hz, p.estimator_pll_speed_fc_hz, p.control_speed_kp,
-                              p.control_speed_ki};
-        const double want[] = {c[k].v1, c[k].bw, c[k].fc, c[k].kp, c[k].ki};
-        for (size_t j = 0; j < 5; ++j) {
+        const double got[] = {p.injection_v1_v, p.estimator_pll_bw_hz, p.control_speed_bw_hz, p.estimator_pll_speed_fc_hz,
+                              p.control_speed_kp, p.control_speed_ki};
+        const double want[] = {c[k].v1, c[k].pll, c[k].bw, c[k].fc, c[k].kp, c[k].ki};
+        for (size_t j = 0; j < 6; ++j) {
             if (want[j] >= 0.0 && !(fabs(got[j] - want[j]) <= 1e-5 * fabs(want[j]))) {
                 fail_msg("%s: value %u = %.9g, hand computation %.9g", c[k].name, (unsigned)j, got[j], want[j]);
             }
