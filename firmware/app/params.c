@@ -249,13 +249,15 @@ static bool injecting(const mc_params_t *p)
 }
 
 /* A quarter of the q current's large-signal bandwidth: a load step makes the speed PI ask for the
- * current at w_bw di, while the voltage the injection leaves slews it at most at
- * (Vdc/sqrt3 - V1) / Lq, Lq at i = 0 the largest l_qq of a saturating machine; beyond that the
- * loop limit-cycles at the voltage limit (docs/parameters.md, "Speed-loop bandwidth") */
+ * current at w_bw di, di up to the references' limit i_max (1 - headroom), while the voltage the
+ * injection leaves slews it at most at (Vdc/sqrt3 - V1) / Lq, Lq at i = 0 the largest l_qq of a
+ * saturating machine; beyond that the loop limit-cycles at the voltage limit
+ * (docs/parameters.md, "Speed-loop bandwidth") */
 static float speed_slew_bw(const mc_params_t *p)
 {
     const float u_free = p->hw_vdc_nominal_v * 0.57735027f - (injecting(p) ? p->injection_v1_v : 0.0f);
-    return 0.25f * u_free / (6.28318531f * p->motor_lq_h * p->control_i_max_a);
+    const float di = p->control_i_max_a * (1.0f - p->control_i_headroom);
+    return 0.25f * u_free / (6.28318531f * p->motor_lq_h * di);
 }
 
 static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
@@ -293,7 +295,7 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         if (estimating(p)) {
             bw = minf(bw, p->estimator_pll_bw_hz);
         }
-        /* and the slew bound (speed_slew_bw): 3.5 Hz on baldor-5p6kw-pmsyrm */
+        /* and the slew bound (speed_slew_bw): 3.6 Hz on baldor-5p6kw-pmsyrm */
         return minf(bw, nice2(speed_slew_bw(p)));
     }
     case MC_RULE_OVERSPEED: {
@@ -363,7 +365,7 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         /* 6 % of the injection frequency: the injection ripple on the raw angle is attenuated
          * ~25 dB while the PLL still follows the speed loop (30 Hz at 500 Hz); and at most 6 x
          * the speed loop's slew bound: the speed loop needs no faster angle, a faster PLL only
-         * passes more of the raw estimate's noise (21 Hz on baldor-5p6kw-pmsyrm) */
+         * passes more of the raw estimate's noise (22 Hz on baldor-5p6kw-pmsyrm) */
         return nice2(minf(0.06f * p->injection_f_hz, 6.0f * speed_slew_bw(p)));
     case MC_RULE_PLL_FC:
         /* the speed loop reads the speed only up to a few times its bandwidth; above, its

@@ -75,7 +75,7 @@ static const want_t motor_b_unop[] = {
     {MC_PARAM_estimator_pll_bw_hz, 18.0, 0},
     {MC_PARAM_control_current_bw_hz, 150.0, 0},
     {MC_PARAM_control_i_slew_a_per_s, 75000.0, 0},
-    {MC_PARAM_control_speed_bw_hz, 18.0, 0},   /* the PLL's; the slew bound (144.3 - 5.8) V / (2 pi 0.5496 mH 160 A) / 4 = 62.7 Hz */
+    {MC_PARAM_control_speed_bw_hz, 18.0, 0},   /* the PLL's; the slew bound (144.3 - 5.8) V / (2 pi 0.5496 mH 155.2 A) / 4 = 64.6 Hz */
     {MC_PARAM_protection_overspeed_rpm, 5997.0, 0},
     {MC_PARAM_protection_i_sum_tol_a, 8.0, 0},
     {MC_PARAM_protection_tracking_err_a, 40.0, 0},
@@ -161,7 +161,7 @@ static const want_t motor_a_manual[] = {
     {MC_PARAM_estimator_pll_bw_hz, 30.0, 0},
     {MC_PARAM_control_current_bw_hz, 250.0, 0},
     {MC_PARAM_control_i_slew_a_per_s, 31000.0, 0},
-    {MC_PARAM_control_speed_bw_hz, 13.0, 0},   /* nice2(173.2 V / (2 pi 12.9 mH 40 A) / 4 = 13.36 Hz) */
+    {MC_PARAM_control_speed_bw_hz, 14.0, 0},   /* nice2(173.2 V / (2 pi 12.9 mH 40 A 0.97) / 4 = 13.77 Hz) */
     {MC_PARAM_protection_overspeed_rpm, 2893.0, 0},
     {MC_PARAM_protection_i_sum_tol_a, 0.66, 0},
     {MC_PARAM_protection_tracking_err_a, 3.3, 0},
@@ -170,14 +170,14 @@ static const want_t motor_a_manual[] = {
     {MC_PARAM_protection_lock_speed_floor_rpm, 100.0, 0},
     {MC_PARAM_protection_stall_speed_rpm, 20.0, 0},
     {MC_PARAM_control_speed_kp, 3.0, 1e-5},
-    {MC_PARAM_control_speed_ki, 61.26105674500097, 1e-5},   /* 3 x 2 pi 13 / 4 */
+    {MC_PARAM_control_speed_ki, 65.97344572538566, 1e-5},   /* 3 x 2 pi 14 / 4 */
     {MC_PARAM_control_torque_max_nm, 35.64, 1e-5},
     {MC_PARAM_control_dtc_i_band_a, 0.3, 0},
     {MC_PARAM_startup_i_rest_a, 0.3, 0},
     {MC_PARAM_control_encoder_speed_fc_hz, 500.0, 0},
     {MC_PARAM_injection_i_hf_a, 2.1264, 1e-5},
     {MC_PARAM_injection_v1_v, 70.0, 0},
-    {MC_PARAM_estimator_pll_speed_fc_hz, 100.0, 0},   /* nice2(8 x 13 Hz) */
+    {MC_PARAM_estimator_pll_speed_fc_hz, 110.0, 0},   /* nice2(8 x 14 Hz) */
     {MC_PARAM_estimator_k2, 100.0, 0},
     {MC_PARAM_startup_step1_m, 5.0, 0},
     {MC_PARAM_startup_v_pol_v, 200.0, 0},
@@ -326,10 +326,11 @@ static void baldor_motor(mc_params_t *p)
     set(p, "hw.vdc_span_v", 1000.0f);
 }
 
-/* The speed loop's slew bound, a quarter of (Vdc/sqrt3 - V1) / (2 pi Lq i_max), V1 only while
- * injecting, rounded to two digits, the PLL at most 6 x the bound (unrounded), the speed filter at
- * 8 x the bandwidth (nice2), with the gains J w_bw and J w_bw^2 / 4 that follow; on three motors (the other two sets are above:
- * brodatzki with UNOP, where the PLL's 18 Hz binds, and the thesis motor at 40 A, 13 Hz). */
+/* The speed loop's slew bound, a quarter of (Vdc/sqrt3 - V1) / (2 pi Lq i_max (1 - headroom)), V1
+ * only while injecting, rounded to two digits, the PLL at most 6 x the bound (unrounded), the speed filter at
+ * 8 x the bandwidth (nice2), with the gains J w_bw and J w_bw^2 / 4 that follow; on two motors
+ * (more above: brodatzki with UNOP, where the PLL's 18 Hz binds, and the thesis motor at 40 A,
+ * 14 Hz). */
 static void test_rules_speed_slew(void **state)
 {
     (void)state;
@@ -339,13 +340,14 @@ static void test_rules_speed_slew(void **state)
         const char *source;
         double v1, pll, bw, fc, kp, ki;
     } c[] = {
-        /* 173.2 V - 70 V over 2 pi 12.9 mH 13.29 A: 95.8 Hz, a quarter 23.95 Hz */
-        {"thesis, UNOP", thesis_motor, "unop", 70.0, 30.0, 24.0, 190.0, 1.9603538158400309, 73.90359775535711},
-        /* the injection at its cap, half of 311.8 V; 155.9 V over 2 pi 140.8 mH 12.45 A: 14.2 Hz,
-         * a quarter 3.538 Hz; the PLL nice2(6 x 3.538) = 21 Hz below 6 % of 500 Hz */
-        {"baldor, UNOP", baldor_motor, "unop", 155.88457268119896, 21.0, 3.5, 28.0, 1.0995574287564276, 6.045132695667232},
-        /* no injection: the whole 311.8 V, 28.3 Hz, a quarter 7.08 Hz (6 x: 42 Hz, the PLL's 30) */
-        {"baldor, encoder", baldor_motor, "encoder", -1.0, 30.0, 7.1, 57.0, 2.230530784048753, 24.876337892945724},
+        /* 173.2 V - 70 V over 2 pi 12.9 mH 12.89 A (13.29 A less the 3 % headroom): 98.8 Hz, a
+         * quarter 24.69 Hz, two digits 25: the thesis' 25 Hz stays */
+        {"thesis, UNOP", thesis_motor, "unop", 70.0, 30.0, 25.0, 200.0, 2.0420352248333655, 80.19053575885104},
+        /* the injection at its cap, half of 311.8 V; 155.9 V over 2 pi 140.8 mH 12.08 A: 14.6 Hz,
+         * a quarter 3.648 Hz; the PLL nice2(6 x 3.648) = 22 Hz below 6 % of 500 Hz */
+        {"baldor, UNOP", baldor_motor, "unop", 155.88457268119896, 22.0, 3.6, 29.0, 1.1309733552923256, 6.395503651905904},
+        /* no injection: the whole 311.8 V, 29.2 Hz, a quarter 7.30 Hz (6 x: 44 Hz, the PLL's 30) */
+        {"baldor, encoder", baldor_motor, "encoder", -1.0, 30.0, 7.3, 58.0, 2.293362637120549, 26.29756092670259},
     };
     for (size_t k = 0; k < sizeof c / sizeof c[0]; ++k) {
         mc_params_t p;
