@@ -248,6 +248,18 @@ static bool injecting(const mc_params_t *p)
     return needs_injection(p) && p->injection_kind != MC_CHOICE_injection_kind_off;
 }
 
+/* A quarter of the q current's large-signal bandwidth: a load step makes the speed PI ask for the
+ * current at w_bw di, di up to the references' limit i_max (1 - headroom), while the voltage the
+ * injection leaves slews it at most at (Vdc/sqrt3 - V1) / Lq, Lq at i = 0 the largest l_qq of a
+ * saturating machine; beyond that the loop limit-cycles at the voltage limit
+ * (docs/parameters.md, "Speed-loop bandwidth") */
+static float speed_slew_bw(const mc_params_t *p)
+{
+    const float u_free = p->hw_vdc_nominal_v * 0.57735027f - (injecting(p) ? p->injection_v1_v : 0.0f);
+    const float di = p->control_i_max_a * (1.0f - p->control_i_headroom);
+    return 0.25f * u_free / (6.28318531f * p->motor_lq_h * di);
+}
+
 static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
 {
     /* f_s to the hertz: 1 / 5e-4f is 1999.99994 Hz in float, and a filter corner 2e-5 Hz off
@@ -283,7 +295,8 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         if (estimating(p)) {
             bw = minf(bw, p->estimator_pll_bw_hz);
         }
-        return bw;
+        /* and the slew bound (speed_slew_bw): 3.6 Hz on baldor-5p6kw-pmsyrm */
+        return minf(bw, nice2(speed_slew_bw(p)));
     }
     case MC_RULE_OVERSPEED: {
         /* the highest speed the drive can control: the voltage circle Vdc/sqrt3 over the flux
@@ -350,10 +363,15 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
         return 2000.0f / (float)p->motor_pole_pairs;
     case MC_RULE_PLL_BW:
         /* 6 % of the injection frequency: the injection ripple on the raw angle is attenuated
-         * ~25 dB while the PLL still follows the speed loop (30 Hz at 500 Hz) */
-        return nice2(0.06f * p->injection_f_hz);
+         * ~25 dB while the PLL still follows the speed loop (30 Hz at 500 Hz); and at most 6 x
+         * the speed loop's slew bound: the speed loop needs no faster angle, a faster PLL only
+         * passes more of the raw estimate's noise (22 Hz on baldor-5p6kw-pmsyrm) */
+        return nice2(minf(0.06f * p->injection_f_hz, 6.0f * speed_slew_bw(p)));
     case MC_RULE_PLL_FC:
-        return minf(200.0f, fs / 10.0f);
+        /* the speed loop reads the speed only up to a few times its bandwidth; above, its
+         * proportional gain J w_bw passes the estimate's noise to the current reference. 8 x
+         * costs the loop 7 deg of phase at crossover */
+        return nice2(minf(minf(200.0f, fs / 10.0f), 8.0f * p->control_speed_bw_hz));
     case MC_RULE_K2: {
         /* K2 acts on the scaled speed omega / w_base; the data term's curvature in that variable
          * is (psi_pm w_base)^2. Keeping their ratio as on the thesis motor (psi_pm w_base =
@@ -442,16 +460,16 @@ static float rule_value(const mc_params_t *p, mc_param_rule_t rule)
 }
 
 /* Rules read the motor and hardware entries (never derived) and other rule results (speed_kp
- * reads speed_bw, which reads pll_bw, which reads inj_f): four passes settle the deepest chain
- * whatever the table order. A rule result that is not finite (a motor entry out of range) is
- * stored as it is, for the validation to report. */
+ * and pll_speed_fc read speed_bw, which reads pll_bw, which reads inj_v1, which reads inj_f):
+ * five passes settle the deepest chain whatever the table order. A rule result that is not
+ * finite (a motor entry out of range) is stored as it is, for the validation to report. */
 void mc_params_derive(mc_params_t *p)
 {
     if (!(p->control_ts_s > 0.0f) || p->motor_pole_pairs < 1 || p->hw_adc_bits < 1 || p->hw_adc_bits > 30 || p->startup_step2_n < 1 ||
         p->control_speed_decimation < 1) {
         return;   /* the validation reports the entry; rules would divide by it */
     }
-    for (int pass = 0; pass < 4; ++pass) {
+    for (int pass = 0; pass < 5; ++pass) {
         for (int k = 0; k < (int)MC_PARAM_COUNT; ++k) {
             if (mc_param_table[k].rule != MC_RULE_NONE && mc_param_is_auto(p, k)) {
                 const float v = rule_value(p, (mc_param_rule_t)mc_param_table[k].rule);

@@ -66,11 +66,20 @@ static void unop_init(mc_angle_src_state_t *st, const mc_angle_src_cfg_t *cfg)
 }
 
 /* Running: the solver takes its whole configuration (injection.n1_rpm, where K1, K2 fade out, is
- * RUNTIME); the PLL's parameters change only with the outputs off. */
+ * RUNTIME); so does the PLL, whose bandwidth and speed filter follow the speed loop's rules
+ * (control.speed_bw_hz, i_max_a, injection.v1_v are RUNTIME): new coefficients, the states kept,
+ * so that a new gain or corner moves no output. */
 static void unop_retune(mc_angle_src_state_t *st, const mc_angle_src_cfg_t *cfg)
 {
     src_unop_t *s = (src_unop_t *)(void *)st;
-    mc_unop_retune(&s->unop, &((const src_unop_cfg_t *)(const void *)cfg)->unop);
+    const src_unop_cfg_t *c = (const src_unop_cfg_t *)(const void *)cfg;
+    mc_unop_retune(&s->unop, &c->unop);
+    if (c->pll.speed_fc_hz != s->pll.cfg.speed_fc_hz) {
+        const mc_lpf1_t kept = s->pll.speed_lpf;
+        mc_lpf1_init(&s->pll.speed_lpf, c->pll.speed_fc_hz, c->pll.ts, kept.y);
+        s->pll.speed_lpf.x1 = kept.x1;
+    }
+    s->pll.cfg = c->pll;
 }
 
 static void unop_reset(mc_angle_src_state_t *st, float theta, float omega)

@@ -3,7 +3,8 @@
  * on two different motors: the thesis IPMSM at 10 kHz (the table's defaults) and the
  * brodatzki-35kw automotive IPMSM (presets/brodatzki-35kw.toml) at 8 kHz with the sensorless
  * estimator and a 300 Hz injection, and again at 5 kHz with a 10-bit ADC; the thesis motor with a
- * current limit and a speed kp set by hand. Every rule of the table has its parameter checked.
+ * current limit and a speed kp set by hand; the speed loop's slew bound on three motors (the
+ * thesis motor and baldor-5p6kw-pmsyrm with UNOP, baldor with the encoder). Every rule of the table has its parameter checked.
  * Then what derive must leave alone: entries set by hand, and everything when an entry the rules
  * divide by is out of range. */
 #include <math.h>
@@ -74,7 +75,7 @@ static const want_t motor_b_unop[] = {
     {MC_PARAM_estimator_pll_bw_hz, 18.0, 0},
     {MC_PARAM_control_current_bw_hz, 150.0, 0},
     {MC_PARAM_control_i_slew_a_per_s, 75000.0, 0},
-    {MC_PARAM_control_speed_bw_hz, 18.0, 0},
+    {MC_PARAM_control_speed_bw_hz, 18.0, 0},   /* the PLL's; the slew bound (144.3 - 5.8) V / (2 pi 0.5496 mH 155.2 A) / 4 = 64.6 Hz */
     {MC_PARAM_protection_overspeed_rpm, 5997.0, 0},
     {MC_PARAM_protection_i_sum_tol_a, 8.0, 0},
     {MC_PARAM_protection_tracking_err_a, 40.0, 0},
@@ -90,7 +91,7 @@ static const want_t motor_b_unop[] = {
     {MC_PARAM_control_encoder_speed_fc_hz, 500.0, 0},
     {MC_PARAM_injection_i_hf_a, 25.6, 1e-5},
     {MC_PARAM_injection_v1_v, 5.8, 0},
-    {MC_PARAM_estimator_pll_speed_fc_hz, 200.0, 0},
+    {MC_PARAM_estimator_pll_speed_fc_hz, 140.0, 0},   /* nice2(8 x 18 Hz) */
     {MC_PARAM_estimator_k2, 3.2, 0},
     {MC_PARAM_startup_step1_m, 1.0, 0},
     {MC_PARAM_startup_v_pol_v, 22.0, 0},
@@ -160,7 +161,7 @@ static const want_t motor_a_manual[] = {
     {MC_PARAM_estimator_pll_bw_hz, 30.0, 0},
     {MC_PARAM_control_current_bw_hz, 250.0, 0},
     {MC_PARAM_control_i_slew_a_per_s, 31000.0, 0},
-    {MC_PARAM_control_speed_bw_hz, 25.0, 0},
+    {MC_PARAM_control_speed_bw_hz, 14.0, 0},   /* nice2(173.2 V / (2 pi 12.9 mH 40 A 0.97) / 4 = 13.77 Hz) */
     {MC_PARAM_protection_overspeed_rpm, 2893.0, 0},
     {MC_PARAM_protection_i_sum_tol_a, 0.66, 0},
     {MC_PARAM_protection_tracking_err_a, 3.3, 0},
@@ -169,14 +170,14 @@ static const want_t motor_a_manual[] = {
     {MC_PARAM_protection_lock_speed_floor_rpm, 100.0, 0},
     {MC_PARAM_protection_stall_speed_rpm, 20.0, 0},
     {MC_PARAM_control_speed_kp, 3.0, 1e-5},
-    {MC_PARAM_control_speed_ki, 117.80972450961724, 1e-5},
+    {MC_PARAM_control_speed_ki, 65.97344572538566, 1e-5},   /* 3 x 2 pi 14 / 4 */
     {MC_PARAM_control_torque_max_nm, 35.64, 1e-5},
     {MC_PARAM_control_dtc_i_band_a, 0.3, 0},
     {MC_PARAM_startup_i_rest_a, 0.3, 0},
     {MC_PARAM_control_encoder_speed_fc_hz, 500.0, 0},
     {MC_PARAM_injection_i_hf_a, 2.1264, 1e-5},
     {MC_PARAM_injection_v1_v, 70.0, 0},
-    {MC_PARAM_estimator_pll_speed_fc_hz, 200.0, 0},
+    {MC_PARAM_estimator_pll_speed_fc_hz, 110.0, 0},   /* nice2(8 x 14 Hz) */
     {MC_PARAM_estimator_k2, 100.0, 0},
     {MC_PARAM_startup_step1_m, 5.0, 0},
     {MC_PARAM_startup_v_pol_v, 200.0, 0},
@@ -306,6 +307,76 @@ static void test_rules_brodatzki_5khz_10bit(void **state)
     assert_true(mc_params_validate(&p, &err));
 }
 
+/* presets/baldor-5p6kw-pmsyrm.toml: a PM-assisted SyRM, its Ld, Lq, psi_pm at i = 0 from the
+ * measured map (25.76 / 140.8 mH, 444 mWb), 12.45 A, 29.7 N m, 0.05 kg m^2; 540 V, 8 kHz */
+static void baldor_motor(mc_params_t *p)
+{
+    mc_params_default(p);
+    set(p, "motor.pole_pairs", 2.0f);
+    set(p, "motor.rs_ohm", 0.63f);
+    set(p, "motor.ld_h", 25.76e-3f);
+    set(p, "motor.lq_h", 140.8e-3f);
+    set(p, "motor.psi_pm_wb", 0.44415f);
+    set(p, "motor.i_rated_a", 12.45f);
+    set(p, "motor.torque_rated_nm", 29.7f);
+    set(p, "motor.inertia_kgm2", 0.05f);
+    set(p, "hw.vdc_nominal_v", 540.0f);
+    set(p, "control.ts_s", 1.25e-4f);
+    set(p, "hw.i_span_a", 25.0f);
+    set(p, "hw.vdc_span_v", 1000.0f);
+}
+
+/* The speed loop's slew bound, a quarter of (Vdc/sqrt3 - V1) / (2 pi Lq i_max (1 - headroom)), V1
+ * only while injecting, rounded to two digits, the PLL at most 6 x the bound (unrounded), the speed filter at
+ * 8 x the bandwidth (nice2), with the gains J w_bw and J w_bw^2 / 4 that follow; on two motors
+ * (more above: brodatzki with UNOP, where the PLL's 18 Hz binds, and the thesis motor at 40 A,
+ * 14 Hz). */
+static void test_rules_speed_slew(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *name;
+        void (*motor)(mc_params_t *);
+        const char *source;
+        double v1, pll, bw, fc, kp, ki;
+    } c[] = {
+        /* 173.2 V - 70 V over 2 pi 12.9 mH 12.89 A (13.29 A less the 3 % headroom): 98.8 Hz, a
+         * quarter 24.69 Hz, two digits 25: the thesis' 25 Hz stays */
+        {"thesis, UNOP", thesis_motor, "unop", 70.0, 30.0, 25.0, 200.0, 2.0420352248333655, 80.19053575885104},
+        /* the injection at its cap, half of 311.8 V; 155.9 V over 2 pi 140.8 mH 12.08 A: 14.6 Hz,
+         * a quarter 3.648 Hz; the PLL nice2(6 x 3.648) = 22 Hz below 6 % of 500 Hz */
+        {"baldor, UNOP", baldor_motor, "unop", 155.88457268119896, 22.0, 3.6, 29.0, 1.1309733552923256, 6.395503651905904},
+        /* no injection: the whole 311.8 V, 29.2 Hz, a quarter 7.30 Hz (6 x: 44 Hz, the PLL's 30) */
+        {"baldor, encoder", baldor_motor, "encoder", -1.0, 30.0, 7.3, 58.0, 2.293362637120549, 26.29756092670259},
+    };
+    for (size_t k = 0; k < sizeof c / sizeof c[0]; ++k) {
+        mc_params_t p;
+        c[k].motor(&p);
+        assert_true(mc_param_set_choice(&p, MC_PARAM_control_angle_source, c[k].source, NULL));
+        mc_params_derive(&p);
+        const double got[] = {p.injection_v1_v, p.estimator_pll_bw_hz, p.control_speed_bw_hz, p.estimator_pll_speed_fc_hz,
+                              p.control_speed_kp, p.control_speed_ki};
+        const double want[] = {c[k].v1, c[k].pll, c[k].bw, c[k].fc, c[k].kp, c[k].ki};
+        for (size_t j = 0; j < 6; ++j) {
+            if (want[j] >= 0.0 && !(fabs(got[j] - want[j]) <= 1e-5 * fabs(want[j]))) {
+                fail_msg("%s: value %u = %.9g, hand computation %.9g", c[k].name, (unsigned)j, got[j], want[j]);
+            }
+        }
+        mc_param_err_t err;
+        if (!mc_params_validate(&p, &err)) {
+            fail_msg("%s: %s (%s)", c[k].name, err.text, mc_param_table[err.param].name);
+        }
+    }
+    /* a bandwidth given by hand is kept, and the filter follows it */
+    mc_params_t p;
+    baldor_motor(&p);
+    assert_true(mc_param_set_choice(&p, MC_PARAM_control_angle_source, "unop", NULL));
+    set(&p, "control.speed_bw_hz", 20.0f);
+    mc_params_derive(&p);
+    assert_true(p.control_speed_bw_hz == 20.0f);
+    assert_true(p.estimator_pll_speed_fc_hz == 160.0f);
+}
+
 /* Entries set by hand are kept and the rules that read them follow them: the current limit
  * (overspeed, current slew) and the speed kp (ki from the kp given, kp w_bw / 4). */
 static void test_rules_follow_hand_entries(void **state)
@@ -394,6 +465,7 @@ int main(void)
         cmocka_unit_test(test_rules_brodatzki_sensorless),
         cmocka_unit_test(test_rules_brodatzki_5khz_10bit),
         cmocka_unit_test(test_rules_follow_hand_entries),
+        cmocka_unit_test(test_rules_speed_slew),
         cmocka_unit_test(test_derive_guard),
         cmocka_unit_test(test_derive_integer_overflow),
     };
