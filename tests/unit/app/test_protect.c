@@ -483,6 +483,14 @@ static void test_overspeed_limit(void **st)
         assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
         in.omega = in.omega_raw = nextafterf(w, 2.0f * w);
         assert_int_equal(run_for(&s, &c, &in, 1, &n), MC_FAULT_OVERSPEED);
+        /* in its reaction (latched already) any finite speed, however far beyond, is no new
+         * over-speed; an infinite one still is (the bound excludes only inf and NaN) */
+        in.reacting = true;
+        in.omega = in.omega_raw = (float)sign * 2.0e38f;
+        mc_protect_reset(&s, &c, w);
+        assert_int_equal(run_for(&s, &c, &in, 1, &n), 0u);
+        in.omega = in.omega_raw = (float)sign * INFINITY;
+        assert_int_equal(run_for(&s, &c, &in, 1, &n), MC_FAULT_OVERSPEED);
     }
 }
 
