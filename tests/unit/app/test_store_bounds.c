@@ -289,6 +289,19 @@ static void test_model_view_other_grid(void **state)
             assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_MAP_MISMATCH);
         }
     }
+    /* ... and one whose flux differs in one cell by one ulp either way, first, middle and last,
+     * on either axis: the map in place is not the stored one */
+    const size_t cells = 4u * 5u, at[] = {0u, cells / 2u, cells - 1u};
+    for (int axis = 0; axis < 2; ++axis) {
+        for (size_t i = 0; i < 3u; ++i) {
+            for (int d = -1; d <= 1; d += 2) {
+                place = good;
+                float *x = axis == 0 ? &place.psi_d[at[i]] : &place.psi_q[at[i]];
+                *x = mc_bits_f32((uint32_t)((int64_t)mc_f32_bits(*x) + d));
+                assert_int_equal(mc_store_model_view(buf, n, &r, &place), MC_STORE_MAP_MISMATCH);
+            }
+        }
+    }
 }
 
 /* What a model slot holds says itself: erased memory is "nothing stored" (the image boots on the
@@ -308,6 +321,13 @@ static void test_model_slot_status(void **state)
     put_le(0u, MC_STORE_MAGIC_PARAMS);
     assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_BAD_MAGIC);
     assert_int_equal(mc_store_model_view(buf, n, &r, &out), MC_STORE_BAD_MAGIC);
+    /* a damaged magic word, one below and one above the model's own: neither is the model's */
+    for (int d = -1; d <= 1; d += 2) {
+        model_record(3u, 3u);
+        put_le(0u, MC_STORE_MAGIC_MODEL + (uint32_t)d);
+        assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_BAD_MAGIC);
+        assert_int_equal(mc_store_model_view(buf, n, &r, &out), MC_STORE_BAD_MAGIC);
+    }
     model_record(3u, 3u);
     put_le(4u, MC_STORE_VERSION + 1u);
     assert_int_equal(mc_store_model_decode(buf, n, &r, &out), MC_STORE_BAD_VERSION);
