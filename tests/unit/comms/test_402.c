@@ -1078,6 +1078,32 @@ static void test_stop_option_codes_other_than_0(void **state)
     }
 }
 
+/* A shutdown or disable-operation ramp that cannot end by standstill (a load holds the rotor at
+ * 300 rpm) still ends by its time limit, (speed / 0x6084) + 1 s, although the master repeats the
+ * command every cycle, as masters do with a cyclic controlword: the repeat does not restart it. */
+static void test_stop_ramp_time_limit_with_the_command_repeated(void **state)
+{
+    (void)state;
+    for (int shutdown = 0; shutdown < 2; ++shutdown) {
+        start();
+        s.od.profile_decel = 1000u;
+        s.od.shutdown_option = 1;
+        s.od.disable_op_option = 1;
+        to_enabled();
+        s.od.target_velocity = 300;
+        step_n(400);
+        set_rpm(300.0f);   /* held there, whatever the command */
+        const uint16_t c = shutdown ? 0x06 : 0x07;
+        const int limit = (int)((300.0f / 1000.0f + 1.0f) / CFG.dt);
+        int k = 0;
+        while (k < 2 * limit && cw(c) == 0x0237) {
+            ++k;
+        }
+        assert_int_equal(sw(), shutdown ? 0x0221 : 0x0233);
+        assert_true(k >= limit - 2 && k <= limit + 2);
+    }
+}
+
 /* Disable operation (0x605C = 0) and enable operation again between two steps
  * (mc_402_controlword, the drive's telemetry still showing RUN): the drive was disabled, so the
  * enable restarts it from zero torque on 0x6087, not with the torque it had before. */
@@ -1338,6 +1364,7 @@ int main(void)
         cmocka_unit_test(test_pole_pairs_out_of_range),
         cmocka_unit_test(test_ramp_down_cut_short),
         cmocka_unit_test(test_stop_option_codes_other_than_0),
+        cmocka_unit_test(test_stop_ramp_time_limit_with_the_command_repeated),
         cmocka_unit_test(test_reenable_in_one_batch_restarts_the_ramp),
         cmocka_unit_test(test_torque_demand_0_when_disabled),
         cmocka_unit_test(test_not_reached_during_startup),
