@@ -641,6 +641,12 @@ static void test_stall_limits(void **st)
         in.u_dq.q = c.rs * 5.0f + in.omega * c.psi_pm;
         mc_protect_reset(&s, &c, in.omega);
         assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
+        /* ... and well above it (accelerating at full torque toward a far reference: no stall) */
+        in.omega = in.omega_raw = sg * 10.0f * c.stall_speed;
+        in.speed_ref = sg * 200.0f;
+        in.u_dq.q = c.rs * 5.0f + in.omega * c.psi_pm;
+        mc_protect_reset(&s, &c, in.omega);
+        assert_int_equal(run_for(&s, &c, &in, 3000, &n), 0u);
         in = base;
         in.torque_ref = sg * nextafterf(c.stall_torque, 0.0f);
         mc_protect_reset(&s, &c, in.omega);

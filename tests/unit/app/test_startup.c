@@ -309,6 +309,42 @@ static void test_sensor_entry_references_from_the_current(void **state)
     }
 }
 
+/* ... and with more current flowing than the references may ask (1.2 x i_ref_max, the catch of a
+ * low-inductance motor can leave that, mc/catch.h), RUN's first reference is that current scaled
+ * to the limit (then one slew step toward the command), whatever its direction: not the current
+ * itself, which the loop would hold above the limit. (startup.c refs_from_current.) */
+static void test_sensor_entry_references_within_the_limit(void **state)
+{
+    (void)state;
+    static rig_t r;
+    const uint32_t starts[] = {0u, 13000u, 29000u, 51000u, 70000u};
+    for (size_t a = 0; a < sizeof starts / sizeof starts[0]; ++a) {
+        rig_init(&r, "encoder", "given", "pulses");
+        const float lim = r.d.cfg->blk.i_ref_max;
+        const float amps = 1.2f * lim / 1.1547005f;   /* i_a = -i_b = amps: |i| = 1.1547 amps */
+        const float k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
+        const uint32_t samples = r.d.cfg->blk.offs.samples;
+        const int32_t step = 800 * 80000 / 60 / 10000;
+        r.qep.sample.count = starts[a];
+        const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
+        mc_drive_command(&r.d, &c);
+        for (int n = 0; n < 5000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
+            if (r.d.offs.count + 1u >= samples) {
+                r.adc.sample.i[0] = (uint16_t)lrintf(nominal + amps / k);
+                r.adc.sample.i[1] = (uint16_t)lrintf(nominal - amps / k);
+            }
+            r.qep.sample.count = (uint32_t)(((int32_t)r.qep.sample.count + step + 80000) % 80000);
+            run(&r, 1);
+        }
+        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
+        const float slew = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
+        assert_true(hypotf(tm->i_dq.d, tm->i_dq.q) > 1.1f * lim);   /* more flows than the limit */
+        const float ref = hypotf(tm->i_ref.d, tm->i_ref.q);
+        assert_true(ref <= lim && ref >= lim - 2.0f * slew);
+    }
+}
+
 /* With the outputs off and nothing to run (IDLE, FAULT) the drive leaves the PWM alone: no duty
  * write and no enable call period after period (the duties it left at 50 % stay latched), only
  * the one outputs-off of the period it got there. (startup.c:376: outputs off only if on.) */
@@ -1073,6 +1109,7 @@ int main(void)
         cmocka_unit_test(test_step2_decision_in_telemetry),
         cmocka_unit_test(test_sensor_wait_is_bounded),
         cmocka_unit_test(test_sensor_entry_references_from_the_current),
+        cmocka_unit_test(test_sensor_entry_references_within_the_limit),
         cmocka_unit_test(test_sensor_entry_at_rest_gates_on_next_period),
         cmocka_unit_test(test_idle_and_fault_leave_the_pwm_alone),
         cmocka_unit_test(test_step1_refused_never_enables),
