@@ -97,8 +97,8 @@ uint32_t mc_protect_running(mc_protect_t *s, const mc_protect_cfg_t *b, const mc
     *doubt = false;
     const float omega = in->omega, omega_raw = in->omega_raw;
     const mc_dq_t i_ref = in->i_ref, i_fb = in->i_fb, u_dq = in->u_dq;
-    if (!(fabsf(omega) <= b->overspeed) && !(in->reacting && fabsf(omega) < 3.0e38f)) {
-        return MC_FAULT_OVERSPEED;   /* also a NaN speed; latched already in its reaction */
+    if (!(fabsf(omega) <= b->overspeed) && !(in->reacting && isfinite(omega))) {
+        return MC_FAULT_OVERSPEED;   /* also a NaN or infinite speed; latched already in its reaction */
     }
     /* (a) the estimator's raw speed against the filtered one: a lock on the wrong solution shows
      * as a raw speed of the wrong sign or size while the PLL keeps its speed (thesis Fig. 6.9) */

@@ -1,5 +1,6 @@
 /* Protection on its own (mc/protect.h): the hard trips and sensor checks, the running detectors
  * and the reactions, each on a state and a configuration of its own, no drive. */
+#include <float.h>
 #include <math.h>
 
 #include "../mc_test.h"
@@ -486,7 +487,7 @@ static void test_overspeed_limit(void **st)
         /* in its reaction (latched already) any finite speed, however far beyond, is no new
          * over-speed; an infinite one still is (the bound excludes only inf and NaN) */
         in.reacting = true;
-        in.omega = in.omega_raw = (float)sign * 2.0e38f;
+        in.omega = in.omega_raw = (float)sign * FLT_MAX;
         mc_protect_reset(&s, &c, w);
         assert_int_equal(run_for(&s, &c, &in, 1, &n), 0u);
         in.omega = in.omega_raw = (float)sign * INFINITY;
