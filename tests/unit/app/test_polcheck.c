@@ -155,6 +155,53 @@ static void test_unsettled(void **st)
     assert_int_equal(n, 19);   /* ended at the period 18.0 rad/s away */
 }
 
+/* No HF response at all under one or both biases (the injection not reaching the machine, a
+ * dead current channel): the ratio is undefined, so no verdict, and the estimate is never turned;
+ * a NaN current the same. */
+static void test_no_response_no_flip(void **st)
+{
+    (void)st;
+    const mc_polcheck_cfg_t c = config();
+    mc_polcheck_t s = {0};
+    mc_polcheck_restart(&s);
+    const float amps[][2] = {{0.0f, 0.0f}, {0.0f, 0.1f}, {0.1f, 0.0f}, {NAN, 0.1f}, {0.1f, NAN}};
+    for (size_t k = 0; k < sizeof amps / sizeof amps[0]; ++k) {
+        int n = 0;
+        s.last = -1;
+        assert_true(mc_polcheck_start(&s, &c, 10.0f, true));
+        assert_false(run_check(&s, &c, amps[k][0], amps[k][1], &n));
+        assert_int_equal(n, 2 * (10 + 20));   /* ran to its end: a real "inconclusive" */
+        assert_int_equal(s.last, 0);
+    }
+    assert_int_equal(s.flips, 0u);
+}
+
+/* A check cut short by an unsettled estimate part-way through its +I_b measurement leaves
+ * nothing behind: the next check's verdict is the one a fresh check gives (right, here, by a
+ * clear 20 % in amplitude), not one weighed with the aborted check's samples. */
+static void test_aborted_check_leaves_no_trace(void **st)
+{
+    (void)st;
+    const mc_polcheck_cfg_t c = config();
+    mc_polcheck_t s = {0};
+    mc_polcheck_restart(&s);
+    assert_true(mc_polcheck_start(&s, &c, 10.0f, true));
+    mc_polcheck_in_t in = {.i_d = 2.1f, .i_d_filtered = 2.0f, .theta = 0.3f, .theta_raw = 0.3f, .w_avg = 5.0f};
+    for (int n = 0; n < 10 + 15; ++n) {   /* settled, then 15 of the 20 measuring periods */
+        in.i_d = (n & 1) ? 2.1f : 1.9f;
+        assert_false(mc_polcheck_step(&s, &c, &in));
+        assert_true(mc_polcheck_active(&s));
+    }
+    in.w_avg = 25.0f;   /* the speed estimate jumps by 20 rad/s (> 10 deg in w_scale units): aborted */
+    assert_false(mc_polcheck_step(&s, &c, &in));
+    assert_false(mc_polcheck_active(&s));
+    int n = 0;
+    assert_true(mc_polcheck_start(&s, &c, 10.0f, true));
+    assert_false(run_check(&s, &c, 0.12f, 0.10f, &n));
+    assert_int_equal(s.last, -1);
+    assert_int_equal(s.flips, 0u);
+}
+
 /* at_start: a check a settling time into RUN, again after an inconclusive verdict, three at
  * most; none after Step II (three_step); a RUN entry marked unsure is checked as at_start. */
 static void test_schedule(void **st)
@@ -209,6 +256,8 @@ int main(void)
         cmocka_unit_test(test_verdicts),
         cmocka_unit_test(test_verdict_margin),
         cmocka_unit_test(test_unsettled),
+        cmocka_unit_test(test_no_response_no_flip),
+        cmocka_unit_test(test_aborted_check_leaves_no_trace),
         cmocka_unit_test(test_schedule),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -312,6 +312,18 @@ static void test_monitor_telemetry_round_trip(void **state)
     t.cmd_reject_last = MC_CMD_BAD_MODE;
     uint32_t w[MC_MONITOR_TM_WORDS];
     mc_monitor_pack_telem(&t, w);
+    /* the frame is a function of the telemetry alone: whatever the block held before (RAM after
+     * reset, the previous frame), every word is written, the unused tail as 0 */
+    uint32_t w2[MC_MONITOR_TM_WORDS];
+    memset(w2, 0xA5, sizeof w2);
+    mc_monitor_pack_telem(&t, w2);
+    assert_memory_equal(w, w2, sizeof w);
+    mc_drive_telem_t z;
+    memset(&z, 0, sizeof z);
+    mc_monitor_pack_telem(&z, w2);
+    for (unsigned k = 0u; k < MC_MONITOR_TM_WORDS; ++k) {
+        assert_int_equal(w2[k], 0u);   /* all-zero telemetry (+0.0f floats): all-zero words */
+    }
     mc_monitor_unpack_telem(w, &u);
     assert_int_equal(u.state, MC_STATE_FAULT_REACTION);
     assert_int_equal(u.init_step, MC_INIT_CATCH);

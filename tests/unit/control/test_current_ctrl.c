@@ -176,6 +176,13 @@ static void test_voltage_limit_d_priority(void **state)
     assert_near(u.q, 40.0, 1e-5);
     assert_false(s.limited);
     assert_near(hypot(s.u.d, s.u.q), 50.0, 1e-4);
+    /* a reset (a polarity flip, a new enable) forgets the last output: the drive's plausibility
+     * checks read s.u as the voltage applied, and nothing is applied by a loop just reset */
+    (void)mc_cc_step(&s, dq(-150.0f, 30.0f), dq(0.0f, 0.0f), 0.0f, 100.0f);
+    assert_true(s.limited);
+    mc_cc_reset(&s);
+    assert_true(s.u.d == 0.0f && s.u.q == 0.0f);
+    assert_false(s.limited);
 }
 
 /* Long saturation, then the error reverses: the output must leave the limit at once. */

@@ -64,6 +64,14 @@ static void test_first_vector(void **st)
         assert_true(m > UMAX - 1e-3);
         /* two passes: the direction from the reach one pass before, within a degree */
         assert_near(a, PI_D / 2.0 + acos(m / (W * PSI)), 0.02);
+        /* the law is homogeneous in flux and voltage: a machine of 1/400 the flux on a bus of
+         * 1/400 (0.75 V) gets the same vector scaled by 1/400, the hexagon's reach included */
+        const double f = 1.0 / 400.0;
+        const mc_dq_t psi_f = {(float)(PSI * f), 0.0f};
+        mc_dq_t uf;
+        assert_true(law(psi_f, i0, u0, 0.0f, (float)W, 0.0f, (float)(UMAX * f), (float)(300.0 * f), sc, true, &uf));
+        assert_near(uf.d / f, u.d, 1e-2);
+        assert_near(uf.q / f, u.q, 1e-2);
     }
 }
 

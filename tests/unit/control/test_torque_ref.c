@@ -415,6 +415,58 @@ static void test_fw_voltage_feedback(void **st)
     assert_near(o.d, r.d, 0.0);
 }
 
+/* The voltage limit (2.20) depends on the ratio vdc / omega only: the same torque with the speed
+ * and the bus both scaled down by the same factor, to a bus of a few mV near standstill, gives the
+ * same reference, in MTPA (300 rpm) and in field weakening (1500 rpm, 10 N m; 1400 rpm, 30 N m on
+ * the circle). */
+static void test_voltage_limit_scales_with_bus(void **state)
+{
+    (void)state;
+    const struct { double rpm, t; } pts[] = {{300.0, 20.0}, {1500.0, 10.0}, {1400.0, 30.0}};
+    const double f[] = {1e-2, 1e-3, 1e-4};
+    for (size_t k = 0; k < sizeof pts / sizeof pts[0]; ++k) {
+        mc_tref_t s;
+        make(&s, false, 1.0f);
+        const double we = rpm_to_we(pts[k].rpm);
+        const mc_dq_t i = mc_tref_step(&s, (float)pts[k].t, (float)we, (float)VDC);
+        const bool fw = s.fw_active, lim = s.i_limited;
+        for (size_t j = 0; j < sizeof f / sizeof f[0]; ++j) {
+            const mc_dq_t g = mc_tref_step(&s, (float)pts[k].t, (float)(we * f[j]), (float)(VDC * f[j]));
+            assert_near(g.d, i.d, 1e-3);
+            assert_near(g.q, i.q, 1e-3);
+            assert_int_equal(s.fw_active, fw);
+            assert_int_equal(s.i_limited, lim);
+        }
+    }
+}
+
+/* An infinite speed reading is a speed beyond top speed whatever the bus reads, an infinite bus
+ * one too: no torque current, all of it on -d (the ellipse shrinks to its centre -psi/Ld, beyond
+ * the circle on this machine); an infinite bus at a finite speed bounds nothing: MTPA. */
+static void test_infinite_speed_and_bus(void **state)
+{
+    (void)state;
+    mc_tref_t s;
+    make(&s, false, 1.0f);
+    const float inf = INFINITY;
+    const float ws[] = {inf, -inf};
+    const float vs[] = {(float)VDC, inf};
+    for (int a = 0; a < 2; ++a) {
+        for (int b = 0; b < 2; ++b) {
+            const mc_dq_t i = mc_tref_step(&s, 10.0f, ws[a], vs[b]);
+            assert_true(s.fw_active);
+            assert_true(s.i_limited);
+            assert_near(i.d, -IMAX, 1e-4);
+            assert_near(i.q, 0.0, 1e-6);
+        }
+    }
+    const mc_dq_t m = mc_tref_step(&s, 10.0f, (float)rpm_to_we(1500.0), inf);
+    const double iq = ref_mtpa_iq(10.0);
+    assert_false(s.fw_active);
+    assert_near(m.d, ref_mtpa_id(iq), 2e-3);
+    assert_near(m.q, iq, 2e-3);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -428,6 +480,8 @@ int main(void)
         cmocka_unit_test(test_mtpa_cache_follows_inputs),
         cmocka_unit_test(test_fw_decision_matches_exact_test),
         cmocka_unit_test(test_fw_voltage_feedback),
+        cmocka_unit_test(test_voltage_limit_scales_with_bus),
+        cmocka_unit_test(test_infinite_speed_and_bus),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -122,10 +122,94 @@ static void test_operating_plane(void **state)
     }
 }
 
+/* The same plane on two other machines the drive supports: a strongly salient one whose magnet
+ * flux is small (Lq = 4 Ld, characteristic current psi/Ld = i_max: the field-weakening point can
+ * sit far right of the MTPA id at low q current), and a surface-magnet one (Ld = Lq: MTPA is
+ * id = 0; psi/Ld = 25 A > i_max: without a max-torque-per-voltage region, which torque_ref.c
+ * does not plan for). Whatever is asked at 48 V, the reference
+ * stays in the circle and the ellipse, never magnetizes beyond the MTPA point's id, gives the
+ * torque asked when no limit is flagged and, when flagged in field weakening, sits on the
+ * ellipse (the most the machine can give there). */
+typedef struct { const char *name; double ld, lq, psi, imax; int p; } tr_mach_t;
+
+static double m_torque(const tr_mach_t *m, double id, double iq) { return 1.5 * m->p * (m->psi * iq + (m->ld - m->lq) * id * iq); }
+static double m_mtpa_id(const tr_mach_t *m, double iq)
+{
+    const double dl = m->lq - m->ld;
+    return dl == 0.0 ? 0.0 : (m->psi - sqrt(m->psi * m->psi + 4.0 * dl * dl * iq * iq)) / (2.0 * dl);
+}
+static double m_mtpa_iq(const tr_mach_t *m, double t)
+{
+    double lo = 0.0, hi = 3.0 * m->imax;
+    for (int k = 0; k < 200; ++k) {
+        const double x = 0.5 * (lo + hi);
+        if (m_torque(m, m_mtpa_id(m, x), x) < t) {
+            lo = x;
+        } else {
+            hi = x;
+        }
+    }
+    return 0.5 * (lo + hi);
+}
+static double m_u(const tr_mach_t *m, double id, double iq, double we)
+{
+    return fabs(we) * sqrt(m->lq * m->lq * iq * iq + (m->ld * id + m->psi) * (m->ld * id + m->psi));
+}
+
+static void test_operating_plane_other_machines(void **state)
+{
+    (void)state;
+    static const tr_mach_t machines[] = {{"salient", 5e-3, 20e-3, 0.05, 10.0, 2}, {"spm", 2e-3, 2e-3, 0.05, 20.0, 4}};
+    const double vdc = 48.0, umax = vdc / sqrt(3.0);
+    for (size_t mk = 0; mk < sizeof machines / sizeof machines[0]; ++mk) {
+        const tr_mach_t *m = &machines[mk];
+        const double t_max = m_torque(m, m_mtpa_id(m, m->imax), m->imax) * 1.3;   /* beyond the circle */
+        const double w_base = umax / (m->psi + m->ld * m->imax);
+        for (int tb = 0; tb < 2; ++tb) {
+            mc_tref_cfg_t c = {0};
+            c.pole_pairs = m->p;
+            c.mach = (mc_lin_params_t){.ld = (float)m->ld, .lq = (float)m->lq, .psi_pm = (float)m->psi};
+            c.i_max = (float)m->imax;
+            c.u_margin = 1.0f;
+            c.use_table = tb == 1;
+            c.ts = 1e-4f;
+            mc_mtpa_table_fill_linear(&c.table, &c.mach, (float)m->imax);
+            mc_tref_t s;
+            mc_tref_init(&s, &c);
+            uint32_t fw = 0u, fw_limited = 0u;
+            for (int iw = 0; iw <= 120; ++iw) {
+                const double we = 6.0 * w_base * iw / 120.0;
+                for (int it = 0; it <= 40; ++it) {
+                    const double t = t_max * it / 40.0;
+                    const mc_dq_t i = mc_tref_step(&s, (float)t, (float)we, (float)vdc);
+                    const double tq = m_torque(m, i.d, i.q), u = m_u(m, i.d, i.q, we);
+                    const double iq_m = m_mtpa_iq(m, t), id_m = m_mtpa_id(m, iq_m);
+                    const bool in_circle = hypot(id_m, iq_m) <= m->imax;   /* the MTPA point itself */
+                    if (!(hypot(i.d, i.q) <= m->imax * (1.0 + 1e-6)) || !(u <= umax * (1.0 + 1e-3)) ||
+                        !(tq <= t * (1.0 + 2e-3) + 1e-3) || !(i.d <= 1e-6) ||
+                        (s.fw_active && in_circle && !(i.d <= id_m + 1e-3 * m->imax)) ||
+                        (!s.i_limited && !(fabs(tq - t) <= 2e-3 * t + 1e-3)) ||
+                        (s.fw_active && s.i_limited && !(u >= umax * (1.0 - 1e-3)))) {
+                        fail_msg("%s %s %.1f rad/s %.3f N m: (%g, %g) A, %g N m, %g V of %g, fw %d limited %d",
+                                 m->name, tb ? "table" : "analytic", we, t, (double)i.d, (double)i.q, tq, u, umax,
+                                 s.fw_active, s.i_limited);
+                    }
+                    fw += s.fw_active;
+                    fw_limited += s.fw_active && s.i_limited;
+                    const mc_dq_t n = mc_tref_step(&s, (float)-t, (float)-we, (float)vdc);
+                    assert_true(fabs(n.d - i.d) <= 1e-5 && fabs(n.q + i.q) <= 1e-5);
+                }
+            }
+            assert_true(fw > 500u && fw_limited > 200u);   /* the sweep reaches both */
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_operating_plane),
+        cmocka_unit_test(test_operating_plane_other_machines),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -94,6 +94,33 @@ static void test_table_lookup(void **st)
     assert_near(m.d, 0.5 * (tab.id[5] + tab.id[6]), 1e-6);
     mc_dq_t big = mc_mtpa_table_lookup(&tab, 100.0f);
     assert_near(big.q, tab.iq[MC_MTPA_TABLE_N - 1], 0.0);
+    /* no current asked, or a negative magnitude (not an MTPA point): no current */
+    const float neg[] = {-1e-3f, -0.5f, -5.0f, NAN};
+    for (int k = 0; k < 4; ++k) {
+        const mc_dq_t n = mc_mtpa_table_lookup(&tab, neg[k]);
+        assert_true(n.d == 0.0f && n.q == 0.0f);
+    }
+}
+
+/* At and beyond the table's end the lookup gives its last point and reads nothing past the table
+ * (a table loaded into a record with other data behind it: NaN there must not leak in). */
+static void test_table_end_in_bounds(void **st)
+{
+    (void)st;
+    struct {
+        mc_mtpa_table_t tab;
+        float behind[4];
+    } rec;
+    mc_mtpa_table_fill_linear(&rec.tab, &P, 32.0f);
+    for (int k = 0; k < 4; ++k) {
+        rec.behind[k] = NAN;
+    }
+    const float at[] = {32.0f, 32.5f, INFINITY};
+    for (int k = 0; k < 3; ++k) {
+        const mc_dq_t e = mc_mtpa_table_lookup(&rec.tab, at[k]);
+        assert_true(e.d == rec.tab.id[MC_MTPA_TABLE_N - 1]);
+        assert_true(e.q == rec.tab.iq[MC_MTPA_TABLE_N - 1]);
+    }
 }
 
 static void test_current_and_voltage_circle(void **st)
@@ -140,6 +167,7 @@ int main(void)
         cmocka_unit_test(test_hand_values),
         cmocka_unit_test(test_mtpa_vs_brute_force),
         cmocka_unit_test(test_table_lookup),
+        cmocka_unit_test(test_table_end_in_bounds),
         cmocka_unit_test(test_current_and_voltage_circle),
         cmocka_unit_test(test_field_weakening_id),
     };
