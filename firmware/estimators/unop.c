@@ -344,6 +344,9 @@ void mc_unop_init(mc_unop_t *s, const mc_unop_cfg_t *cfg)
 {
     mc_unop_retune(s, cfg);
     s->l_scale = 1.0f;
+    /* the prior weighs as much as the injection (amplitude 2 sqrt(l_adapt_p)) over one time
+     * constant: steady state of the power sum below */
+    s->ls_pow = (cfg->l_adapt > 0.0f) ? 2.0f * cfg->l_adapt_p / cfg->l_adapt : 0.0f;
     mc_unop_reset(s, 0.0f, 0.0f);
 }
 
@@ -474,8 +477,13 @@ void mc_unop_adapt(mc_unop_t *s, const mc_angle_in_t *in, float theta, float ome
         z[1] = -b0 * v[k] - cfg->bp_a2 * o;
         v[k] = o;
     }
-    /* normalised LMS: r = (s_true - l_scale) phi + ..., so the step is the rate times the error */
-    const float ds = cfg->l_adapt * v[0] * v[1] / (v[1] * v[1] + cfg->l_adapt_p);
+    /* r = (s_true - l_scale) phi + ...: least squares with exponential forgetting (scalar RLS):
+     * the step is normalised by the regressor's power summed at the forgetting rate, not by its
+     * instantaneous square (normalised LMS, whose gain over a sine of amplitude 2 sqrt(p) averages
+     * about 0.55: a time constant of ~18 ms for the 10 ms asked; the thesis motor at L x1.2
+     * tripped loss_of_lock at 41 ms in 1 seed of 10) */
+    s->ls_pow = (1.0f - cfg->l_adapt) * s->ls_pow + v[1] * v[1];
+    const float ds = v[0] * v[1] / (s->ls_pow + cfg->l_adapt_p);
     const float ls = s->l_scale + ds;
     s->l_scale = (ls > MC_UNOP_LS_HI) ? MC_UNOP_LS_HI : ((ls >= MC_UNOP_LS_LO) ? ls : MC_UNOP_LS_LO);
 }

@@ -38,9 +38,10 @@ typedef struct {
                             second-order correction for a voltage held in alpha-beta (held-voltage
                             mean and trapezoid flux together, steady state; default true); removes
                             a -(omega Ts)^2/24 relative speed bias */
-    float l_adapt;       /* inductance-scale adaptation: normalised-LMS gain per period (see
-                            mc_unop_adapt); 0: off, the model as given */
-    float l_adapt_p;     /* [V^2] floor of the regressor power in that normalisation */
+    float l_adapt;       /* inductance-scale adaptation: forgetting rate per period of its least
+                            squares (see mc_unop_adapt); 0: off, the model as given */
+    float l_adapt_p;     /* [V^2] floor of the regressor power in that normalisation; the
+                            injection's (amplitude 2 sqrt(l_adapt_p)) sets the prior's weight */
     float bp_a1, bp_a2;  /* denominator of the band-pass at the injection frequency the residual
                             and the regressor go through (mc_unop_cfg_band) */
 } mc_unop_cfg_t;
@@ -59,6 +60,8 @@ typedef struct {
     float l_scale;       /* adapted by mc_unop_adapt in [MC_UNOP_LS_LO, MC_UNOP_LS_HI]; 1 at init */
     mc_dq_t psi0;        /* psi_model(0): the magnet part, kept as given */
     float bp_z[2][2];    /* band-pass states (transposed direct form II) of r_d and phi_d */
+    float ls_pow;        /* regressor power of the inductance scale's least squares (forgotten at
+                            cfg.l_adapt per period) */
 } mc_unop_t;
 
 /* Algorithmic defaults (mid_sample, reg_predicted, iteration limits, scalings); leaves ts, rs,
@@ -76,7 +79,7 @@ void mc_unop_step(mc_unop_t *s, const mc_angle_in_t *in, mc_angle_out_t *out);
 /* Inductance-scale adaptation (an extension of (6.4)): at a smooth estimate of the same interval
  * (theta = theta(k-1), omega; the PLL's, not the per-period solution, which absorbs the error),
  * the residual of a model whose inductive part is off by a factor holds (s_true - l_scale) times
- * dpsi/Ts of the model; one normalised-LMS step moves l_scale toward s_true. Only while
+ * dpsi/Ts of the model; one least-squares step moves l_scale toward s_true. Only while
  * |omega| <= omega_n1, where the HF injection excites dpsi/Ts along the estimated d axis. */
 void mc_unop_adapt(mc_unop_t *s, const mc_angle_in_t *in, float theta, float omega);
 /* The adaptation's band-pass (Q = 2, unity gain at f_hz) into cfg->bp_a1, bp_a2; needs cfg->ts. */
