@@ -264,6 +264,30 @@ static void test_sensor_wait_is_bounded(void **state)
     assert_int_equal(after, 1u + wait);   /* the last sample's period, then n_wait_max waited */
 }
 
+/* An encoder drive enabled in current mode while the rotor turns at rpm from encoder count
+ * start, with i_a = -i_b = amps flowing from the calibration's last sample on: run to RUN. */
+static void enter_turning(rig_t *r, uint32_t start, int32_t rpm, float amps)
+{
+    rig_init(r, "encoder", "given", "pulses");
+    const float k = r->d.cfg->blk.offs.amps_per_count, nominal = (float)r->d.cfg->blk.offs.nominal;
+    const uint32_t samples = r->d.cfg->blk.offs.samples;
+    const int32_t step = rpm * 80000 / 60 / 10000;   /* counts per period */
+    r->qep.sample.count = start;
+    const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
+    mc_drive_command(&r->d, &c);
+    for (int n = 0; n < 5000 && mc_drive_state(&r->d) != MC_STATE_RUN; ++n) {
+        if (r->d.offs.count + 1u >= samples) {
+            r->adc.sample.i[0] = (uint16_t)lrintf(nominal + amps / k);
+            r->adc.sample.i[1] = (uint16_t)lrintf(nominal - amps / k);
+        }
+        r->qep.sample.count = (uint32_t)(((int32_t)r->qep.sample.count + step + 80000) % 80000);
+        run(r, 1);
+    }
+    assert_int_equal(mc_drive_state(&r->d), MC_STATE_RUN);
+}
+
+static const uint32_t entry_starts[] = {0u, 13000u, 29000u, 51000u, 70000u};
+
 /* Bumpless RUN entry of an angle-sensor drive on a turning rotor (800 rpm, either way: the flux
  * is held, no field-weakening entry) with 5 A flowing: RUN's first current reference starts from
  * the current measured, in the frame of the sensor's angle one period on (the frame the pipeline
@@ -276,25 +300,9 @@ static void test_sensor_entry_references_from_the_current(void **state)
     (void)state;
     static rig_t r;
     const int32_t speeds[] = {800, -800};
-    const uint32_t starts[] = {0u, 13000u, 29000u, 51000u, 70000u};
     for (size_t v = 0; v < 2u; ++v) {
-        for (size_t a = 0; a < sizeof starts / sizeof starts[0]; ++a) {
-            rig_init(&r, "encoder", "given", "pulses");
-            const float amps = 5.0f, k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
-            const uint32_t samples = r.d.cfg->blk.offs.samples;
-            const int32_t step = speeds[v] * 80000 / 60 / 10000;   /* counts per period */
-            r.qep.sample.count = starts[a];
-            const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
-            mc_drive_command(&r.d, &c);
-            for (int n = 0; n < 5000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
-                if (r.d.offs.count + 1u >= samples) {
-                    r.adc.sample.i[0] = (uint16_t)lrintf(nominal + amps / k);
-                    r.adc.sample.i[1] = (uint16_t)lrintf(nominal - amps / k);
-                }
-                r.qep.sample.count = (uint32_t)(((int32_t)r.qep.sample.count + step + 80000) % 80000);
-                run(&r, 1);
-            }
-            assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        for (size_t a = 0; a < sizeof entry_starts / sizeof entry_starts[0]; ++a) {
+            enter_turning(&r, entry_starts[a], speeds[v], 5.0f);
             const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
             const float slew = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
             const float dd = tm->i_ref.d - tm->i_dq.d, dq = tm->i_ref.q - tm->i_dq.q;
@@ -317,26 +325,10 @@ static void test_sensor_entry_references_within_the_limit(void **state)
 {
     (void)state;
     static rig_t r;
-    const uint32_t starts[] = {0u, 13000u, 29000u, 51000u, 70000u};
-    for (size_t a = 0; a < sizeof starts / sizeof starts[0]; ++a) {
+    for (size_t a = 0; a < sizeof entry_starts / sizeof entry_starts[0]; ++a) {
         rig_init(&r, "encoder", "given", "pulses");
         const float lim = r.d.cfg->blk.i_ref_max;
-        const float amps = 1.2f * lim / 1.1547005f;   /* i_a = -i_b = amps: |i| = 1.1547 amps */
-        const float k = r.d.cfg->blk.offs.amps_per_count, nominal = (float)r.d.cfg->blk.offs.nominal;
-        const uint32_t samples = r.d.cfg->blk.offs.samples;
-        const int32_t step = 800 * 80000 / 60 / 10000;
-        r.qep.sample.count = starts[a];
-        const mc_drive_cmd_t c = {.enable = true, .mode = MC_MODE_CURRENT};
-        mc_drive_command(&r.d, &c);
-        for (int n = 0; n < 5000 && mc_drive_state(&r.d) != MC_STATE_RUN; ++n) {
-            if (r.d.offs.count + 1u >= samples) {
-                r.adc.sample.i[0] = (uint16_t)lrintf(nominal + amps / k);
-                r.adc.sample.i[1] = (uint16_t)lrintf(nominal - amps / k);
-            }
-            r.qep.sample.count = (uint32_t)(((int32_t)r.qep.sample.count + step + 80000) % 80000);
-            run(&r, 1);
-        }
-        assert_int_equal(mc_drive_state(&r.d), MC_STATE_RUN);
+        enter_turning(&r, entry_starts[a], 800, 1.2f * lim / 1.1547005f);   /* |i| = 1.1547 amps */
         const mc_drive_telem_t *tm = mc_drive_telemetry(&r.d);
         const float slew = r.d.cfg->blk.i_slew * r.d.cfg->blk.ts;
         assert_true(hypotf(tm->i_dq.d, tm->i_dq.q) > 1.1f * lim);   /* more flows than the limit */
