@@ -188,6 +188,122 @@ static void test_param_keys_distinct(void **state)
     }
 }
 
+/* The parameter table of main at 5265cfe, the last that wrote version 1 records (positions only):
+ * names and types in their order, from that commit's firmware/include/mc/params_table.h. */
+static const struct { const char *name; mc_param_type_t type; } v1_table[] = {
+    {"motor.pole_pairs", MC_PT_I32},
+    {"motor.rs_ohm", MC_PT_F32},
+    {"motor.ld_h", MC_PT_F32},
+    {"motor.lq_h", MC_PT_F32},
+    {"motor.psi_pm_wb", MC_PT_F32},
+    {"motor.i_rated_a", MC_PT_F32},
+    {"motor.torque_rated_nm", MC_PT_F32},
+    {"motor.inertia_kgm2", MC_PT_F32},
+    {"control.ts_s", MC_PT_F32},
+    {"hw.vdc_nominal_v", MC_PT_F32},
+    {"hw.adc_bits", MC_PT_I32},
+    {"hw.i_span_a", MC_PT_F32},
+    {"hw.vdc_span_v", MC_PT_F32},
+    {"hw.adc_offset_tol", MC_PT_F32},
+    {"hw.dead_time_s", MC_PT_F32},
+    {"hw.encoder_lines", MC_PT_I32},
+    {"hw.encoder_offset_rad", MC_PT_F32},
+    {"control.i_trip_a", MC_PT_F32},
+    {"control.vdc_min_v", MC_PT_F32},
+    {"control.vdc_max_v", MC_PT_F32},
+    {"control.angle_source", MC_PT_ENUM},
+    {"control.offset_cal_samples", MC_PT_I32},
+    {"control.i_max_a", MC_PT_F32},
+    {"control.i_headroom", MC_PT_F32},
+    {"control.current_bw_hz", MC_PT_F32},
+    {"control.i_slew_a_per_s", MC_PT_F32},
+    {"control.decouple", MC_PT_BOOL},
+    {"control.u_margin", MC_PT_F32},
+    {"control.mtpa", MC_PT_ENUM},
+    {"control.speed_bw_hz", MC_PT_F32},
+    {"control.speed_kp", MC_PT_F32},
+    {"control.speed_ki", MC_PT_F32},
+    {"control.speed_decimation", MC_PT_I32},
+    {"control.torque_max_nm", MC_PT_F32},
+    {"control.deadtime_comp", MC_PT_BOOL},
+    {"control.dtc_i_band_a", MC_PT_F32},
+    {"control.encoder_pll_bw_hz", MC_PT_F32},
+    {"control.encoder_speed_fc_hz", MC_PT_F32},
+    {"estimator.model", MC_PT_ENUM},
+    {"estimator.iter_max", MC_PT_I32},
+    {"estimator.step_tol", MC_PT_F32},
+    {"estimator.k1", MC_PT_F32},
+    {"estimator.k2", MC_PT_F32},
+    {"estimator.speed_scale_rpm", MC_PT_F32},
+    {"estimator.mid_sample", MC_PT_BOOL},
+    {"estimator.reg_predicted", MC_PT_BOOL},
+    {"injection.kind", MC_PT_ENUM},
+    {"injection.f_hz", MC_PT_F32},
+    {"injection.i_hf_a", MC_PT_F32},
+    {"injection.v1_v", MC_PT_F32},
+    {"injection.n1_rpm", MC_PT_F32},
+    {"injection.notch_q", MC_PT_F32},
+    {"estimator.pll_bw_hz", MC_PT_F32},
+    {"estimator.pll_speed_fc_hz", MC_PT_F32},
+    {"startup.init_pos", MC_PT_ENUM},
+    {"startup.step1_method", MC_PT_ENUM},
+    {"startup.step1_cost", MC_PT_ENUM},
+    {"startup.step1_m", MC_PT_I32},
+    {"startup.step1_dirs", MC_PT_I32},
+    {"startup.i_rest_a", MC_PT_F32},
+    {"startup.polarity", MC_PT_ENUM},
+    {"startup.step2_n", MC_PT_I32},
+    {"startup.v_pol_v", MC_PT_F32},
+    {"startup.dvi_n", MC_PT_I32},
+    {"startup.step3_speed_tol_rpm", MC_PT_F32},
+    {"startup.step3_hold_s", MC_PT_F32},
+    {"startup.timeout_step12_s", MC_PT_F32},
+    {"startup.timeout_step3_s", MC_PT_F32},
+    {"protection.overspeed_rpm", MC_PT_F32},
+    {"protection.i_sum_tol_a", MC_PT_F32},
+    {"protection.i_sum_time_s", MC_PT_F32},
+    {"protection.tracking_err_a", MC_PT_F32},
+    {"protection.tracking_time_s", MC_PT_F32},
+    {"protection.residual_v", MC_PT_F32},
+    {"protection.residual_time_s", MC_PT_F32},
+    {"protection.lock_speed_tol", MC_PT_F32},
+    {"protection.lock_speed_floor_rpm", MC_PT_F32},
+    {"protection.lock_time_s", MC_PT_F32},
+    {"protection.stall_speed_rpm", MC_PT_F32},
+    {"protection.stall_time_s", MC_PT_F32},
+    {"startup.catch", MC_PT_ENUM},
+    {"startup.catch_i_a", MC_PT_F32},
+    {"startup.catch_min_rpm", MC_PT_F32},
+    {"protection.lock_action", MC_PT_ENUM},
+    {"protection.retries", MC_PT_I32},
+    {"protection.retry_reset_s", MC_PT_F32},
+    {"protection.overspeed_action", MC_PT_ENUM},
+    {"protection.reaction_timeout_s", MC_PT_F32},
+    {"hw.device_drop_v", MC_PT_F32},
+    {"protection.polarity_check", MC_PT_ENUM},
+    {"protection.polarity_bias_a", MC_PT_F32},
+    {"protection.lock_jump_deg", MC_PT_F32},
+    {"protection.lock_jump_time_s", MC_PT_F32},
+    {"protection.accel_time_s", MC_PT_F32},
+    {"control.u_loop", MC_PT_F32},
+};
+
+/* The frozen keys are that table's, position by position: FNV-1a-32 of the name (the key rule,
+ * written out here independently), its low nibble dropped, the type below. A swap of two keys
+ * would hand a version 1 record's values to each other's parameters. */
+static void test_v1_keys_are_the_5265cfe_table(void **state)
+{
+    (void)state;
+    assert_int_equal(sizeof v1_table / sizeof v1_table[0], MC_STORE_V1_COUNT);
+    for (uint32_t k = 0; k < MC_STORE_V1_COUNT; ++k) {
+        uint32_t h = 2166136261u;
+        for (const char *c = v1_table[k].name; *c != '\0'; ++c) {
+            h = (h ^ (uint8_t)*c) * 16777619u;
+        }
+        assert_int_equal(mc_store_v1_key(k), (h & MC_STORE_KEY_NAME) | (uint32_t)v1_table[k].type);
+    }
+}
+
 /* The frozen keys of the version 1 table (main at 5265cfe): each is the key of a parameter of
  * today's table (name hash and type), so a version 1 record's value finds its parameter by name.
  * A key wrong in one bit would drop that value silently at the first update (the stored value
@@ -354,7 +470,7 @@ int main(void)
         cmocka_unit_test(test_params_corruption_refused),
         cmocka_unit_test(test_params_by_name),
         cmocka_unit_test(test_param_keys_distinct),
-        cmocka_unit_test(test_v1_keys_name_todays_parameters), cmocka_unit_test(test_model_round_trip_with_map),
+        cmocka_unit_test(test_v1_keys_name_todays_parameters), cmocka_unit_test(test_v1_keys_are_the_5265cfe_table), cmocka_unit_test(test_model_round_trip_with_map),
         cmocka_unit_test(test_model_view_in_place),
         cmocka_unit_test(test_monitor_telemetry_round_trip),
     };
