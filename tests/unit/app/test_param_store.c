@@ -166,6 +166,7 @@ static void test_empty_and_bad_args(void **state)
     assert_int_equal(mc_pstore_save(NULL, a, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
     assert_int_equal(mc_pstore_save(&nvm, NULL, work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
     assert_int_equal(mc_pstore_save(&nvm, a, work, MC_PSTORE_WORK_MIN - 1u, NULL), MC_PSTORE_BAD_ARGS);
+    assert_int_equal(mc_pstore_save(&nvm, a, NULL, sizeof work, NULL), MC_PSTORE_BAD_ARGS);   /* no work area */
     assert_int_equal(mc_pstore_load(NULL, &got, &maps[0], work, sizeof work, NULL), MC_PSTORE_BAD_ARGS);
     assert_int_equal(mc_pstore_erase(&nvm, work, 8u), MC_PSTORE_BAD_ARGS);
     /* map_out NULL: a stored map is checked, not loaded */
