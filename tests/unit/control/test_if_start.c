@@ -182,6 +182,7 @@ static void test_est_only(void **st)
  * and the reseeds' jumps are not counted as the rotor's motion. */
 static void run_slip(const mc_if_cfg_t *c, mc_if_t *s, int n, float sign, bool stalled, float *slip_max, int *k_turn)
 {
+    mc_if_enter(s, c, 0.0f, 0.0f, sign);
     mc_if_out_t o = {0};
     float est = 0.0f, frame_adv = 0.0f, frame_prev = 0.0f;
     *slip_max = 0.0f;
@@ -224,7 +225,6 @@ static void test_slip_in_step(void **st)
     const mc_if_cfg_t c = cfg();
     for (int sg = -1; sg <= 1; sg += 2) {
         mc_if_t s;
-        mc_if_enter(&s, &c, 0.0f, 0.0f, (float)sg);
         float mx;
         int k;
         run_slip(&c, &s, 20000, (float)sg, false, &mx, &k);   /* 2 s, up to 90 rad/s: open loop */
@@ -239,7 +239,6 @@ static void test_slip_stalled(void **st)
     const mc_if_cfg_t c = cfg();
     for (int sg = -1; sg <= 1; sg += 2) {
         mc_if_t s;
-        mc_if_enter(&s, &c, 0.0f, 0.0f, (float)sg);
         float mx;
         int k;
         run_slip(&c, &s, 20000, (float)sg, true, &mx, &k);
